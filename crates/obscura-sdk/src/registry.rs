@@ -1,0 +1,113 @@
+//! Name → factory: how a host finds the projection a scene names.
+
+use crate::environment::ProjectionEnvironment;
+use crate::param::{ParamList, did_you_mean};
+use crate::plugin::{PluginError, Projection, ProjectionFactory, SyncMessage};
+
+struct Entry {
+    factory: Box<dyn ProjectionFactory>,
+    path: String,
+    initialized: bool,
+}
+
+/// The projections a host knows, by name.
+///
+/// Factories are initialised lazily, on the first `create`, and finalised when the registry is dropped,
+/// so a session only pays for the plugins it uses.
+#[derive(Default)]
+pub struct Registry {
+    entries: Vec<Entry>,
+}
+
+impl std::fmt::Debug for Registry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Registry").field("names", &self.names()).finish()
+    }
+}
+
+/// A second factory was registered under a name already taken.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("a projection named \"{0}\" is already registered")]
+pub struct DuplicateName(pub String);
+
+impl Registry {
+    /// An empty registry.
+    #[must_use]
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Adds a factory. `path` is where it was loaded from (empty for built-ins), handed to `init`.
+    ///
+    /// # Errors
+    /// [`DuplicateName`] when the name is taken.
+    pub fn register(&mut self, factory: Box<dyn ProjectionFactory>, path: &str) -> Result<(), DuplicateName> {
+        if self.get(factory.name()).is_some() {
+            return Err(DuplicateName(factory.name().to_string()));
+        }
+        self.entries.push(Entry { factory, path: path.to_string(), initialized: false });
+        Ok(())
+    }
+
+    /// Every registered name, sorted.
+    #[must_use]
+    pub fn names(&self) -> Vec<String> {
+        let mut n: Vec<String> = self.entries.iter().map(|e| e.factory.name().to_string()).collect();
+        n.sort();
+        n
+    }
+
+    /// The factory named `name`.
+    #[must_use]
+    pub fn get(&self, name: &str) -> Option<&dyn ProjectionFactory> {
+        self.entries.iter().find(|e| e.factory.name() == name).map(|e| e.factory.as_ref())
+    }
+
+    /// The factory named `name`, or an error listing the known ones.
+    ///
+    /// # Errors
+    /// [`PluginError::Unknown`] with a did-you-mean and every known name.
+    pub fn find(&self, name: &str) -> Result<&dyn ProjectionFactory, PluginError> {
+        self.get(name).ok_or_else(|| self.unknown(name))
+    }
+
+    fn unknown(&self, name: &str) -> PluginError {
+        let known = self.names();
+        PluginError::Unknown {
+            name: name.to_string(),
+            suggestion: did_you_mean(name, known.iter().map(String::as_str)),
+            known,
+        }
+    }
+
+    /// Creates the projection `name` for a camera: initialises its factory on first use, sends it
+    /// `RenderBegin`, and calls `create_projection`.
+    ///
+    /// # Errors
+    /// An unknown name, a failing `init`, or the factory's own parameter errors.
+    pub fn create(
+        &mut self,
+        name: &str,
+        env: &mut ProjectionEnvironment,
+        params: &ParamList,
+    ) -> Result<Box<dyn Projection>, PluginError> {
+        let Some(idx) = self.entries.iter().position(|e| e.factory.name() == name) else {
+            return Err(self.unknown(name));
+        };
+        let entry = &mut self.entries[idx];
+        if !entry.initialized {
+            entry.factory.init(&entry.path)?;
+            entry.initialized = true;
+        }
+        entry.factory.synchronize(SyncMessage::RenderBegin, Some(params));
+        entry.factory.create_projection(env, params)
+    }
+}
+
+impl Drop for Registry {
+    fn drop(&mut self) {
+        for e in self.entries.iter_mut().filter(|e| e.initialized) {
+            e.factory.finalize();
+        }
+    }
+}
