@@ -112,6 +112,69 @@ impl PerspectiveRays {
     }
 }
 
+/// The constants of one orthographic camera, ready to make rays.
+///
+/// The ray of screen point `(sx, sy)` starts at `(sx, sy, 0)` and runs down +Z; its footprint is a
+/// cylinder of half a pixel in radius (`origin_radius = ½·sqrt(Δx·Δy)`, `ray_spread = 0`). With a thin
+/// lens of radius `R` focused at `f`, the lens is centred on the pixel's own origin: the ray leaves
+/// `O = (sx + R·ax, sy + R·ay, 0)` toward `F = (sx, sy, f)`. (pbrt-v3 centred the lens on the camera axis
+/// instead, which tilts the focal cone off-axis: its issue 315.)
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OrthographicRays {
+    /// `½·sqrt(Δx·Δy)`, half a pixel in screen units.
+    pub half_pixel: f32,
+    /// Lens radius; 0 for no depth of field.
+    pub lens_radius: f32,
+    /// Distance of the plane of focus.
+    pub focal_distance: f32,
+    /// Near clipping plane z.
+    pub near: f32,
+    /// Far clipping plane z.
+    pub far: f32,
+}
+
+impl OrthographicRays {
+    /// Constants for a pixel of `Δx × Δy` screen units, clipping `(near, far)`, and a lens.
+    #[must_use]
+    pub fn new(pixel_size: (f32, f32), clipping: (f32, f32), lens_radius: f32, focal_distance: f32) -> Self {
+        OrthographicRays {
+            half_pixel: 0.5 * (pixel_size.0 * pixel_size.1).sqrt(),
+            lens_radius,
+            focal_distance,
+            near: clipping.0,
+            far: clipping.1,
+        }
+    }
+
+    /// The ray for screen point `s` and aperture sample `a ∈ [−1, 1]²`.
+    #[inline(always)]
+    #[must_use]
+    pub fn ray(&self, s: Point2, a: Point2) -> RayGeometry {
+        if self.lens_radius > 0.0 {
+            let origin = Vec3::new(s.x + self.lens_radius * a.x, s.y + self.lens_radius * a.y, 0.0);
+            let focus = Vec3::new(s.x, s.y, self.focal_distance);
+            let dir = (focus - origin).normalize_or_zero();
+            RayGeometry {
+                origin,
+                origin_radius: self.half_pixel,
+                direction: dir,
+                ray_spread: 0.0,
+                min_dist: self.near / dir.z,
+                max_dist: self.far / dir.z,
+            }
+        } else {
+            RayGeometry {
+                origin: Vec3::new(s.x, s.y, 0.0),
+                origin_radius: self.half_pixel,
+                direction: Vec3::Z,
+                ray_spread: 0.0,
+                min_dist: self.near,
+                max_dist: self.far,
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,0 +1,202 @@
+//! `PxrOrthographic`: parallel rays, with optional thin-lens depth of field.
+//!
+//! Mapping, for screen sample `(sx, sy)` and aperture sample `(ax, ay) ∈ [−1, 1]²`:
+//!
+//! - without depth of field: `O = (sx, sy, 0)`, `D = (0, 0, 1)`;
+//! - with a thin lens (finite positive `fStop`, positive `focalLength`, `R = ½·focalLength/fStop`): the
+//!   lens is centred on the pixel's own origin, `O = (sx + R·ax, sy + R·ay, 0)`,
+//!   `D = normalize((sx, sy, focalDistance) − O)`, so every ray of one screen point meets the plane
+//!   `z = focalDistance` at `(sx, sy)` (pbrt-v3 centred the lens on the axis instead: its issue 315);
+//! - footprint: `origin_radius = ½·sqrt(Δx·Δy)` (half a pixel, screen units are camera units here),
+//!   `ray_spread = 0`;
+//! - clipping: `min_dist = near/D.z`, `max_dist = far/D.z`.
+//!
+//! The view size is the screen window: a window `[−2, 2]²` sees a 4 × 4 region of camera space.
+//!
+//! Inverse: a camera-space point `P` with `P.z > 0` is seen at `(P.x, P.y)`.
+//!
+//! Properties: DicingHint Orthographic; DeepMetric CameraZ; no FieldOfView (an orthographic camera has
+//! none); FStop, FocalLength, FocalDistance when depth of field is on.
+
+use std::sync::LazyLock;
+
+use obscura_sdk::optics::{OrthographicRays, PerspectiveRays};
+use obscura_sdk::{
+    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, ValueRange, Vec3,
+};
+
+use crate::simd;
+
+/// The name scenes use.
+pub const NAME: &str = "PxrOrthographic";
+
+static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
+    vec![
+        ParamDecl::float("fStop", f32::INFINITY)
+            .range(ValueRange::at_least(0.0))
+            .doc("aperture f-number; inf (or 0) = no depth of field"),
+        ParamDecl::float("focalLength", 0.0)
+            .range(ValueRange { min: 0.0, max: f64::INFINITY, min_inclusive: true, max_inclusive: false })
+            .doc("focal length in scene units; the lens radius is focalLength/(2 fStop)"),
+        ParamDecl::float("focalDistance", 1.0)
+            .range(ValueRange::greater_than(0.0))
+            .doc("distance to the plane in focus, scene units"),
+    ]
+});
+
+/// Creates [`Orthographic`] projections.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct OrthographicFactory;
+
+impl ProjectionFactory for OrthographicFactory {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn summary(&self) -> &str {
+        "parallel rays O = (sx, sy, 0), D = +Z; thin-lens depth of field centred on each pixel"
+    }
+
+    fn param_table(&self) -> &[ParamDecl] {
+        &TABLE
+    }
+
+    fn create_projection(
+        &self,
+        env: &mut ProjectionEnvironment,
+        params: &ParamList,
+    ) -> Result<Box<dyn Projection>, PluginError> {
+        let p = Params::resolve(NAME, &TABLE, params)?;
+        env.set_deep_metric(DeepMetric::CameraZ);
+        Ok(Box::new(Orthographic::new(
+            env,
+            p.float("fStop")?,
+            p.float("focalLength")?,
+            p.float("focalDistance")?,
+        )))
+    }
+}
+
+/// An orthographic camera (see the module documentation for its mapping).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Orthographic {
+    rays: OrthographicRays,
+    f_stop: f32,
+    focal_length: f32,
+}
+
+impl Orthographic {
+    /// An orthographic camera for `env`, with a thin lens when `f_stop` is finite and positive and
+    /// `focal_length` positive.
+    #[must_use]
+    pub fn new(env: &ProjectionEnvironment, f_stop: f32, focal_length: f32, focal_distance: f32) -> Self {
+        Orthographic {
+            rays: OrthographicRays::new(
+                env.pixel_size(),
+                (env.clipping_near(), env.clipping_far()),
+                PerspectiveRays::lens_radius_for(f_stop, focal_length),
+                focal_distance,
+            ),
+            f_stop,
+            focal_length,
+        }
+    }
+}
+
+impl Projection for Orthographic {
+    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
+        let dof = self.rays.lens_radius > 0.0;
+        match property {
+            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Orthographic)),
+            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
+            ProjectionProperty::FStop if dof => Some(PropertyValue::Float(self.f_stop)),
+            ProjectionProperty::FocalLength if dof => Some(PropertyValue::Float(self.focal_length)),
+            ProjectionProperty::FocalDistance if dof => Some(PropertyValue::Float(self.rays.focal_distance)),
+            _ => None,
+        }
+    }
+
+    fn project(&self, ctx: &mut ProjectionContext<'_>) {
+        let c = ctx.parts_mut();
+        let rays = &self.rays;
+        simd::run(|| {
+            for ((r, s), a) in c.rays.iter_mut().zip(c.screen).zip(c.aperture) {
+                *r = rays.ray(*s, *a);
+            }
+        });
+    }
+
+    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
+        (point.z > 0.0 && point.is_finite()).then(|| Point2::new(point.x, point.y))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::project_points;
+    use obscura_sdk::{Format, ScreenWindow};
+    use proptest::prelude::*;
+
+    fn make(params: &[(&str, &str)]) -> Box<dyn Projection> {
+        let mut list = ParamList::new();
+        for (decl, val) in params {
+            list.push_text(decl, &[val], None).unwrap();
+        }
+        let mut env = ProjectionEnvironment::new(
+            Format::new(200, 100),
+            ScreenWindow::new(-4.0, 4.0, -2.0, 2.0),
+            (0.0, 1.0),
+            (0.1, f32::INFINITY),
+            Vec::new(),
+        );
+        OrthographicFactory.create_projection(&mut env, &list).unwrap()
+    }
+
+    proptest! {
+        #[test]
+        fn rays_are_parallel_and_start_on_the_screen_point(sx in -4.0f32..4.0, sy in -2.0f32..2.0) {
+            let p = make(&[]);
+            let r = project_points(p.as_ref(), &[Point2::new(sx, sy)], &[Point2::new(0.3, 0.3)], &[0.0])[0];
+            prop_assert_eq!(r.origin, Vec3::new(sx, sy, 0.0));
+            prop_assert_eq!(r.direction, Vec3::Z);
+            prop_assert_eq!(r.ray_spread, 0.0);
+            // Half a pixel: the window is 8 units over 200 pixels and 4 over 100, so 0.04 units a pixel.
+            prop_assert!((r.origin_radius - 0.02).abs() < 1e-7);
+            prop_assert_eq!(p.unproject(r.origin + r.direction * 3.0, 0.0), Some(Point2::new(sx, sy)));
+        }
+
+        #[test]
+        fn the_lens_is_centred_on_each_pixel_not_on_the_axis(
+            sx in -4.0f32..4.0, sy in -2.0f32..2.0, ax in -1.0f32..1.0, ay in -1.0f32..1.0,
+        ) {
+            let p = make(&[("float fStop", "2"), ("float focalLength", "1"), ("float focalDistance", "5")]);
+            let r = project_points(p.as_ref(), &[Point2::new(sx, sy)], &[Point2::new(ax, ay)], &[0.0])[0];
+            // Radius 0.25 around the pixel's own origin.
+            prop_assert!((r.origin.x - (sx + 0.25 * ax)).abs() < 1e-5 && (r.origin.y - (sy + 0.25 * ay)).abs() < 1e-5);
+            // Every ray of a screen point meets the focal plane at that screen point.
+            let t = 5.0 / r.direction.z;
+            let hit = r.origin + r.direction * t;
+            prop_assert!((hit.x - sx).abs() < 1e-4 && (hit.y - sy).abs() < 1e-4, "{:?}", hit);
+            prop_assert!((r.direction.length() - 1.0).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn properties_are_honest() {
+        let p = make(&[]);
+        assert_eq!(
+            p.property(ProjectionProperty::DicingHint),
+            Some(PropertyValue::DicingHint(DicingHint::Orthographic))
+        );
+        assert_eq!(
+            p.property(ProjectionProperty::DeepMetric),
+            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
+        );
+        assert_eq!(p.property(ProjectionProperty::FieldOfView), None);
+        assert_eq!(p.property(ProjectionProperty::FStop), None);
+        let lens = make(&[("float fStop", "2"), ("float focalLength", "1")]);
+        assert_eq!(lens.property(ProjectionProperty::FStop), Some(PropertyValue::Float(2.0)));
+    }
+}

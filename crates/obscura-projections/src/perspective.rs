@@ -1,0 +1,361 @@
+//! `PxrPerspective`: the pinhole and thin-lens perspective camera.
+//!
+//! Mapping, for screen sample `(sx, sy)`, aperture sample `(ax, ay) ∈ [−1, 1]²` and shutter time `t`:
+//!
+//! - field of view `φ(t) = fov + (fovEnd − fov)·t` (or `fov` throughout when `fovEnd` is 0), screen
+//!   plane at `d(t) = 1/tan(φ(t)/2)`: the square `[−1, 1]²` of screen space spans `φ`, so with the
+//!   default screen window `fov` is the angle across the *smaller* image dimension;
+//! - pinhole: `O = 0`, `D = normalize(sx, sy, d)`;
+//! - thin lens (finite positive `fStop`, positive `focalLength`): lens radius
+//!   `R = ½·focalLength/fStop`, `O = (R·ax, R·ay, 0)`, `D = normalize(F − O)` with the focus point
+//!   `F = (sx, sy, d)·focalDistance/d`, so every ray of one screen point crosses the plane
+//!   `z = focalDistance` at the same point;
+//! - footprint: `origin_radius = 0`, `ray_spread = ½·sqrt(αx·αy)` with the per-pixel turn of the
+//!   pinhole direction `αx = Δx·sqrt(sy² + d²)/L²`, `αy = Δy·sqrt(sx² + d²)/L²`, `L² = sx² + sy² + d²`
+//!   (through a lens scaled by `|F|/|F − O|`, so the cone has the pinhole's radius at the focus point);
+//! - clipping: `min_dist = near/D.z`, `max_dist = far/D.z` (the clipping planes are planes of constant z).
+//!
+//! Inverse: a camera-space point `P` with `P.z > 0` is seen at `(P.x·d/P.z, P.y·d/P.z)`.
+//!
+//! Properties: DicingHint Perspective; FieldOfView `fov` (the narrower of `fov`, `fovEnd` during a
+//! zoom, so dicing is fine enough all through the shutter); DeepMetric CameraZ; FStop, FocalLength and
+//! FocalDistance only when depth of field is on.
+
+use std::sync::LazyLock;
+
+use obscura_sdk::optics::{PerspectiveRays, screen_distance};
+use obscura_sdk::{
+    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, ValueRange, Vec3,
+};
+
+use crate::simd;
+
+/// The name scenes use.
+pub const NAME: &str = "PxrPerspective";
+
+static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
+    vec![
+        ParamDecl::float("fov", 90.0)
+            .range(ValueRange::open(0.0, 180.0))
+            .doc("field of view in degrees across the screen window's [-1, 1] square (the smaller image side)"),
+        ParamDecl::float("fovEnd", 0.0)
+            .range(ValueRange { min: 0.0, max: 180.0, min_inclusive: true, max_inclusive: false })
+            .doc("field of view at shutter close, for zoom blur; 0 = same as fov"),
+        ParamDecl::float("fStop", f32::INFINITY)
+            .range(ValueRange::at_least(0.0))
+            .doc("aperture f-number; inf (or 0) = pinhole, no depth of field"),
+        ParamDecl::float("focalLength", 0.0)
+            .range(ValueRange { min: 0.0, max: f64::INFINITY, min_inclusive: true, max_inclusive: false })
+            .doc("focal length in scene units; the lens radius is focalLength/(2 fStop)"),
+        ParamDecl::float("focalDistance", 1.0)
+            .range(ValueRange::greater_than(0.0))
+            .doc("distance to the plane in focus, scene units"),
+    ]
+});
+
+/// Creates [`Perspective`] projections.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct PerspectiveFactory;
+
+impl ProjectionFactory for PerspectiveFactory {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn summary(&self) -> &str {
+        "pinhole or thin-lens perspective: D = normalize(sx, sy, 1/tan(fov/2)); zoom blur with fovEnd"
+    }
+
+    fn param_table(&self) -> &[ParamDecl] {
+        &TABLE
+    }
+
+    fn create_projection(
+        &self,
+        env: &mut ProjectionEnvironment,
+        params: &ParamList,
+    ) -> Result<Box<dyn Projection>, PluginError> {
+        let p = Params::resolve(NAME, &TABLE, params)?;
+        let fov = p.float("fov")?;
+        let fov_end = p.float("fovEnd")?;
+        let f_stop = p.float("fStop")?;
+        let focal_length = p.float("focalLength")?;
+        let focal_distance = p.float("focalDistance")?;
+        env.set_deep_metric(DeepMetric::CameraZ);
+        Ok(Box::new(Perspective::new(env, fov, fov_end, f_stop, focal_length, focal_distance)))
+    }
+}
+
+/// A perspective camera (see the module documentation for its mapping).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Perspective {
+    rays: PerspectiveRays,
+    fov: f32,
+    /// `Some(fovEnd)` when the field of view changes during the shutter.
+    fov_end: Option<f32>,
+    d: f32,
+    f_stop: f32,
+    focal_length: f32,
+}
+
+impl Perspective {
+    /// A perspective camera for `env`; `fov_end` 0 means no zoom, an infinite or zero `f_stop` or a zero
+    /// `focal_length` means a pinhole.
+    #[must_use]
+    pub fn new(
+        env: &ProjectionEnvironment,
+        fov: f32,
+        fov_end: f32,
+        f_stop: f32,
+        focal_length: f32,
+        focal_distance: f32,
+    ) -> Self {
+        let lens_radius = PerspectiveRays::lens_radius_for(f_stop, focal_length);
+        Perspective {
+            rays: PerspectiveRays::new(
+                env.pixel_size(),
+                (env.clipping_near(), env.clipping_far()),
+                lens_radius,
+                focal_distance,
+            ),
+            fov,
+            fov_end: (fov_end > 0.0 && fov_end != fov).then_some(fov_end),
+            d: screen_distance(fov),
+            f_stop,
+            focal_length,
+        }
+    }
+
+    /// The screen-plane distance at shutter-normalised time `t`.
+    #[inline]
+    #[must_use]
+    pub fn screen_distance_at(&self, t: f32) -> f32 {
+        match self.fov_end {
+            None => self.d,
+            Some(end) => screen_distance(self.fov + (end - self.fov) * t),
+        }
+    }
+
+    /// True when depth of field is on.
+    #[must_use]
+    pub fn has_depth_of_field(&self) -> bool {
+        self.rays.lens_radius > 0.0
+    }
+}
+
+impl Projection for Perspective {
+    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
+        let dof = self.has_depth_of_field();
+        match property {
+            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Perspective)),
+            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
+            ProjectionProperty::FieldOfView => {
+                Some(PropertyValue::Float(self.fov_end.map_or(self.fov, |e| e.min(self.fov))))
+            }
+            ProjectionProperty::FStop if dof => Some(PropertyValue::Float(self.f_stop)),
+            ProjectionProperty::FocalLength if dof => Some(PropertyValue::Float(self.focal_length)),
+            ProjectionProperty::FocalDistance if dof => Some(PropertyValue::Float(self.rays.focal_distance)),
+            _ => None,
+        }
+    }
+
+    fn project(&self, ctx: &mut ProjectionContext<'_>) {
+        let c = ctx.parts_mut();
+        let rays = &self.rays;
+        match (self.fov_end.is_some(), self.has_depth_of_field()) {
+            (false, false) => simd::run(|| {
+                for (r, s) in c.rays.iter_mut().zip(c.screen) {
+                    *r = rays.pinhole(*s, self.d);
+                }
+            }),
+            (false, true) => simd::run(|| {
+                for ((r, s), a) in c.rays.iter_mut().zip(c.screen).zip(c.aperture) {
+                    *r = rays.thin_lens(*s, *a, self.d);
+                }
+            }),
+            (true, _) => simd::run(|| {
+                for (((r, s), a), t) in c.rays.iter_mut().zip(c.screen).zip(c.aperture).zip(c.time.iter()) {
+                    *r = rays.ray(*s, *a, self.screen_distance_at(*t));
+                }
+            }),
+        }
+    }
+
+    fn unproject(&self, point: Vec3, time: f32) -> Option<Point2> {
+        if point.z <= 0.0 || !point.is_finite() {
+            return None;
+        }
+        let k = self.screen_distance_at(time) / point.z;
+        Some(Point2::new(point.x * k, point.y * k))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::{project_points, pixel_centre_rays};
+    use obscura_sdk::Format;
+    use proptest::prelude::*;
+
+    fn make(params: &[(&str, &[&str])], format: Format) -> Box<dyn Projection> {
+        let mut list = ParamList::new();
+        for (decl, vals) in params {
+            list.push_text(decl, vals, None).unwrap();
+        }
+        let mut env = ProjectionEnvironment::for_format(format);
+        PerspectiveFactory.create_projection(&mut env, &list).unwrap()
+    }
+
+    proptest! {
+        #[test]
+        fn pinhole_directions_match_the_closed_form(sx in -2.0f32..2.0, sy in -2.0f32..2.0, fov in 1.0f32..179.0) {
+            let p = make(&[("float fov", &[&fov.to_string()])], Format::new(64, 64));
+            let r = project_points(p.as_ref(), &[Point2::new(sx, sy)], &[Point2::ZERO], &[0.0])[0];
+            let d = 1.0 / (fov.to_radians() as f64 / 2.0).tan();
+            let l = ((sx as f64).powi(2) + (sy as f64).powi(2) + d * d).sqrt();
+            prop_assert!((r.direction.x as f64 - sx as f64 / l).abs() < 1e-6);
+            prop_assert!((r.direction.y as f64 - sy as f64 / l).abs() < 1e-6);
+            prop_assert!((r.direction.z as f64 - d / l).abs() < 1e-6);
+            prop_assert_eq!(r.origin, Vec3::ZERO);
+            prop_assert!((r.direction.length() - 1.0).abs() < 1e-6);
+        }
+
+        #[test]
+        fn thin_lens_rays_of_one_screen_point_share_a_point_of_the_focal_plane(
+            sx in -1.5f32..1.5, sy in -1.0f32..1.0,
+            ax in -1.0f32..1.0, ay in -1.0f32..1.0,
+            f_stop in 0.5f32..22.0, fd in 0.5f32..100.0,
+        ) {
+            let p = make(&[
+                ("float fov", &["40"]), ("float fStop", &[&f_stop.to_string()]),
+                ("float focalLength", &["0.05"]), ("float focalDistance", &[&fd.to_string()]),
+            ], Format::new(64, 64));
+            let s = Point2::new(sx, sy);
+            let rays = project_points(p.as_ref(), &[s, s], &[Point2::ZERO, Point2::new(ax, ay)], &[0.0, 0.0]);
+            let hit = |r: &obscura_sdk::RayGeometry| {
+                let t = (fd - r.origin.z) / r.direction.z;
+                r.origin + r.direction * t
+            };
+            let (a, b) = (hit(&rays[0]), hit(&rays[1]));
+            prop_assert!((a - b).length() <= 1e-5 * fd.max(1.0) * (1.0 + sx.abs() + sy.abs()), "{:?} vs {:?}", a, b);
+            // The lens-centre ray is the pinhole ray; the other starts on the lens disk.
+            let radius = 0.5 * 0.05 / f_stop;
+            prop_assert!((rays[1].origin.x - radius * ax).abs() < 1e-6 && (rays[1].origin.y - radius * ay).abs() < 1e-6);
+        }
+
+        #[test]
+        fn unproject_inverts_project(sx in -2.0f32..2.0, sy in -2.0f32..2.0, t in 0.0f32..1.0, depth in 0.2f32..50.0) {
+            let p = make(&[("float fov", &["50"]), ("float fovEnd", &["30"])], Format::new(64, 64));
+            let r = project_points(p.as_ref(), &[Point2::new(sx, sy)], &[Point2::ZERO], &[t])[0];
+            let back = p.unproject(r.origin + r.direction * depth, t).unwrap();
+            prop_assert!((back.x - sx).abs() < 2e-5 && (back.y - sy).abs() < 2e-5, "{:?}", back);
+        }
+    }
+
+    #[test]
+    fn twenty_degrees_puts_the_screen_plane_at_5_6713() {
+        let p = make(&[("float fov", &["20"])], Format::new(100, 100));
+        let r = project_points(p.as_ref(), &[Point2::new(1.0, 0.0)], &[Point2::ZERO], &[0.0])[0];
+        assert!((r.direction.z / r.direction.x - 5.6713).abs() < 1e-3);
+        // The edge of the [-1, 1] square is half the field of view off axis.
+        assert!((r.direction.x.asin().to_degrees() - 10.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn ray_spread_is_half_the_angle_between_neighbouring_pixel_rays() {
+        let format = Format::new(640, 480);
+        for fov in ["30", "90", "150"] {
+            let p = make(&[("float fov", &[fov])], format);
+            let grid = pixel_centre_rays(p.as_ref(), format);
+            let w = format.width as usize;
+            let mut worst = 0.0f64;
+            for y in (1..format.height as usize - 1).step_by(7) {
+                for x in (1..w - 1).step_by(7) {
+                    let angle = |a: Vec3, b: Vec3| {
+                        let (a, b) = ([a.x as f64, a.y as f64, a.z as f64], [b.x as f64, b.y as f64, b.z as f64]);
+                        let c = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+                        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+                        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().atan2(dot)
+                    };
+                    let c = &grid[y * w + x];
+                    let ax = 0.5 * angle(grid[y * w + x - 1].direction, grid[y * w + x + 1].direction);
+                    let ay = 0.5 * angle(grid[(y - 1) * w + x].direction, grid[(y + 1) * w + x].direction);
+                    let expected = 0.5 * (ax * ay).sqrt();
+                    worst = worst.max((c.ray_spread as f64 / expected - 1.0).abs());
+                }
+            }
+            assert!(worst < 0.02, "fov {fov}: worst relative error {worst}");
+        }
+    }
+
+    #[test]
+    fn zoom_follows_each_rays_time() {
+        let p = make(&[("float fov", &["60"]), ("float fovEnd", &["20"])], Format::new(64, 64));
+        let s = [Point2::new(1.0, 0.0); 3];
+        let rays = project_points(p.as_ref(), &s, &[Point2::ZERO; 3], &[0.0, 0.5, 0.999_999]);
+        let half_angle = |r: &obscura_sdk::RayGeometry| r.direction.x.atan2(r.direction.z).to_degrees();
+        assert!((half_angle(&rays[0]) - 30.0).abs() < 1e-4);
+        assert!((half_angle(&rays[1]) - 20.0).abs() < 1e-4);
+        assert!((half_angle(&rays[2]) - 10.0).abs() < 1e-3);
+        // Dicing uses the narrowest field of view of the shutter interval.
+        assert_eq!(p.property(ProjectionProperty::FieldOfView), Some(PropertyValue::Float(20.0)));
+    }
+
+    #[test]
+    fn properties_are_honest() {
+        let pin = make(&[("float fov", &["45"])], Format::new(8, 8));
+        assert_eq!(
+            pin.property(ProjectionProperty::DicingHint),
+            Some(PropertyValue::DicingHint(DicingHint::Perspective))
+        );
+        assert_eq!(pin.property(ProjectionProperty::FieldOfView), Some(PropertyValue::Float(45.0)));
+        assert_eq!(
+            pin.property(ProjectionProperty::DeepMetric),
+            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
+        );
+        assert_eq!(pin.property(ProjectionProperty::FStop), None);
+        let lens = make(
+            &[("float fStop", &["2.8"]), ("float focalLength", &["0.05"]), ("float focalDistance", &["3"])],
+            Format::new(8, 8),
+        );
+        assert_eq!(lens.property(ProjectionProperty::FStop), Some(PropertyValue::Float(2.8)));
+        assert_eq!(lens.property(ProjectionProperty::FocalLength), Some(PropertyValue::Float(0.05)));
+        assert_eq!(lens.property(ProjectionProperty::FocalDistance), Some(PropertyValue::Float(3.0)));
+        // A finite f-stop without a focal length is still a pinhole.
+        let no_fl = make(&[("float fStop", &["2.8"])], Format::new(8, 8));
+        assert_eq!(no_fl.property(ProjectionProperty::FStop), None);
+    }
+
+    #[test]
+    fn clipping_planes_become_distances_along_each_ray() {
+        let mut env = ProjectionEnvironment::new(
+            Format::new(8, 8),
+            obscura_sdk::ScreenWindow::new(-1.0, 1.0, -1.0, 1.0),
+            (0.0, 1.0),
+            (2.0, 10.0),
+            Vec::new(),
+        );
+        let p = PerspectiveFactory.create_projection(&mut env, &ParamList::new()).unwrap();
+        let r = project_points(p.as_ref(), &[Point2::new(1.0, 1.0)], &[Point2::ZERO], &[0.0])[0];
+        assert!(((r.direction * r.min_dist).z - 2.0).abs() < 1e-5);
+        assert!(((r.direction * r.max_dist).z - 10.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn bad_parameters_name_the_plugin_and_parameter() {
+        for (decl, val, needle) in [
+            ("float fov", "0", "\"fov\" = 0 is out of range"),
+            ("float fov", "180", "expected a value in (0, 180)"),
+            ("float focalDistance", "-1", "\"focalDistance\""),
+            ("float fovv", "40", "did you mean \"fov\""),
+        ] {
+            let mut list = ParamList::new();
+            list.push_text(decl, &[val], None).unwrap();
+            let mut env = ProjectionEnvironment::for_format(Format::new(8, 8));
+            let err = PerspectiveFactory.create_projection(&mut env, &list).err().unwrap().to_string();
+            assert!(err.starts_with("PxrPerspective: "), "{err}");
+            assert!(err.contains(needle), "{err}");
+        }
+    }
+}
