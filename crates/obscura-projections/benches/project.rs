@@ -1,1 +1,178 @@
-fn main() {}
+//! `cargo bench -p obscura-projections`: rays/s of `project` per projection and batch size, beside two
+//! same-run references: a scalar per-ray loop (one non-inlined call per ray, baseline instruction set)
+//! and a store-bandwidth kernel that writes the same 40 bytes per ray and computes nothing.
+//!
+//! divan reports items/s: each item is one ray.
+
+use std::hint::black_box;
+
+use divan::{Bencher, counter::ItemsCount};
+use obscura_projections::builtin_registry;
+use obscura_sdk::optics::{PerspectiveRays, screen_distance};
+use obscura_sdk::{
+    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
+    ScreenWindow, Vec3,
+};
+
+const BATCHES: [usize; 3] = [64, 256, 4096];
+
+fn main() {
+    divan::main();
+}
+
+struct Batch {
+    screen: Vec<Point2>,
+    lens: Vec<Point2>,
+    aperture: Vec<Point2>,
+    time: Vec<f32>,
+    rays: Vec<RayGeometry>,
+    tint: Vec<Rgb>,
+}
+
+impl Batch {
+    /// Screen samples spread over a 1920×1080 frame, stratified lens and time samples.
+    fn new(n: usize) -> Self {
+        let format = Format::new(1920, 1080);
+        let w = ScreenWindow::default_for(format);
+        let side = (n as f64).sqrt().ceil() as usize;
+        let screen = (0..n)
+            .map(|i| {
+                let (x, y) = ((i % side) as f64 + 0.5, (i / side) as f64 + 0.5);
+                w.raster_to_screen(format, x / side as f64 * 1920.0, y / side as f64 * 1080.0)
+            })
+            .collect();
+        let lens: Vec<Point2> = (0..n)
+            .map(|i| Point2::new(((i * 37) % n) as f32 / n as f32, ((i * 91) % n) as f32 / n as f32))
+            .collect();
+        let aperture = lens
+            .iter()
+            .map(|l| Point2::new(2.0 * l.x - 1.0, 2.0 * l.y - 1.0))
+            .collect();
+        Batch {
+            screen,
+            lens,
+            aperture,
+            time: (0..n).map(|i| i as f32 / n as f32).collect(),
+            rays: vec![RayGeometry::CULLED; n],
+            tint: vec![Rgb::WHITE; n],
+        }
+    }
+
+    fn run(&mut self, p: &dyn Projection) {
+        let mut ctx = ProjectionContext::new(
+            &self.screen,
+            &self.lens,
+            &self.aperture,
+            &mut self.time,
+            &mut self.rays,
+            &mut self.tint,
+        )
+        .expect("equal lengths");
+        p.project(&mut ctx);
+    }
+}
+
+fn projection(name: &str, params: &[(&str, &str)]) -> Box<dyn Projection> {
+    let mut list = ParamList::new();
+    for (decl, v) in params {
+        list.push_text(decl, &[v], None).expect("valid bench parameter");
+    }
+    let mut env = ProjectionEnvironment::for_format(Format::new(1920, 1080));
+    builtin_registry()
+        .create(name, &mut env, &list)
+        .expect("valid bench projection")
+}
+
+fn bench_projection(bencher: Bencher, n: usize, name: &str, params: &[(&str, &str)]) {
+    let p = projection(name, params);
+    let mut batch = Batch::new(n);
+    bencher.counter(ItemsCount::new(n)).bench_local(|| {
+        batch.run(black_box(p.as_ref()));
+        black_box(&batch.rays);
+    });
+}
+
+#[divan::bench(args = BATCHES)]
+fn perspective_pinhole(bencher: Bencher, n: usize) {
+    bench_projection(bencher, n, "PxrPerspective", &[("float fov", "60")]);
+}
+
+#[divan::bench(args = BATCHES)]
+fn perspective_thin_lens(bencher: Bencher, n: usize) {
+    bench_projection(
+        bencher,
+        n,
+        "PxrPerspective",
+        &[
+            ("float fov", "60"),
+            ("float fStop", "2.8"),
+            ("float focalLength", "0.05"),
+            ("float focalDistance", "4"),
+        ],
+    );
+}
+
+#[divan::bench(args = BATCHES)]
+fn perspective_zoom(bencher: Bencher, n: usize) {
+    bench_projection(
+        bencher,
+        n,
+        "PxrPerspective",
+        &[("float fov", "60"), ("float fovEnd", "40")],
+    );
+}
+
+#[divan::bench(args = BATCHES)]
+fn orthographic(bencher: Bencher, n: usize) {
+    bench_projection(bencher, n, "PxrOrthographic", &[]);
+}
+
+#[divan::bench(args = BATCHES)]
+fn orthographic_thin_lens(bencher: Bencher, n: usize) {
+    bench_projection(
+        bencher,
+        n,
+        "PxrOrthographic",
+        &[
+            ("float fStop", "2"),
+            ("float focalLength", "0.5"),
+            ("float focalDistance", "4"),
+        ],
+    );
+}
+
+/// Reference: the pinhole ray computed one call per ray, never inlined, baseline instruction set.
+#[divan::bench(args = BATCHES)]
+fn reference_scalar_per_ray(bencher: Bencher, n: usize) {
+    #[inline(never)]
+    fn one(rays: &PerspectiveRays, s: Point2, d: f32) -> RayGeometry {
+        rays.pinhole(s, d)
+    }
+    let rays = PerspectiveRays::new((0.00185, 0.00185), (0.1, f32::INFINITY), 0.0, 1.0);
+    let d = screen_distance(60.0);
+    let mut batch = Batch::new(n);
+    bencher.counter(ItemsCount::new(n)).bench_local(|| {
+        for (r, s) in batch.rays.iter_mut().zip(&batch.screen) {
+            *r = one(black_box(&rays), *s, d);
+        }
+        black_box(&batch.rays);
+    });
+}
+
+/// Reference: store bandwidth. Writes the same 40 bytes per ray, computing nothing.
+#[divan::bench(args = BATCHES)]
+fn reference_store_bandwidth(bencher: Bencher, n: usize) {
+    let mut batch = Batch::new(n);
+    let ray = RayGeometry {
+        origin: Vec3::ZERO,
+        origin_radius: 0.0,
+        direction: Vec3::Z,
+        ray_spread: 0.001,
+        min_dist: 0.1,
+        max_dist: f32::INFINITY,
+    };
+    bencher.counter(ItemsCount::new(n)).bench_local(|| {
+        batch.rays.fill(black_box(ray));
+        black_box(&batch.rays);
+    });
+}

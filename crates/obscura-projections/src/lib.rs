@@ -26,8 +26,12 @@ pub use perspective::{Perspective, PerspectiveFactory};
 /// # Panics
 /// When `registry` already holds a projection of a built-in's name (register built-ins first).
 pub fn register_builtins(registry: &mut Registry) {
-    registry.register(Box::new(PerspectiveFactory), "").expect("built-in names are unique");
-    registry.register(Box::new(OrthographicFactory), "").expect("built-in names are unique");
+    registry
+        .register(Box::new(PerspectiveFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(OrthographicFactory), "")
+        .expect("built-in names are unique");
 }
 
 /// A registry holding every built-in projection.
@@ -47,9 +51,16 @@ mod tests {
     fn unknown_projection_lists_the_known_ones() {
         let mut reg = builtin_registry();
         let mut env = ProjectionEnvironment::for_format(Format::new(4, 4));
-        let err = reg.create("PxrPerspectve", &mut env, &ParamList::new()).err().unwrap().to_string();
+        let err = reg
+            .create("PxrPerspectve", &mut env, &ParamList::new())
+            .err()
+            .unwrap()
+            .to_string();
         assert!(err.contains("did you mean \"PxrPerspective\""), "{err}");
-        assert!(err.contains("known projections: PxrOrthographic, PxrPerspective"), "{err}");
+        assert!(
+            err.contains("known projections: PxrOrthographic, PxrPerspective"),
+            "{err}"
+        );
         assert!(reg.create("PxrOrthographic", &mut env, &ParamList::new()).is_ok());
     }
 
@@ -63,7 +74,12 @@ mod tests {
             for d in f.param_table() {
                 assert!(!d.doc.is_empty(), "{name}.{} has no doc", d.name);
                 assert!(seen.insert(d.name.clone()), "{name}.{} declared twice", d.name);
-                assert_eq!(d.default.len(), d.scalar_count(), "{name}.{} default has the wrong size", d.name);
+                assert_eq!(
+                    d.default.len(),
+                    d.scalar_count(),
+                    "{name}.{} default has the wrong size",
+                    d.name
+                );
             }
         }
     }

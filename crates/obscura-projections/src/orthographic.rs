@@ -37,7 +37,12 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
             .range(ValueRange::at_least(0.0))
             .doc("aperture f-number; inf (or 0) = no depth of field"),
         ParamDecl::float("focalLength", 0.0)
-            .range(ValueRange { min: 0.0, max: f64::INFINITY, min_inclusive: true, max_inclusive: false })
+            .range(ValueRange {
+                min: 0.0,
+                max: f64::INFINITY,
+                min_inclusive: true,
+                max_inclusive: false,
+            })
             .doc("focal length in scene units; the lens radius is focalLength/(2 fStop)"),
         ParamDecl::float("focalDistance", 1.0)
             .range(ValueRange::greater_than(0.0))
@@ -197,6 +202,9 @@ mod tests {
         assert_eq!(p.property(ProjectionProperty::FieldOfView), None);
         assert_eq!(p.property(ProjectionProperty::FStop), None);
         let lens = make(&[("float fStop", "2"), ("float focalLength", "1")]);
-        assert_eq!(lens.property(ProjectionProperty::FStop), Some(PropertyValue::Float(2.0)));
+        assert_eq!(
+            lens.property(ProjectionProperty::FStop),
+            Some(PropertyValue::Float(2.0))
+        );
     }
 }

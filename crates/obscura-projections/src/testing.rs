@@ -3,9 +3,17 @@
 use obscura_sdk::{Format, Point2, Projection, ProjectionContext, RayGeometry, Rgb, ScreenWindow};
 
 /// Projects one batch of hand-made samples and returns the rays.
-pub fn project_points(p: &dyn Projection, screen: &[Point2], aperture: &[Point2], time: &[f32]) -> Vec<RayGeometry> {
+pub fn project_points(
+    p: &dyn Projection,
+    screen: &[Point2],
+    aperture: &[Point2],
+    time: &[f32],
+) -> Vec<RayGeometry> {
     let n = screen.len();
-    let lens: Vec<Point2> = aperture.iter().map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5)).collect();
+    let lens: Vec<Point2> = aperture
+        .iter()
+        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
+        .collect();
     let mut time = time.to_vec();
     let mut rays = vec![RayGeometry::CULLED; n];
     let mut tint = vec![Rgb::WHITE; n];

@@ -76,7 +76,10 @@ impl<'a> ProjectionContext<'a> {
         tint: &'a mut [Rgb],
     ) -> Result<Self, ContextLengthError> {
         let n = screen.len();
-        if [lens.len(), aperture.len(), time.len(), rays.len(), tint.len()].iter().any(|&l| l != n) {
+        if [lens.len(), aperture.len(), time.len(), rays.len(), tint.len()]
+            .iter()
+            .any(|&l| l != n)
+        {
             return Err(ContextLengthError {
                 screen: n,
                 lens: lens.len(),
@@ -86,7 +89,14 @@ impl<'a> ProjectionContext<'a> {
                 tint: tint.len(),
             });
         }
-        Ok(ProjectionContext { screen, lens, aperture, time, rays, tint })
+        Ok(ProjectionContext {
+            screen,
+            lens,
+            aperture,
+            time,
+            rays,
+            tint,
+        })
     }
 
     /// The number of rays in this batch (`numRays`).

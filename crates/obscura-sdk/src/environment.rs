@@ -18,7 +18,11 @@ impl Format {
     /// A format with square pixels.
     #[must_use]
     pub const fn new(width: u32, height: u32) -> Self {
-        Format { width, height, pixel_aspect: 1.0 }
+        Format {
+            width,
+            height,
+            pixel_aspect: 1.0,
+        }
     }
 
     /// Frame aspect ratio `a = W·pa / H`.
@@ -46,7 +50,12 @@ impl ScreenWindow {
     /// Makes a window from RIB's order `l r b t`.
     #[must_use]
     pub const fn new(left: f32, right: f32, bottom: f32, top: f32) -> Self {
-        ScreenWindow { left, right, bottom, top }
+        ScreenWindow {
+            left,
+            right,
+            bottom,
+            top,
+        }
     }
 
     /// RenderMan's default window for a format: with frame aspect `a = W·pa/H`, `(−a, a, −1, 1)` when
@@ -139,7 +148,10 @@ impl ProjectionEnvironment {
         mut world_to_camera: Vec<MotionSample>,
     ) -> Self {
         if world_to_camera.is_empty() {
-            world_to_camera.push(MotionSample { time: shutter.0, world_to_camera: Matrix4::IDENTITY });
+            world_to_camera.push(MotionSample {
+                time: shutter.0,
+                world_to_camera: Matrix4::IDENTITY,
+            });
         }
         world_to_camera.sort_by(|a, b| a.time.total_cmp(&b.time));
         ProjectionEnvironment {
@@ -158,7 +170,13 @@ impl ProjectionEnvironment {
     /// default clipping (0.1, ∞) and an identity camera: handy in tests and tools.
     #[must_use]
     pub fn for_format(format: Format) -> Self {
-        Self::new(format, ScreenWindow::default_for(format), (0.0, 0.0), (0.1, f32::INFINITY), Vec::new())
+        Self::new(
+            format,
+            ScreenWindow::default_for(format),
+            (0.0, 0.0),
+            (0.1, f32::INFINITY),
+            Vec::new(),
+        )
     }
 
     /// Image size and pixel aspect.
@@ -240,7 +258,11 @@ mod tests {
         assert_eq!((tall.left, tall.right), (-1.0, 1.0));
         assert!((tall.top - 1.777_777_8).abs() < 1e-6);
         // Pixel aspect widens the frame: 100×100 pixels of aspect 2 make a 2:1 frame.
-        let pa = ScreenWindow::default_for(Format { width: 100, height: 100, pixel_aspect: 2.0 });
+        let pa = ScreenWindow::default_for(Format {
+            width: 100,
+            height: 100,
+            pixel_aspect: 2.0,
+        });
         assert_eq!((pa.left, pa.right), (-2.0, 2.0));
     }
 
@@ -249,7 +271,10 @@ mod tests {
         let f = Format::new(640, 480);
         let w = ScreenWindow::default_for(f);
         assert_eq!(w.raster_to_screen(f, 0.0, 0.0), Point2::new(w.left, w.top));
-        assert_eq!(w.raster_to_screen(f, 640.0, 480.0), Point2::new(w.right, w.bottom));
+        assert_eq!(
+            w.raster_to_screen(f, 640.0, 480.0),
+            Point2::new(w.right, w.bottom)
+        );
         let (x, y) = w.screen_to_raster(f, w.raster_to_screen(f, 123.25, 77.5));
         assert!((x - 123.25).abs() < 1e-4 && (y - 77.5).abs() < 1e-4);
     }

@@ -42,9 +42,17 @@ pub struct Vec3 {
 
 impl Vec3 {
     /// The zero vector: as a ray direction it means "cull this sample".
-    pub const ZERO: Vec3 = Vec3 { x: 0.0, y: 0.0, z: 0.0 };
+    pub const ZERO: Vec3 = Vec3 {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+    };
     /// The camera's viewing axis.
-    pub const Z: Vec3 = Vec3 { x: 0.0, y: 0.0, z: 1.0 };
+    pub const Z: Vec3 = Vec3 {
+        x: 0.0,
+        y: 0.0,
+        z: 1.0,
+    };
 
     /// Makes a vector from its coordinates.
     #[inline]
@@ -147,9 +155,17 @@ pub struct Rgb {
 
 impl Rgb {
     /// (1, 1, 1): the tint that leaves the beauty unchanged.
-    pub const WHITE: Rgb = Rgb { r: 1.0, g: 1.0, b: 1.0 };
+    pub const WHITE: Rgb = Rgb {
+        r: 1.0,
+        g: 1.0,
+        b: 1.0,
+    };
     /// (0, 0, 0).
-    pub const BLACK: Rgb = Rgb { r: 0.0, g: 0.0, b: 0.0 };
+    pub const BLACK: Rgb = Rgb {
+        r: 0.0,
+        g: 0.0,
+        b: 0.0,
+    };
 
     /// Makes a colour from its channels.
     #[inline]
@@ -237,8 +253,14 @@ mod tests {
     fn matrix_uses_row_vectors_with_translation_in_the_last_row() {
         let mut m = Matrix4::IDENTITY;
         m.0[3] = [1.0, 2.0, 3.0, 1.0];
-        assert_eq!(m.transform_point(Vec3::new(1.0, 1.0, 1.0)), Vec3::new(2.0, 3.0, 4.0));
-        assert_eq!(m.transform_vector(Vec3::new(1.0, 1.0, 1.0)), Vec3::new(1.0, 1.0, 1.0));
+        assert_eq!(
+            m.transform_point(Vec3::new(1.0, 1.0, 1.0)),
+            Vec3::new(2.0, 3.0, 4.0)
+        );
+        assert_eq!(
+            m.transform_vector(Vec3::new(1.0, 1.0, 1.0)),
+            Vec3::new(1.0, 1.0, 1.0)
+        );
     }
 
     #[test]

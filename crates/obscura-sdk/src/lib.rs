@@ -59,8 +59,8 @@ pub use context::{ContextLengthError, ContextParts, ProjectionContext};
 pub use environment::{Format, MotionSample, ProjectionEnvironment, ScreenWindow};
 pub use geometry::{Matrix4, Point2, Rgb, Vec3};
 pub use param::{
-    DeclarationError, ParamDecl, ParamEntry, ParamError, ParamList, ParamType, ParamValue, Params, ValueRange,
-    did_you_mean, parse_declaration, parse_float,
+    DeclarationError, ParamDecl, ParamEntry, ParamError, ParamList, ParamType, ParamValue, Params,
+    ValueRange, did_you_mean, parse_declaration, parse_float,
 };
 pub use plugin::{PluginError, Projection, ProjectionFactory, SyncMessage};
 pub use property::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};

@@ -61,7 +61,11 @@ impl PerspectiveRays {
     /// and the focal length positive.
     #[must_use]
     pub fn lens_radius_for(f_stop: f32, focal_length: f32) -> f32 {
-        if f_stop.is_finite() && f_stop > 0.0 && focal_length > 0.0 { 0.5 * focal_length / f_stop } else { 0.0 }
+        if f_stop.is_finite() && f_stop > 0.0 && focal_length > 0.0 {
+            0.5 * focal_length / f_stop
+        } else {
+            0.0
+        }
     }
 
     /// The pinhole ray through screen point `s` with the screen plane at `d`.
@@ -80,6 +84,14 @@ impl PerspectiveRays {
             ray_spread: spread,
             min_dist: self.near / dz,
             max_dist: self.far / dz,
+        }
+    }
+
+    /// Pinhole rays for a whole batch with the screen plane at `d`, one [`PerspectiveRays::pinhole`] per
+    /// sample (the portable path; `PxrPerspective` adds an AVX2 kernel with bit-identical results).
+    pub fn pinhole_batch(&self, screen: &[Point2], d: f32, out: &mut [RayGeometry]) {
+        for (o, s) in out.iter_mut().zip(screen) {
+            *o = self.pinhole(*s, d);
         }
     }
 
@@ -108,7 +120,11 @@ impl PerspectiveRays {
     #[inline(always)]
     #[must_use]
     pub fn ray(&self, s: Point2, a: Point2, d: f32) -> RayGeometry {
-        if self.lens_radius > 0.0 { self.thin_lens(s, a, d) } else { self.pinhole(s, d) }
+        if self.lens_radius > 0.0 {
+            self.thin_lens(s, a, d)
+        } else {
+            self.pinhole(s, d)
+        }
     }
 }
 
@@ -192,7 +208,11 @@ mod tests {
         let s = Point2::new(0.3, -0.4);
         let d = 1.5;
         let focus = Vec3::new(s.x * 7.0 / d, s.y * 7.0 / d, 7.0);
-        for a in [Point2::new(1.0, 0.0), Point2::new(-0.3, 0.9), Point2::new(0.0, 0.0)] {
+        for a in [
+            Point2::new(1.0, 0.0),
+            Point2::new(-0.3, 0.9),
+            Point2::new(0.0, 0.0),
+        ] {
             let r = p.thin_lens(s, a, d);
             let t = (focus.z - r.origin.z) / r.direction.z;
             let hit = r.origin + r.direction * t;

@@ -187,29 +187,57 @@ impl ValueRange {
     /// `[min, max]`.
     #[must_use]
     pub const fn closed(min: f64, max: f64) -> Self {
-        ValueRange { min, max, min_inclusive: true, max_inclusive: true }
+        ValueRange {
+            min,
+            max,
+            min_inclusive: true,
+            max_inclusive: true,
+        }
     }
     /// `(min, max)`.
     #[must_use]
     pub const fn open(min: f64, max: f64) -> Self {
-        ValueRange { min, max, min_inclusive: false, max_inclusive: false }
+        ValueRange {
+            min,
+            max,
+            min_inclusive: false,
+            max_inclusive: false,
+        }
     }
     /// `[min, ∞]`: non-negative when `min` is 0; infinity itself allowed (an f-stop of ∞).
     #[must_use]
     pub const fn at_least(min: f64) -> Self {
-        ValueRange { min, max: f64::INFINITY, min_inclusive: true, max_inclusive: true }
+        ValueRange {
+            min,
+            max: f64::INFINITY,
+            min_inclusive: true,
+            max_inclusive: true,
+        }
     }
     /// `(min, ∞)`: strictly greater than `min`, finite.
     #[must_use]
     pub const fn greater_than(min: f64) -> Self {
-        ValueRange { min, max: f64::INFINITY, min_inclusive: false, max_inclusive: false }
+        ValueRange {
+            min,
+            max: f64::INFINITY,
+            min_inclusive: false,
+            max_inclusive: false,
+        }
     }
 
     /// True when `x` lies in the range (NaN never does).
     #[must_use]
     pub fn contains(&self, x: f64) -> bool {
-        let lo = if self.min_inclusive { x >= self.min } else { x > self.min };
-        let hi = if self.max_inclusive { x <= self.max } else { x < self.max };
+        let lo = if self.min_inclusive {
+            x >= self.min
+        } else {
+            x > self.min
+        };
+        let hi = if self.max_inclusive {
+            x <= self.max
+        } else {
+            x < self.max
+        };
         lo && hi
     }
 }
@@ -218,7 +246,11 @@ impl fmt::Display for ValueRange {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let end = |x: f64| {
             if x.is_infinite() {
-                if x > 0.0 { "∞".to_string() } else { "−∞".to_string() }
+                if x > 0.0 {
+                    "∞".to_string()
+                } else {
+                    "−∞".to_string()
+                }
             } else {
                 format!("{x}")
             }
@@ -279,12 +311,20 @@ impl ParamDecl {
     /// A `string` parameter.
     #[must_use]
     pub fn string(name: &'static str, default: &str) -> Self {
-        Self::new(name, ParamType::String, ParamValue::Strings(vec![default.to_string()]))
+        Self::new(
+            name,
+            ParamType::String,
+            ParamValue::Strings(vec![default.to_string()]),
+        )
     }
     /// A `color` parameter.
     #[must_use]
     pub fn color(name: &'static str, default: Rgb) -> Self {
-        Self::new(name, ParamType::Color, ParamValue::Floats(vec![default.r, default.g, default.b]))
+        Self::new(
+            name,
+            ParamType::Color,
+            ParamValue::Floats(vec![default.r, default.g, default.b]),
+        )
     }
     /// A `point`, `vector` or `normal` parameter.
     ///
@@ -296,7 +336,11 @@ impl ParamDecl {
             matches!(ty, ParamType::Point | ParamType::Vector | ParamType::Normal),
             "ParamDecl::triple takes point, vector or normal"
         );
-        Self::new(name, ty, ParamValue::Floats(vec![default.x, default.y, default.z]))
+        Self::new(
+            name,
+            ty,
+            ParamValue::Floats(vec![default.x, default.y, default.z]),
+        )
     }
     /// A `matrix` parameter.
     #[must_use]
@@ -377,7 +421,9 @@ pub struct ParamList {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum DeclarationError {
     /// The string is not `type name` or `type[n] name`.
-    #[error("cannot read parameter declaration \"{0}\": expected \"type name\" or \"type[n] name\", e.g. \"float fov\"")]
+    #[error(
+        "cannot read parameter declaration \"{0}\": expected \"type name\" or \"type[n] name\", e.g. \"float fov\""
+    )]
     Malformed(String),
     /// The type is not one of the eight.
     #[error(
@@ -434,7 +480,10 @@ fn kind_name(s: Storage) -> &'static str {
 /// # Errors
 /// A [`DeclarationError`] naming the declaration when it cannot be read.
 pub fn parse_declaration(decl: &str) -> Result<(ParamType, Option<usize>, String), DeclarationError> {
-    let words: Vec<&str> = decl.split_whitespace().filter(|w| !matches!(*w, "uniform" | "constant")).collect();
+    let words: Vec<&str> = decl
+        .split_whitespace()
+        .filter(|w| !matches!(*w, "uniform" | "constant"))
+        .collect();
     let [ty_word, name] = words[..] else {
         return Err(DeclarationError::Malformed(decl.to_string()));
     };
@@ -449,8 +498,10 @@ pub fn parse_declaration(decl: &str) -> Result<(ParamType, Option<usize>, String
             (t, Some(n))
         }
     };
-    let ty = ParamType::from_rib_name(ty_name)
-        .ok_or_else(|| DeclarationError::UnknownType { decl: decl.to_string(), ty: ty_name.to_string() })?;
+    let ty = ParamType::from_rib_name(ty_name).ok_or_else(|| DeclarationError::UnknownType {
+        decl: decl.to_string(),
+        ty: ty_name.to_string(),
+    })?;
     Ok((ty, len, name.to_string()))
 }
 
@@ -476,7 +527,9 @@ impl ParamList {
     ) -> Result<&mut Self, DeclarationError> {
         let (ty, array_len, name) = parse_declaration(decl)?;
         let value = match (ty.storage(), value) {
-            (Storage::Float, ParamValue::Ints(v)) => ParamValue::Floats(v.into_iter().map(|i| i as f32).collect()),
+            (Storage::Float, ParamValue::Ints(v)) => {
+                ParamValue::Floats(v.into_iter().map(|i| i as f32).collect())
+            }
             (_, v) => v,
         };
         if value.storage() != ty.storage() {
@@ -502,7 +555,13 @@ impl ParamList {
         }
         // An undeclared length is taken from the values: "float k" [1 2 3] is a float[3].
         let array_len = array_len.or(if got == comps { None } else { Some(got / comps) });
-        self.entries.push(ParamEntry { name, ty, array_len, value, origin });
+        self.entries.push(ParamEntry {
+            name,
+            ty,
+            array_len,
+            value,
+            origin,
+        });
         Ok(self)
     }
 
@@ -510,16 +569,31 @@ impl ParamList {
     ///
     /// # Errors
     /// A [`DeclarationError`] naming the declaration and the value that could not be read.
-    pub fn push_text(&mut self, decl: &str, values: &[&str], origin: Option<String>) -> Result<&mut Self, DeclarationError> {
+    pub fn push_text(
+        &mut self,
+        decl: &str,
+        values: &[&str],
+        origin: Option<String>,
+    ) -> Result<&mut Self, DeclarationError> {
         let (ty, _, _) = parse_declaration(decl)?;
-        let bad = |v: &str| DeclarationError::Value { decl: decl.to_string(), value: v.to_string(), ty };
+        let bad = |v: &str| DeclarationError::Value {
+            decl: decl.to_string(),
+            value: v.to_string(),
+            ty,
+        };
         let value = match ty.storage() {
             Storage::String => ParamValue::Strings(values.iter().map(|s| s.to_string()).collect()),
             Storage::Int => ParamValue::Ints(
-                values.iter().map(|v| v.parse::<i32>().map_err(|_| bad(v))).collect::<Result<_, _>>()?,
+                values
+                    .iter()
+                    .map(|v| v.parse::<i32>().map_err(|_| bad(v)))
+                    .collect::<Result<_, _>>()?,
             ),
             Storage::Float => ParamValue::Floats(
-                values.iter().map(|v| parse_float(v).ok_or_else(|| bad(v))).collect::<Result<_, _>>()?,
+                values
+                    .iter()
+                    .map(|v| parse_float(v).ok_or_else(|| bad(v)))
+                    .collect::<Result<_, _>>()?,
             ),
         };
         self.push(decl, value, origin)
@@ -631,7 +705,9 @@ pub enum ParamError {
         second: String,
     },
     /// The plugin itself asked for a parameter its table lacks, or as another type: a plugin bug.
-    #[error("{plugin}: internal error: parameter \"{name}\" looked up as {asked}, but the table declares {declared}")]
+    #[error(
+        "{plugin}: internal error: parameter \"{name}\" looked up as {asked}, but the table declares {declared}"
+    )]
     Lookup {
         /// The projection.
         plugin: String,
@@ -680,7 +756,10 @@ impl Params {
         let mut values: Vec<ParamValue> = table.iter().map(|d| d.default.clone()).collect();
         let mut given_at: Vec<Option<String>> = vec![None; table.len()];
         for entry in list.entries() {
-            let origin_text = entry.origin.clone().unwrap_or_else(|| "the parameter list".into());
+            let origin_text = entry
+                .origin
+                .clone()
+                .unwrap_or_else(|| "the parameter list".into());
             let Some(idx) = table.iter().position(|d| d.name == entry.name) else {
                 return Err(ParamError::Unknown {
                     plugin: plugin.to_string(),
@@ -689,7 +768,11 @@ impl Params {
                     known: if table.is_empty() {
                         "no parameters".into()
                     } else {
-                        table.iter().map(|d| d.name.as_ref()).collect::<Vec<_>>().join(", ")
+                        table
+                            .iter()
+                            .map(|d| d.name.as_ref())
+                            .collect::<Vec<_>>()
+                            .join(", ")
                     },
                     origin: entry.origin.clone(),
                 });
@@ -747,24 +830,43 @@ impl Params {
     /// True when the scene gave `name` (false when it is the default).
     #[must_use]
     pub fn is_given(&self, name: &str) -> bool {
-        self.decls.iter().position(|d| d.name == name).is_some_and(|i| self.given[i])
+        self.decls
+            .iter()
+            .position(|d| d.name == name)
+            .is_some_and(|i| self.given[i])
     }
 
-    fn lookup(&self, name: &str, ty: &[ParamType], len: Option<usize>, asked: &str) -> Result<&ParamValue, ParamError> {
+    fn lookup(
+        &self,
+        name: &str,
+        ty: &[ParamType],
+        len: Option<usize>,
+        asked: &str,
+    ) -> Result<&ParamValue, ParamError> {
         match self.decls.iter().position(|d| d.name == name) {
-            Some(i) if ty.contains(&self.decls[i].ty) && (len.is_none() || self.decls[i].array_len == len) => {
+            Some(i)
+                if ty.contains(&self.decls[i].ty) && (len.is_none() || self.decls[i].array_len == len) =>
+            {
                 Ok(&self.values[i])
             }
             found => Err(ParamError::Lookup {
                 plugin: self.plugin.clone(),
                 name: name.to_string(),
                 asked: asked.to_string(),
-                declared: found.map(|i| self.decls[i].rib_declaration()).unwrap_or_else(|| "nothing".into()),
+                declared: found
+                    .map(|i| self.decls[i].rib_declaration())
+                    .unwrap_or_else(|| "nothing".into()),
             }),
         }
     }
 
-    fn floats_of(&self, name: &str, ty: &[ParamType], len: Option<usize>, asked: &str) -> Result<&[f32], ParamError> {
+    fn floats_of(
+        &self,
+        name: &str,
+        ty: &[ParamType],
+        len: Option<usize>,
+        asked: &str,
+    ) -> Result<&[f32], ParamError> {
         match self.lookup(name, ty, len, asked)? {
             ParamValue::Floats(v) => Ok(v),
             _ => unreachable!("float-typed declarations hold floats: resolve checked it"),
@@ -815,7 +917,12 @@ impl Params {
     /// # Errors
     /// [`ParamError::Lookup`] when the table has no such parameter.
     pub fn triple(&self, name: &str) -> Result<Vec3, ParamError> {
-        let v = self.floats_of(name, &[ParamType::Point, ParamType::Vector, ParamType::Normal], None, "point")?;
+        let v = self.floats_of(
+            name,
+            &[ParamType::Point, ParamType::Vector, ParamType::Normal],
+            None,
+            "point",
+        )?;
         Ok(Vec3::new(v[0], v[1], v[2]))
     }
 
@@ -841,7 +948,12 @@ impl Params {
     }
 }
 
-fn check_value(plugin: &str, decl: &ParamDecl, value: &ParamValue, origin: Option<String>) -> Result<(), ParamError> {
+fn check_value(
+    plugin: &str,
+    decl: &ParamDecl,
+    value: &ParamValue,
+    origin: Option<String>,
+) -> Result<(), ParamError> {
     let out = |v: String, expected: String| ParamError::OutOfRange {
         plugin: plugin.to_string(),
         name: decl.name.to_string(),
@@ -878,7 +990,12 @@ fn check_value(plugin: &str, decl: &ParamDecl, value: &ParamValue, origin: Optio
             if !decl.choices.is_empty() {
                 for s in v {
                     if !decl.choices.iter().any(|c| c == s) {
-                        let list = decl.choices.iter().map(|c| format!("\"{c}\"")).collect::<Vec<_>>().join(", ");
+                        let list = decl
+                            .choices
+                            .iter()
+                            .map(|c| format!("\"{c}\""))
+                            .collect::<Vec<_>>()
+                            .join(", ");
                         let hint = did_you_mean(s, decl.choices.iter().map(|c| c.as_ref()))
                             .map(|h| format!(" (did you mean \"{h}\"?)"))
                             .unwrap_or_default();
@@ -897,7 +1014,9 @@ mod tests {
 
     fn table() -> Vec<ParamDecl> {
         vec![
-            ParamDecl::float("fov", 90.0).range(ValueRange::open(0.0, 180.0)).doc("field of view"),
+            ParamDecl::float("fov", 90.0)
+                .range(ValueRange::open(0.0, 180.0))
+                .doc("field of view"),
             ParamDecl::float("fStop", f32::INFINITY).range(ValueRange::at_least(0.0)),
             ParamDecl::int("samples", 4).range(ValueRange::closed(1.0, 64.0)),
             ParamDecl::string("eye", "left").choices(&["left", "right"]),
@@ -931,8 +1050,10 @@ mod tests {
     #[test]
     fn given_values_are_read_back_typed() {
         let mut l = list("float fov", &["45"]);
-        l.push_text("float[5] polynomial", &["1", "2", "3", "4", "5"], None).unwrap();
-        l.push_text("color transverse", &["1", "0.5", "0.25"], None).unwrap();
+        l.push_text("float[5] polynomial", &["1", "2", "3", "4", "5"], None)
+            .unwrap();
+        l.push_text("color transverse", &["1", "0.5", "0.25"], None)
+            .unwrap();
         l.push_text("string eye", &["right"], None).unwrap();
         let p = Params::resolve("P", &table(), &l).unwrap();
         assert_eq!(p.float("fov").unwrap(), 45.0);
@@ -946,7 +1067,10 @@ mod tests {
     fn unknown_name_names_plugin_and_suggests_the_close_one() {
         let err = Params::resolve("PxrPerspective", &table(), &list("float fvo", &["45"])).unwrap_err();
         let msg = err.to_string();
-        assert!(msg.starts_with("PxrPerspective: unknown parameter \"fvo\""), "{msg}");
+        assert!(
+            msg.starts_with("PxrPerspective: unknown parameter \"fvo\""),
+            "{msg}"
+        );
         assert!(msg.contains("did you mean \"fov\""), "{msg}");
         assert!(msg.contains("test:1"), "{msg}");
         assert!(msg.contains("fov, fStop, samples"), "{msg}");
@@ -962,9 +1086,29 @@ mod tests {
     #[test]
     fn wrong_array_length_is_refused() {
         let err = Params::resolve("P", &table(), &list("float[3] polynomial", &["1", "2", "3"])).unwrap_err();
-        assert!(matches!(err, ParamError::WrongLength { expected: 5, got: 3, .. }), "{err}");
+        assert!(
+            matches!(
+                err,
+                ParamError::WrongLength {
+                    expected: 5,
+                    got: 3,
+                    ..
+                }
+            ),
+            "{err}"
+        );
         let err = Params::resolve("P", &table(), &list("float fov", &["1", "2"])).unwrap_err();
-        assert!(matches!(err, ParamError::WrongLength { expected: 1, got: 2, .. }), "{err}");
+        assert!(
+            matches!(
+                err,
+                ParamError::WrongLength {
+                    expected: 1,
+                    got: 2,
+                    ..
+                }
+            ),
+            "{err}"
+        );
     }
 
     #[test]
@@ -990,14 +1134,35 @@ mod tests {
 
     #[test]
     fn declarations_parse_or_explain() {
-        assert_eq!(parse_declaration("float fov").unwrap(), (ParamType::Float, None, "fov".into()));
-        assert_eq!(parse_declaration("uniform float[5] k").unwrap(), (ParamType::Float, Some(5), "k".into()));
-        assert!(matches!(parse_declaration("flaot fov"), Err(DeclarationError::UnknownType { .. })));
-        assert!(matches!(parse_declaration("float[x] k"), Err(DeclarationError::Malformed(_))));
-        assert!(matches!(parse_declaration("fov"), Err(DeclarationError::Malformed(_))));
+        assert_eq!(
+            parse_declaration("float fov").unwrap(),
+            (ParamType::Float, None, "fov".into())
+        );
+        assert_eq!(
+            parse_declaration("uniform float[5] k").unwrap(),
+            (ParamType::Float, Some(5), "k".into())
+        );
+        assert!(matches!(
+            parse_declaration("flaot fov"),
+            Err(DeclarationError::UnknownType { .. })
+        ));
+        assert!(matches!(
+            parse_declaration("float[x] k"),
+            Err(DeclarationError::Malformed(_))
+        ));
+        assert!(matches!(
+            parse_declaration("fov"),
+            Err(DeclarationError::Malformed(_))
+        ));
         let mut l = ParamList::new();
-        assert!(matches!(l.push_text("color c", &["1", "2"], None), Err(DeclarationError::Count { .. })));
-        assert!(matches!(l.push_text("float f", &["x"], None), Err(DeclarationError::Value { .. })));
+        assert!(matches!(
+            l.push_text("color c", &["1", "2"], None),
+            Err(DeclarationError::Count { .. })
+        ));
+        assert!(matches!(
+            l.push_text("float f", &["x"], None),
+            Err(DeclarationError::Value { .. })
+        ));
         assert!(matches!(
             l.push("float f", ParamValue::Strings(vec!["a".into()]), None),
             Err(DeclarationError::Kind { .. })
@@ -1012,6 +1177,9 @@ mod tests {
         let p = Params::resolve("P", &table(), &ParamList::new()).unwrap();
         assert!(matches!(p.float("nope"), Err(ParamError::Lookup { .. })));
         assert!(matches!(p.int("fov"), Err(ParamError::Lookup { .. })));
-        assert!(matches!(p.floats("polynomial", 4), Err(ParamError::Lookup { .. })));
+        assert!(matches!(
+            p.floats("polynomial", 4),
+            Err(ParamError::Lookup { .. })
+        ));
     }
 }

@@ -45,14 +45,22 @@ impl Registry {
         if self.get(factory.name()).is_some() {
             return Err(DuplicateName(factory.name().to_string()));
         }
-        self.entries.push(Entry { factory, path: path.to_string(), initialized: false });
+        self.entries.push(Entry {
+            factory,
+            path: path.to_string(),
+            initialized: false,
+        });
         Ok(())
     }
 
     /// Every registered name, sorted.
     #[must_use]
     pub fn names(&self) -> Vec<String> {
-        let mut n: Vec<String> = self.entries.iter().map(|e| e.factory.name().to_string()).collect();
+        let mut n: Vec<String> = self
+            .entries
+            .iter()
+            .map(|e| e.factory.name().to_string())
+            .collect();
         n.sort();
         n
     }
@@ -60,7 +68,10 @@ impl Registry {
     /// The factory named `name`.
     #[must_use]
     pub fn get(&self, name: &str) -> Option<&dyn ProjectionFactory> {
-        self.entries.iter().find(|e| e.factory.name() == name).map(|e| e.factory.as_ref())
+        self.entries
+            .iter()
+            .find(|e| e.factory.name() == name)
+            .map(|e| e.factory.as_ref())
     }
 
     /// The factory named `name`, or an error listing the known ones.
