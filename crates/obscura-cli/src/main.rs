@@ -1,1 +1,202 @@
-fn main() {}
+//! The `obscura` command. Argument parsing only: every job lives in the library crates.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use obscura_host::aperture::ApertureDesc;
+use obscura_host::cli_params::push_param_arg;
+use obscura_host::raymap::{trace_ray_map, write_exr};
+use obscura_host::shutter::ShutterDesc;
+use obscura_host::{CameraDesc, CameraStage, CropWindow, listing};
+use obscura_projections::builtin_registry;
+use obscura_sdk::{Format, ParamList, ScreenWindow};
+
+/// Obscura: RenderMan-style camera projection plugins, and the host that drives them.
+#[derive(Parser, Debug)]
+#[command(name = "obscura", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Write every pixel's camera ray (origin, direction, radius, spread, tint, valid) as OpenEXR.
+    Rays(Box<RaysArgs>),
+    /// List the projections and their parameter tables.
+    Plugins {
+        /// Show only this projection.
+        name: Option<String>,
+    },
+}
+
+#[derive(Args, Debug)]
+struct RaysArgs {
+    /// The projection, e.g. PxrPerspective, PxrOrthographic.
+    #[arg(short, long, default_value = "PxrPerspective")]
+    projection: String,
+    /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
+    #[arg(long = "param", value_name = "PARAM")]
+    params: Vec<String>,
+    /// Image size in pixels, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_format)]
+    format: (u32, u32),
+    /// Pixel aspect ratio (pixel width / height).
+    #[arg(long, default_value_t = 1.0)]
+    pixel_aspect: f32,
+    /// ScreenWindow left right bottom top (default: from the frame aspect).
+    #[arg(long, num_args = 4, value_names = ["L", "R", "B", "T"], allow_negative_numbers = true)]
+    screen_window: Option<Vec<f32>>,
+    /// CropWindow xmin xmax ymin ymax, in NDC (y down).
+    #[arg(long, num_args = 4, value_names = ["XMIN", "XMAX", "YMIN", "YMAX"])]
+    crop: Option<Vec<f32>>,
+    /// Shutter open close (scene time).
+    #[arg(long, num_args = 2, value_names = ["OPEN", "CLOSE"], allow_negative_numbers = true)]
+    shutter: Option<Vec<f32>>,
+    /// Clipping near far.
+    #[arg(long, num_args = 2, value_names = ["NEAR", "FAR"])]
+    clipping: Option<Vec<f32>>,
+    /// Also write N sampled rays of every pixel, as layers sample1..sampleN.
+    #[arg(long, default_value_t = 0)]
+    samples: u32,
+    /// Seed of the sample sequence.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Camera option apertureNSides (< 3: circular).
+    #[arg(long, default_value_t = 0)]
+    aperture_sides: i32,
+    /// Camera option apertureAngle, degrees.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    aperture_angle: f32,
+    /// Camera option apertureRoundness, -1..1.
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    aperture_roundness: f32,
+    /// Camera option apertureDensity, -1..1.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    aperture_density: f32,
+    /// Camera option dofaspect.
+    #[arg(long, default_value_t = 1.0)]
+    dof_aspect: f32,
+    /// Camera option shutterOpenTime, 0..1.
+    #[arg(long, default_value_t = 0.0)]
+    shutter_open_time: f32,
+    /// Camera option shutterCloseTime, 0..1.
+    #[arg(long, default_value_t = 1.0)]
+    shutter_close_time: f32,
+    /// Camera option shutteropening: eight Bézier control values c1 c2 d1 d2 e1 e2 f1 f2.
+    #[arg(long, num_args = 8, value_name = "V")]
+    shutter_opening: Option<Vec<f32>>,
+    /// Output file.
+    #[arg(short, long, default_value = "rays.exr")]
+    output: PathBuf,
+}
+
+fn parse_format(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("'{s}': expected WIDTHxHEIGHT with positive integers, e.g. 640x480");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h) = (
+        w.trim().parse::<u32>().map_err(|_| bad())?,
+        h.trim().parse::<u32>().map_err(|_| bad())?,
+    );
+    if w == 0 || h == 0 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn camera(a: &RaysArgs) -> CameraDesc {
+    let mut cam = CameraDesc::new(Format {
+        width: a.format.0,
+        height: a.format.1,
+        pixel_aspect: a.pixel_aspect,
+    });
+    cam.screen_window = a
+        .screen_window
+        .as_ref()
+        .map(|w| ScreenWindow::new(w[0], w[1], w[2], w[3]));
+    if let Some(c) = &a.crop {
+        cam.crop_window = CropWindow {
+            x_min: c[0],
+            x_max: c[1],
+            y_min: c[2],
+            y_max: c[3],
+        };
+    }
+    if let Some(s) = &a.shutter {
+        cam.shutter = (s[0], s[1]);
+    }
+    if let Some(c) = &a.clipping {
+        cam.clipping = (c[0], c[1]);
+    }
+    cam.aperture = ApertureDesc {
+        n_sides: a.aperture_sides,
+        angle_deg: a.aperture_angle,
+        roundness: a.aperture_roundness,
+        density: a.aperture_density,
+        dof_aspect: a.dof_aspect,
+    };
+    cam.shutter_opening = ShutterDesc {
+        open_time: a.shutter_open_time,
+        close_time: a.shutter_close_time,
+        opening: a
+            .shutter_opening
+            .as_ref()
+            .map(|v| std::array::from_fn(|i| v[i]))
+            .unwrap_or(ShutterDesc::default().opening),
+    };
+    cam
+}
+
+fn rays(a: &RaysArgs) -> Result<(), String> {
+    let mut registry = builtin_registry();
+    let factory = registry.find(&a.projection).map_err(|e| e.to_string())?;
+    let mut params = ParamList::new();
+    for p in &a.params {
+        push_param_arg(&mut params, p, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
+    }
+    let cam = camera(a);
+    let stage = CameraStage::new(&mut registry, &a.projection, &params, &cam).map_err(|e| e.to_string())?;
+    for w in stage.setup_warnings() {
+        eprintln!("{w}");
+    }
+    let (map, report) = trace_ray_map(&stage, a.samples, a.seed).map_err(|e| e.to_string())?;
+    if let Some(w) = report.warning(stage.name()) {
+        eprintln!("{w}");
+    }
+    let attributes = [
+        ("obscura:projection", a.projection.clone()),
+        ("obscura:parameters", a.params.join("; ")),
+    ];
+    write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
+    println!(
+        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} culled for breaking the contract",
+        a.output.display(),
+        report.samples,
+        a.projection,
+        map.pixels.width(),
+        map.pixels.height(),
+        map.layers.len(),
+        if map.layers.len() == 1 { "" } else { "s" },
+        report.culled,
+        report.violations()
+    );
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Rays(a) => rays(a),
+        Command::Plugins { name } => listing::list(&builtin_registry(), name.as_deref())
+            .map(|text| print!("{text}"))
+            .map_err(|e| e.to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -25,7 +25,12 @@ pub struct CropWindow {
 
 impl Default for CropWindow {
     fn default() -> Self {
-        CropWindow { x_min: 0.0, x_max: 1.0, y_min: 0.0, y_max: 1.0 }
+        CropWindow {
+            x_min: 0.0,
+            x_max: 1.0,
+            y_min: 0.0,
+            y_max: 1.0,
+        }
     }
 }
 
@@ -85,7 +90,9 @@ impl CropWindow {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CameraError {
     /// `Format` is not positive.
-    #[error("Format: expected a positive width, height and pixel aspect ratio, got {width}x{height} with pixel aspect {pixel_aspect}")]
+    #[error(
+        "Format: expected a positive width, height and pixel aspect ratio, got {width}x{height} with pixel aspect {pixel_aspect}"
+    )]
     Format {
         /// Width given.
         width: u32,
@@ -98,7 +105,9 @@ pub enum CameraError {
     #[error("ScreenWindow: expected finite left < right and bottom < top, got {0} {1} {2} {3}")]
     ScreenWindow(f32, f32, f32, f32),
     /// `CropWindow` is outside [0, 1] or selects no pixel.
-    #[error("CropWindow: expected 0 <= xmin < xmax <= 1 and 0 <= ymin < ymax <= 1 selecting at least one pixel, got {0} {1} {2} {3}")]
+    #[error(
+        "CropWindow: expected 0 <= xmin < xmax <= 1 and 0 <= ymin < ymax <= 1 selecting at least one pixel, got {0} {1} {2} {3}"
+    )]
     CropWindow(f32, f32, f32, f32),
     /// `Shutter` is backwards or not finite.
     #[error("Shutter: expected finite open <= close, got {0} {1}")]
@@ -160,7 +169,11 @@ impl CameraDesc {
     pub fn validate(&self) -> Result<(), CameraError> {
         let f = self.format;
         if f.width == 0 || f.height == 0 || !(f.pixel_aspect.is_finite() && f.pixel_aspect > 0.0) {
-            return Err(CameraError::Format { width: f.width, height: f.height, pixel_aspect: f.pixel_aspect });
+            return Err(CameraError::Format {
+                width: f.width,
+                height: f.height,
+                pixel_aspect: f.pixel_aspect,
+            });
         }
         let w = self.screen_window();
         let finite = [w.left, w.right, w.bottom, w.top].iter().all(|v| v.is_finite());
@@ -168,7 +181,9 @@ impl CameraDesc {
             return Err(CameraError::ScreenWindow(w.left, w.right, w.bottom, w.top));
         }
         let c = self.crop_window;
-        let in_unit = [c.x_min, c.x_max, c.y_min, c.y_max].iter().all(|v| (0.0..=1.0).contains(v));
+        let in_unit = [c.x_min, c.x_max, c.y_min, c.y_max]
+            .iter()
+            .all(|v| (0.0..=1.0).contains(v));
         if !in_unit || c.x_min >= c.x_max || c.y_min >= c.y_max || c.pixels(f).is_empty() {
             return Err(CameraError::CropWindow(c.x_min, c.x_max, c.y_min, c.y_max));
         }
@@ -188,7 +203,8 @@ impl CameraDesc {
     /// The screen window in force: the explicit one or the default for the format.
     #[must_use]
     pub fn screen_window(&self) -> ScreenWindow {
-        self.screen_window.unwrap_or_else(|| ScreenWindow::default_for(self.format))
+        self.screen_window
+            .unwrap_or_else(|| ScreenWindow::default_for(self.format))
     }
 
     /// The pixels to render.
@@ -207,11 +223,20 @@ impl CameraDesc {
     #[must_use]
     pub fn environment(&self) -> ProjectionEnvironment {
         let motion = if self.world_to_camera.is_empty() {
-            vec![MotionSample { time: self.shutter.0, world_to_camera: Matrix4::IDENTITY }]
+            vec![MotionSample {
+                time: self.shutter.0,
+                world_to_camera: Matrix4::IDENTITY,
+            }]
         } else {
             self.world_to_camera.clone()
         };
-        ProjectionEnvironment::new(self.format, self.screen_window(), self.shutter, self.clipping, motion)
+        ProjectionEnvironment::new(
+            self.format,
+            self.screen_window(),
+            self.shutter,
+            self.clipping,
+            motion,
+        )
     }
 }
 
@@ -235,13 +260,41 @@ mod tests {
     fn crop_selects_pixels_without_moving_the_camera() {
         let mut cam = CameraDesc::new(Format::new(640, 480));
         let full = cam.raster_to_screen(100.5, 200.5);
-        cam.crop_window = CropWindow { x_min: 0.1, x_max: 0.5, y_min: 0.25, y_max: 1.0 };
-        assert_eq!(cam.pixels(), PixelRect { x0: 64, x1: 320, y0: 120, y1: 480 });
+        cam.crop_window = CropWindow {
+            x_min: 0.1,
+            x_max: 0.5,
+            y_min: 0.25,
+            y_max: 1.0,
+        };
+        assert_eq!(
+            cam.pixels(),
+            PixelRect {
+                x0: 64,
+                x1: 320,
+                y0: 120,
+                y1: 480
+            }
+        );
         assert_eq!(cam.raster_to_screen(100.5, 200.5), full);
-        assert_eq!(cam.environment().screen_window(), CameraDesc::new(Format::new(640, 480)).screen_window());
+        assert_eq!(
+            cam.environment().screen_window(),
+            CameraDesc::new(Format::new(640, 480)).screen_window()
+        );
         // Adjacent crops tile the image with no pixel twice and none missed.
-        let left = CropWindow { x_min: 0.0, x_max: 0.37, y_min: 0.0, y_max: 1.0 }.pixels(cam.format);
-        let right = CropWindow { x_min: 0.37, x_max: 1.0, y_min: 0.0, y_max: 1.0 }.pixels(cam.format);
+        let left = CropWindow {
+            x_min: 0.0,
+            x_max: 0.37,
+            y_min: 0.0,
+            y_max: 1.0,
+        }
+        .pixels(cam.format);
+        let right = CropWindow {
+            x_min: 0.37,
+            x_max: 1.0,
+            y_min: 0.0,
+            y_max: 1.0,
+        }
+        .pixels(cam.format);
         assert_eq!(left.x1, right.x0);
         assert_eq!(left.width() + right.width(), 640);
     }
@@ -250,14 +303,28 @@ mod tests {
     fn inconsistent_descriptions_name_the_request() {
         let mut cam = CameraDesc::new(Format::new(64, 64));
         cam.screen_window = Some(ScreenWindow::new(1.0, -1.0, -1.0, 1.0));
-        assert!(cam.validate().unwrap_err().to_string().starts_with("ScreenWindow:"));
+        assert!(
+            cam.validate()
+                .unwrap_err()
+                .to_string()
+                .starts_with("ScreenWindow:")
+        );
         let mut cam = CameraDesc::new(Format::new(64, 64));
-        cam.crop_window = CropWindow { x_min: 0.5, x_max: 0.5, y_min: 0.0, y_max: 1.0 };
+        cam.crop_window = CropWindow {
+            x_min: 0.5,
+            x_max: 0.5,
+            y_min: 0.0,
+            y_max: 1.0,
+        };
         assert!(cam.validate().unwrap_err().to_string().starts_with("CropWindow:"));
         let mut cam = CameraDesc::new(Format::new(64, 64));
         cam.clipping = (0.0, 10.0);
         assert!(cam.validate().unwrap_err().to_string().starts_with("Clipping:"));
-        let cam = CameraDesc::new(Format { width: 0, height: 4, pixel_aspect: 1.0 });
+        let cam = CameraDesc::new(Format {
+            width: 0,
+            height: 4,
+            pixel_aspect: 1.0,
+        });
         assert!(cam.validate().unwrap_err().to_string().starts_with("Format:"));
         assert!(CameraDesc::new(Format::new(64, 64)).validate().is_ok());
     }

@@ -14,7 +14,9 @@ use obscura_sdk::{DeclarationError, ParamDecl, ParamList, did_you_mean};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ParamArgError {
     /// The argument has none of the accepted forms.
-    #[error("--param '{arg}': expected \"type name=value\", \"name=value\" or RIB's '\"type name\" [values]', e.g. --param 'float fov=60'")]
+    #[error(
+        "--param '{arg}': expected \"type name=value\", \"name=value\" or RIB's '\"type name\" [values]', e.g. --param 'float fov=60'"
+    )]
     Form {
         /// The argument.
         arg: String,
@@ -46,7 +48,12 @@ pub enum ParamArgError {
 ///
 /// # Errors
 /// A [`ParamArgError`] quoting the argument.
-pub fn push_param_arg(list: &mut ParamList, arg: &str, plugin: &str, table: &[ParamDecl]) -> Result<(), ParamArgError> {
+pub fn push_param_arg(
+    list: &mut ParamList,
+    arg: &str,
+    plugin: &str,
+    table: &[ParamDecl],
+) -> Result<(), ParamArgError> {
     let form = || ParamArgError::Form { arg: arg.to_string() };
     let origin = Some(format!("--param '{arg}'"));
     let (decl, values): (String, Vec<String>) = if arg.trim_start().starts_with('"') {
@@ -54,10 +61,17 @@ pub fn push_param_arg(list: &mut ParamList, arg: &str, plugin: &str, table: &[Pa
     } else {
         let (lhs, rhs) = arg.split_once('=').ok_or_else(form)?;
         let lhs = lhs.trim();
-        let values: Vec<String> = if lhs.split_whitespace().next().is_some_and(|t| t.starts_with("string")) {
+        let values: Vec<String> = if lhs
+            .split_whitespace()
+            .next()
+            .is_some_and(|t| t.starts_with("string"))
+        {
             vec![rhs.to_string()]
         } else {
-            rhs.split([',', ' ']).filter(|v| !v.is_empty()).map(str::to_string).collect()
+            rhs.split([',', ' '])
+                .filter(|v| !v.is_empty())
+                .map(str::to_string)
+                .collect()
         };
         if lhs.contains(char::is_whitespace) {
             (lhs.to_string(), values)
@@ -70,7 +84,11 @@ pub fn push_param_arg(list: &mut ParamList, arg: &str, plugin: &str, table: &[Pa
                     suggestion: did_you_mean(lhs, table.iter().map(|d| d.name.as_ref())),
                 });
             };
-            let values = if d.ty == obscura_sdk::ParamType::String { vec![rhs.to_string()] } else { values };
+            let values = if d.ty == obscura_sdk::ParamType::String {
+                vec![rhs.to_string()]
+            } else {
+                values
+            };
             (d.rib_declaration(), values)
         }
     };
@@ -79,7 +97,10 @@ pub fn push_param_arg(list: &mut ParamList, arg: &str, plugin: &str, table: &[Pa
     }
     let refs: Vec<&str> = values.iter().map(String::as_str).collect();
     list.push_text(&decl, &refs, origin)
-        .map_err(|source| ParamArgError::Declaration { arg: arg.to_string(), source })?;
+        .map_err(|source| ParamArgError::Declaration {
+            arg: arg.to_string(),
+            source,
+        })?;
     Ok(())
 }
 
@@ -151,13 +172,24 @@ mod tests {
             assert_eq!(e.value, ParamValue::Floats(vec![60.0]), "{arg}");
             assert_eq!(e.origin.as_deref(), Some(format!("--param '{arg}'").as_str()));
         }
-        for arg in ["float[5] polynomial=0 1 2 3 4", "polynomial=0,1,2,3,4", "\"float[5] polynomial\" [0 1 2 3 4]"] {
+        for arg in [
+            "float[5] polynomial=0 1 2 3 4",
+            "polynomial=0,1,2,3,4",
+            "\"float[5] polynomial\" [0 1 2 3 4]",
+        ] {
             let l = one(arg).unwrap();
-            assert_eq!(l.get("polynomial").unwrap().value, ParamValue::Floats(vec![0.0, 1.0, 2.0, 3.0, 4.0]));
+            assert_eq!(
+                l.get("polynomial").unwrap().value,
+                ParamValue::Floats(vec![0.0, 1.0, 2.0, 3.0, 4.0])
+            );
         }
         for arg in ["string eye=right", "eye=right", "\"string eye\" [\"right\"]"] {
             let l = one(arg).unwrap();
-            assert_eq!(l.get("eye").unwrap().value, ParamValue::Strings(vec!["right".into()]), "{arg}");
+            assert_eq!(
+                l.get("eye").unwrap().value,
+                ParamValue::Strings(vec!["right".into()]),
+                "{arg}"
+            );
         }
     }
 

@@ -21,8 +21,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use obscura_sdk::optics::{OrthographicRays, PerspectiveRays, screen_distance};
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionProperty, PropertyValue, RayGeometry, Registry, Rgb, Vec3,
+    DeepMetric, DicingHint, ParamList, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, Registry, Rgb, Vec3,
 };
 
 use crate::aperture::ApertureWarp;
@@ -226,7 +226,10 @@ impl ContractReport {
         let i = v.index();
         self.counts[i] += 1;
         if self.examples[i].is_none() {
-            self.examples[i] = Some(Example { screen, detail: detail() });
+            self.examples[i] = Some(Example {
+                screen,
+                detail: detail(),
+            });
         }
     }
 
@@ -259,7 +262,10 @@ impl ContractReport {
             if n > 0 {
                 msg.push_str(&format!("\n  {n} {}", v.describe()));
                 if let Some(e) = self.example(v) {
-                    msg.push_str(&format!(" (first at screen ({}, {}): {})", e.screen.x, e.screen.y, e.detail));
+                    msg.push_str(&format!(
+                        " (first at screen ({}, {}): {})",
+                        e.screen.x, e.screen.y, e.detail
+                    ));
                 }
             }
         }
@@ -398,14 +404,23 @@ impl CameraStage {
         batch.aperture.resize(n, Point2::ZERO);
         batch.time.resize(n, 0.0);
         batch.rays.clear();
-        batch.rays.extend(batch.screen.iter().zip(&batch.aperture).map(|(s, a)| match &self.defaults {
-            DefaultRays::Perspective { rays, d } => rays.ray(*s, *a, *d),
-            DefaultRays::Orthographic(rays) => rays.ray(*s, *a),
-        }));
+        batch.rays.extend(
+            batch
+                .screen
+                .iter()
+                .zip(&batch.aperture)
+                .map(|(s, a)| match &self.defaults {
+                    DefaultRays::Perspective { rays, d } => rays.ray(*s, *a, *d),
+                    DefaultRays::Orthographic(rays) => rays.ray(*s, *a),
+                }),
+        );
         batch.tint.clear();
         batch.tint.resize(n, Rgb::WHITE);
 
-        let mut report = ContractReport { samples: n as u64, ..ContractReport::default() };
+        let mut report = ContractReport {
+            samples: n as u64,
+            ..ContractReport::default()
+        };
         let outcome = catch_unwind(AssertUnwindSafe(|| {
             let mut ctx = ProjectionContext::new(
                 &batch.screen,
@@ -445,17 +460,26 @@ fn validate(batch: &mut Batch, report: &mut ContractReport) {
         if !r.origin.is_finite() {
             bad = Some((Violation::NonFiniteOrigin, format!("origin {:?}", r.origin)));
         } else if !r.direction.is_finite() {
-            bad = Some((Violation::NonFiniteDirection, format!("direction {:?}", r.direction)));
+            bad = Some((
+                Violation::NonFiniteDirection,
+                format!("direction {:?}", r.direction),
+            ));
         } else if r.direction != Vec3::ZERO && (len - 1.0).abs() > UNIT_TOLERANCE {
             bad = Some((Violation::NonUnitDirection, format!("|direction| = {len}")));
         } else if !(0.0..1.0).contains(&t) {
             bad = Some((Violation::TimeOutOfRange, format!("time {t}")));
         } else if !(r.origin_radius >= 0.0 && r.origin_radius.is_finite()) {
-            bad = Some((Violation::BadOriginRadius, format!("origin_radius {}", r.origin_radius)));
+            bad = Some((
+                Violation::BadOriginRadius,
+                format!("origin_radius {}", r.origin_radius),
+            ));
         } else if !(r.ray_spread >= 0.0 && r.ray_spread.is_finite()) {
             bad = Some((Violation::BadRaySpread, format!("ray_spread {}", r.ray_spread)));
         } else if !(r.min_dist >= 0.0 && r.min_dist <= r.max_dist) {
-            bad = Some((Violation::BadDistances, format!("min_dist {} max_dist {}", r.min_dist, r.max_dist)));
+            bad = Some((
+                Violation::BadDistances,
+                format!("min_dist {} max_dist {}", r.min_dist, r.max_dist),
+            ));
         } else if !batch.tint[i].is_finite() {
             bad = Some((Violation::NonFiniteTint, format!("tint {:?}", batch.tint[i])));
         }
@@ -525,7 +549,11 @@ fn default_rays(props: &Properties, env: &ProjectionEnvironment) -> DefaultRays 
         ));
     }
     // A pinhole cannot show 180° or more; wider projections write their own rays anyway.
-    let fov = props.field_of_view.filter(|f| *f > 0.0).unwrap_or(90.0).min(179.0);
+    let fov = props
+        .field_of_view
+        .filter(|f| *f > 0.0)
+        .unwrap_or(90.0)
+        .min(179.0);
     DefaultRays::Perspective {
         rays: PerspectiveRays::new(env.pixel_size(), clipping, lens_radius, focal_distance),
         d: screen_distance(fov),
@@ -576,7 +604,8 @@ mod tests {
     #[test]
     fn a_modifier_that_only_rewrites_time_gets_the_default_rays() {
         let cam = camera();
-        let stage = CameraStage::with_projection("TimeOnly", Box::new(TimeOnly), cam.environment(), &cam).unwrap();
+        let stage =
+            CameraStage::with_projection("TimeOnly", Box::new(TimeOnly), cam.environment(), &cam).unwrap();
         let mut batch = grid_batch(&cam);
         let report = stage.run(&mut batch);
         assert!(report.is_clean(), "{:?}", report.warning("TimeOnly"));
@@ -607,11 +636,16 @@ mod tests {
     #[test]
     fn default_rays_use_the_reported_thin_lens() {
         let cam = camera();
-        let stage = CameraStage::with_projection("LensOnly", Box::new(LensOnly), cam.environment(), &cam).unwrap();
+        let stage =
+            CameraStage::with_projection("LensOnly", Box::new(LensOnly), cam.environment(), &cam).unwrap();
         let mut batch = Batch::default();
         let s = Point2::new(0.2, -0.1);
         for i in 0..16 {
-            batch.push(s, Point2::new((i as f32 + 0.5) / 16.0, ((i * 7 % 16) as f32 + 0.5) / 16.0), 0.0);
+            batch.push(
+                s,
+                Point2::new((i as f32 + 0.5) / 16.0, ((i * 7 % 16) as f32 + 0.5) / 16.0),
+                0.0,
+            );
         }
         assert!(stage.run(&mut batch).is_clean());
         let d = screen_distance(40.0);
@@ -648,7 +682,8 @@ mod tests {
     #[test]
     fn contract_breaches_are_culled_and_counted_by_kind() {
         let cam = camera();
-        let stage = CameraStage::with_projection("Broken", Box::new(Broken), cam.environment(), &cam).unwrap();
+        let stage =
+            CameraStage::with_projection("Broken", Box::new(Broken), cam.environment(), &cam).unwrap();
         let mut batch = grid_batch(&cam);
         let r = stage.run(&mut batch);
         for v in [
@@ -663,13 +698,19 @@ mod tests {
             assert_eq!(r.count(v), 1, "{v:?}");
         }
         assert_eq!(r.violations(), 7);
-        assert_eq!(r.culled, 1, "the projection's own zero direction is a cull, not a breach");
+        assert_eq!(
+            r.culled, 1,
+            "the projection's own zero direction is a cull, not a breach"
+        );
         for i in [0, 1, 2, 3, 5, 6, 7] {
             assert_eq!(batch.rays[i].direction, Vec3::ZERO, "sample {i} must be culled");
         }
         assert_ne!(batch.rays[8].direction, Vec3::ZERO);
         let w = r.warning("Broken").unwrap();
-        assert!(w.contains("projection Broken broke the projection contract on 7 of 3072 samples"), "{w}");
+        assert!(
+            w.contains("projection Broken broke the projection contract on 7 of 3072 samples"),
+            "{w}"
+        );
         assert!(w.contains("1 times outside [0, 1) (first at screen"), "{w}");
         assert!(w.contains("|direction| = 2"), "{w}");
     }
@@ -687,12 +728,17 @@ mod tests {
     #[test]
     fn a_panicking_projection_loses_its_batch_not_the_render() {
         let cam = camera();
-        let stage = CameraStage::with_projection("Panics", Box::new(Panics), cam.environment(), &cam).unwrap();
+        let stage =
+            CameraStage::with_projection("Panics", Box::new(Panics), cam.environment(), &cam).unwrap();
         let mut batch = grid_batch(&cam);
         let r = stage.run(&mut batch);
         assert_eq!(r.count(Violation::Panicked), 3072);
         assert!(batch.rays.iter().all(RayGeometry::is_culled));
-        assert!(r.warning("Panics").unwrap().contains("panicked: lens table missing"));
+        assert!(
+            r.warning("Panics")
+                .unwrap()
+                .contains("panicked: lens table missing")
+        );
     }
 
     struct WrongTypes;
@@ -710,9 +756,14 @@ mod tests {
     #[test]
     fn mistyped_properties_are_ignored_with_a_warning() {
         let cam = camera();
-        let stage = CameraStage::with_projection("WrongTypes", Box::new(WrongTypes), cam.environment(), &cam).unwrap();
+        let stage = CameraStage::with_projection("WrongTypes", Box::new(WrongTypes), cam.environment(), &cam)
+            .unwrap();
         assert_eq!(stage.setup_warnings().len(), 2);
-        assert!(stage.setup_warnings()[0].contains("k_DicingHint"), "{:?}", stage.setup_warnings());
+        assert!(
+            stage.setup_warnings()[0].contains("k_DicingHint"),
+            "{:?}",
+            stage.setup_warnings()
+        );
         assert_eq!(stage.properties().field_of_view, None);
         assert_eq!(stage.properties().dicing_hint, DicingHint::Perspective);
     }
@@ -723,8 +774,18 @@ mod tests {
         let mut cam = camera();
         cam.aperture.n_sides = 6;
         for (name, params) in [
-            ("PxrPerspective", vec![("float fStop", "2"), ("float focalLength", "0.1"), ("float fovEnd", "50")]),
-            ("PxrOrthographic", vec![("float fStop", "2"), ("float focalLength", "0.1")]),
+            (
+                "PxrPerspective",
+                vec![
+                    ("float fStop", "2"),
+                    ("float focalLength", "0.1"),
+                    ("float fovEnd", "50"),
+                ],
+            ),
+            (
+                "PxrOrthographic",
+                vec![("float fStop", "2"), ("float focalLength", "0.1")],
+            ),
         ] {
             let mut list = ParamList::new();
             for (d, v) in params {
@@ -741,10 +802,19 @@ mod tests {
 
     #[test]
     fn reports_merge() {
-        let mut a = ContractReport { samples: 10, culled: 1, ..Default::default() };
+        let mut a = ContractReport {
+            samples: 10,
+            culled: 1,
+            ..Default::default()
+        };
         a.record(Violation::TimeOutOfRange, Point2::ZERO, || "time 1".into());
-        let mut b = ContractReport { samples: 5, ..Default::default() };
-        b.record(Violation::TimeOutOfRange, Point2::new(1.0, 1.0), || "time 2".into());
+        let mut b = ContractReport {
+            samples: 5,
+            ..Default::default()
+        };
+        b.record(Violation::TimeOutOfRange, Point2::new(1.0, 1.0), || {
+            "time 2".into()
+        });
         b.record(Violation::BadRaySpread, Point2::ZERO, || "spread".into());
         a.merge(&b);
         assert_eq!((a.samples, a.culled, a.violations()), (15, 1, 3));

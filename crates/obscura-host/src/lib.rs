@@ -11,12 +11,14 @@
 //! - [`driver`]: the camera stage — fills a batch, pre-fills the renderer's default rays, calls
 //!   `project`, validates every ray and culls what breaks the contract, counting it;
 //! - [`raymap`]: the per-pixel ray map written by `obscura rays`;
+//! - [`listing`]: the text of `obscura plugins`;
 //! - [`cli_params`]: reading `--param` arguments against a projection's table.
 
 pub mod aperture;
 pub mod camera;
 pub mod cli_params;
 pub mod driver;
+pub mod listing;
 pub mod raymap;
 pub mod sampler;
 pub mod shutter;

@@ -12,8 +12,8 @@
 use std::path::{Path, PathBuf};
 
 use exr::prelude::{
-    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, IntegerBounds, Layer, LayerAttributes, Text,
-    Vec2, WritableImage,
+    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, IntegerBounds, Layer,
+    LayerAttributes, Text, Vec2, WritableImage,
 };
 use obscura_sdk::{Point2, RayGeometry, Rgb, Vec3};
 use rayon::prelude::*;
@@ -74,7 +74,11 @@ pub enum RayMapError {
 ///
 /// # Errors
 /// [`RayMapError::TooManySamples`] above [`MAX_SAMPLES`].
-pub fn trace_ray_map(stage: &CameraStage, samples: u32, seed: u32) -> Result<(RayMap, ContractReport), RayMapError> {
+pub fn trace_ray_map(
+    stage: &CameraStage,
+    samples: u32,
+    seed: u32,
+) -> Result<(RayMap, ContractReport), RayMapError> {
     if samples > MAX_SAMPLES {
         return Err(RayMapError::TooManySamples(samples));
     }
@@ -90,20 +94,33 @@ pub fn trace_ray_map(stage: &CameraStage, samples: u32, seed: u32) -> Result<(Ra
                 let mut b = Batch::with_capacity(rect.width() as usize);
                 for x in rect.x0..rect.x1 {
                     if layer == 0 {
-                        b.push(cam.raster_to_screen(x as f64 + 0.5, y as f64 + 0.5), Point2::new(0.5, 0.5), 0.0);
+                        b.push(
+                            cam.raster_to_screen(x as f64 + 0.5, y as f64 + 0.5),
+                            Point2::new(0.5, 0.5),
+                            0.0,
+                        );
                         b.aperture.push(Point2::ZERO);
                     } else {
                         let s = sampler.sample(x, y, layer - 1);
-                        let p = cam.raster_to_screen(x as f64 + s.pixel.0 as f64, y as f64 + s.pixel.1 as f64);
+                        let p =
+                            cam.raster_to_screen(x as f64 + s.pixel.0 as f64, y as f64 + s.pixel.1 as f64);
                         b.push(p, Point2::new(s.lens.0, s.lens.1), s.time);
                     }
                 }
-                let r = if layer == 0 { stage.run_prepared(&mut b) } else { stage.run(&mut b) };
+                let r = if layer == 0 {
+                    stage.run_prepared(&mut b)
+                } else {
+                    stage.run(&mut b)
+                };
                 (b, r)
             })
             .collect();
         let mut out = RayLayer {
-            name: if layer == 0 { String::new() } else { format!("sample{layer}") },
+            name: if layer == 0 {
+                String::new()
+            } else {
+                format!("sample{layer}")
+            },
             screen: Vec::with_capacity(rect.len()),
             rays: Vec::with_capacity(rect.len()),
             tint: Vec::with_capacity(rect.len()),
@@ -135,9 +152,16 @@ pub fn write_exr(
 ) -> Result<(), RayMapError> {
     let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
     for layer in &map.layers {
-        let prefix = if layer.name.is_empty() { String::new() } else { format!("{}.", layer.name) };
+        let prefix = if layer.name.is_empty() {
+            String::new()
+        } else {
+            format!("{}.", layer.name)
+        };
         let mut add = |name: &str, values: Vec<f32>| {
-            channels.push(AnyChannel::new(format!("{prefix}{name}").as_str(), FlatSamples::F32(values)));
+            channels.push(AnyChannel::new(
+                format!("{prefix}{name}").as_str(),
+                FlatSamples::F32(values),
+            ));
         };
         let rays = &layer.rays;
         let comp = |f: fn(&RayGeometry) -> f32| rays.iter().map(f).collect::<Vec<f32>>();
@@ -151,7 +175,10 @@ pub fn write_exr(
         add("raySpread", comp(|r| r.ray_spread));
         add("minDist", comp(|r| r.min_dist));
         add("maxDist", comp(|r| r.max_dist));
-        add("valid", comp(|r| if r.direction == Vec3::ZERO { 0.0 } else { 1.0 }));
+        add(
+            "valid",
+            comp(|r| if r.direction == Vec3::ZERO { 0.0 } else { 1.0 }),
+        );
         add("tint.R", layer.tint.iter().map(|t| t.r).collect());
         add("tint.G", layer.tint.iter().map(|t| t.g).collect());
         add("tint.B", layer.tint.iter().map(|t| t.b).collect());
@@ -162,35 +189,55 @@ pub fn write_exr(
         }
     }
     let size = (map.pixels.width() as usize, map.pixels.height() as usize);
-    let mut layer = Layer::new(size, LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels.into()));
+    let mut layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
     layer.attributes.layer_position = Vec2(map.pixels.x0 as i32, map.pixels.y0 as i32);
     // OpenEXR's screen window is centred at the origin with height 2 in NDC-like units: record ours.
     layer.attributes.screen_window_width = screen_window.width();
-    layer.attributes.screen_window_center =
-        Vec2(0.5 * (screen_window.left + screen_window.right), 0.5 * (screen_window.bottom + screen_window.top));
+    layer.attributes.screen_window_center = Vec2(
+        0.5 * (screen_window.left + screen_window.right),
+        0.5 * (screen_window.bottom + screen_window.top),
+    );
     for (k, v) in attributes {
-        layer.attributes.other.insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
+        layer
+            .attributes
+            .other
+            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
     }
     let mut image = Image::from_layer(layer);
-    image.attributes.display_window = IntegerBounds::new((0, 0), (format.width as usize, format.height as usize));
+    image.attributes.display_window =
+        IntegerBounds::new((0, 0), (format.width as usize, format.height as usize));
     image.attributes.pixel_aspect = format.pixel_aspect;
 
     let tmp = temporary_sibling(path);
     let written = image.write().to_file(&tmp);
     if let Err(source) = written {
         let _ = std::fs::remove_file(&tmp);
-        return Err(RayMapError::Write { path: path.to_path_buf(), source });
+        return Err(RayMapError::Write {
+            path: path.to_path_buf(),
+            source,
+        });
     }
     std::fs::rename(&tmp, path).map_err(|source| {
         let _ = std::fs::remove_file(&tmp);
-        RayMapError::Rename { path: path.to_path_buf(), source }
+        RayMapError::Rename {
+            path: path.to_path_buf(),
+            source,
+        }
     })
 }
 
 /// `dir/.name.tmp-PID`: same directory (so the rename is atomic), hidden, unique per process.
 #[must_use]
 pub fn temporary_sibling(path: &Path) -> PathBuf {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
     path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
 
@@ -212,17 +259,36 @@ mod tests {
     #[test]
     fn chief_rays_match_the_closed_form_and_crops_are_the_same_region() {
         let mut cam = CameraDesc::new(Format::new(32, 24));
-        let full = trace_ray_map(&stage(&cam, &[("float fov", "50")]), 0, 0).unwrap().0;
+        let full = trace_ray_map(&stage(&cam, &[("float fov", "50")]), 0, 0)
+            .unwrap()
+            .0;
         let d = 1.0 / (25.0f64.to_radians()).tan();
         for (i, r) in full.layers[0].rays.iter().enumerate() {
             let (x, y) = ((i % 32) as f64 + 0.5, (i / 32) as f64 + 0.5);
             let (sx, sy) = (-4.0 / 3.0 + x / 32.0 * 8.0 / 3.0, 1.0 - y / 24.0 * 2.0);
             let l = (sx * sx + sy * sy + d * d).sqrt();
-            assert!((r.direction.x as f64 - sx / l).abs() < 1e-6 && (r.direction.y as f64 - sy / l).abs() < 1e-6);
+            assert!(
+                (r.direction.x as f64 - sx / l).abs() < 1e-6 && (r.direction.y as f64 - sy / l).abs() < 1e-6
+            );
         }
-        cam.crop_window = CropWindow { x_min: 0.25, x_max: 0.75, y_min: 0.5, y_max: 1.0 };
-        let crop = trace_ray_map(&stage(&cam, &[("float fov", "50")]), 0, 0).unwrap().0;
-        assert_eq!(crop.pixels, PixelRect { x0: 8, x1: 24, y0: 12, y1: 24 });
+        cam.crop_window = CropWindow {
+            x_min: 0.25,
+            x_max: 0.75,
+            y_min: 0.5,
+            y_max: 1.0,
+        };
+        let crop = trace_ray_map(&stage(&cam, &[("float fov", "50")]), 0, 0)
+            .unwrap()
+            .0;
+        assert_eq!(
+            crop.pixels,
+            PixelRect {
+                x0: 8,
+                x1: 24,
+                y0: 12,
+                y1: 24
+            }
+        );
         for (i, r) in crop.layers[0].rays.iter().enumerate() {
             let (x, y) = (8 + i % 16, 12 + i / 16);
             assert_eq!(*r, full.layers[0].rays[y * 32 + x]);
@@ -240,7 +306,11 @@ mod tests {
         for layer in &map.layers[1..] {
             for (i, s) in layer.screen.iter().enumerate() {
                 let (x, y) = w.screen_to_raster(cam.format, *s);
-                assert_eq!(((x.floor() as usize), (y.floor() as usize)), (i % 16, i / 16), "{s:?}");
+                assert_eq!(
+                    ((x.floor() as usize), (y.floor() as usize)),
+                    (i % 16, i / 16),
+                    "{s:?}"
+                );
             }
         }
         assert_ne!(map.layers[1].screen, map.layers[2].screen);
@@ -249,7 +319,10 @@ mod tests {
     #[test]
     fn too_many_samples_is_an_error() {
         let cam = CameraDesc::new(Format::new(4, 4));
-        assert!(matches!(trace_ray_map(&stage(&cam, &[]), MAX_SAMPLES + 1, 0), Err(RayMapError::TooManySamples(_))));
+        assert!(matches!(
+            trace_ray_map(&stage(&cam, &[]), MAX_SAMPLES + 1, 0),
+            Err(RayMapError::TooManySamples(_))
+        ));
     }
 
     #[test]

@@ -103,7 +103,11 @@ mod tests {
             corr += (c.pixel.0 as f64 - 0.5) * (c.lens.0 as f64 - 0.5);
         }
         // Uniform on [0,1): variance 1/12; a correlation of 0.1 would give 34 here.
-        assert!((corr / n as f64 * 12.0).abs() < 0.05, "correlation {}", corr / n as f64 * 12.0);
+        assert!(
+            (corr / n as f64 * 12.0).abs() < 0.05,
+            "correlation {}",
+            corr / n as f64 * 12.0
+        );
     }
 
     #[test]

@@ -21,9 +21,9 @@ pub enum SyncMessage {
 /// Why a factory could not initialise or create a projection.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PluginError {
-    /// A parameter did not fit the table.
+    /// A parameter did not fit the table (boxed: errors stay small on the success path).
     #[error(transparent)]
-    Param(#[from] ParamError),
+    Param(Box<ParamError>),
     /// The parameters fit the table but describe no valid camera (three collinear focus points, …).
     #[error("{plugin}: {message}")]
     Invalid {
@@ -52,6 +52,12 @@ pub enum PluginError {
         /// Every registered name.
         known: Vec<String>,
     },
+}
+
+impl From<ParamError> for PluginError {
+    fn from(e: ParamError) -> Self {
+        PluginError::Param(Box::new(e))
+    }
 }
 
 /// A camera model, created once per camera per render (`RixProjection`).

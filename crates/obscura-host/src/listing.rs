@@ -1,0 +1,104 @@
+//! `obscura plugins`: the projections a registry knows and their parameter tables, as text.
+
+use obscura_sdk::{ParamDecl, ParamValue, PluginError, ProjectionFactory, Registry};
+
+/// The listing of one projection: its name and summary, then one line per parameter with its RIB
+/// declaration, default, allowed values and documentation.
+#[must_use]
+pub fn describe(factory: &dyn ProjectionFactory) -> String {
+    let mut out = format!("{}\n    {}\n", factory.name(), factory.summary());
+    let table = factory.param_table();
+    if table.is_empty() {
+        out.push_str("    (no parameters)\n");
+    }
+    let rows: Vec<(String, String, String, &str)> = table
+        .iter()
+        .map(|d| {
+            (
+                d.rib_declaration(),
+                default_text(d),
+                allowed_text(d),
+                d.doc.as_ref(),
+            )
+        })
+        .collect();
+    let w0 = rows.iter().map(|r| r.0.len()).max().unwrap_or(0);
+    let w1 = rows.iter().map(|r| r.1.chars().count()).max().unwrap_or(0);
+    let w2 = rows.iter().map(|r| r.2.chars().count()).max().unwrap_or(0);
+    for (decl, default, allowed, doc) in rows {
+        out.push_str(&format!(
+            "    \"{decl}\"{:p0$} {default}{:p1$}  {allowed}{:p2$}  {doc}\n",
+            "",
+            "",
+            "",
+            p0 = w0 - decl.len(),
+            p1 = w1 - default.chars().count(),
+            p2 = w2 - allowed.chars().count(),
+        ));
+    }
+    out
+}
+
+fn default_text(d: &ParamDecl) -> String {
+    match &d.default {
+        ParamValue::Strings(v) if v.len() == 1 => format!("[\"{}\"]", v[0]),
+        v => v.to_string(),
+    }
+}
+
+fn allowed_text(d: &ParamDecl) -> String {
+    if let Some(r) = d.range {
+        r.to_string()
+    } else if !d.choices.is_empty() {
+        d.choices.join("|")
+    } else {
+        String::new()
+    }
+}
+
+/// Every projection in `registry`, or only `name`.
+///
+/// # Errors
+/// [`PluginError::Unknown`] when `name` is not registered.
+pub fn list(registry: &Registry, name: Option<&str>) -> Result<String, PluginError> {
+    match name {
+        Some(n) => Ok(describe(registry.find(n)?)),
+        None => Ok(registry
+            .names()
+            .iter()
+            .filter_map(|n| registry.get(n))
+            .map(describe)
+            .collect::<Vec<_>>()
+            .join("\n")),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obscura_projections::builtin_registry;
+
+    #[test]
+    fn perspective_listing_shows_declarations_defaults_ranges_and_docs() {
+        let text = list(&builtin_registry(), Some("PxrPerspective")).unwrap();
+        assert!(text.starts_with("PxrPerspective\n"), "{text}");
+        let fov = text.lines().find(|l| l.contains("\"float fov\"")).unwrap();
+        assert!(
+            fov.contains("[90]") && fov.contains("(0, 180)") && fov.contains("field of view"),
+            "{fov}"
+        );
+        let fstop = text.lines().find(|l| l.contains("\"float fStop\"")).unwrap();
+        assert!(fstop.contains("[inf]") && fstop.contains("[0, ∞]"), "{fstop}");
+    }
+
+    #[test]
+    fn full_listing_has_every_builtin_and_unknown_names_are_errors() {
+        let text = list(&builtin_registry(), None).unwrap();
+        assert!(text.contains("PxrOrthographic\n") && text.contains("PxrPerspective\n"));
+        let err = list(&builtin_registry(), Some("Nope")).unwrap_err().to_string();
+        assert!(
+            err.contains("known projections: PxrOrthographic, PxrPerspective"),
+            "{err}"
+        );
+    }
+}
