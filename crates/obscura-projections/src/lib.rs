@@ -10,6 +10,7 @@
 //!
 //! [`register_builtins`] adds them all to a [`Registry`]; [`builtin_registry`] makes one holding them.
 
+pub mod dof;
 pub mod orthographic;
 pub mod perspective;
 pub mod simd;

@@ -20,35 +20,19 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::optics::{OrthographicRays, PerspectiveRays};
+use obscura_sdk::optics::OrthographicRays;
 use obscura_sdk::{
     DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, ValueRange, Vec3,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, Vec3,
 };
 
+use crate::dof::{self, DepthOfField};
 use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrOrthographic";
 
-static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
-    vec![
-        ParamDecl::float("fStop", f32::INFINITY)
-            .range(ValueRange::at_least(0.0))
-            .doc("aperture f-number; inf (or 0) = no depth of field"),
-        ParamDecl::float("focalLength", 0.0)
-            .range(ValueRange {
-                min: 0.0,
-                max: f64::INFINITY,
-                min_inclusive: true,
-                max_inclusive: false,
-            })
-            .doc("focal length in scene units; the lens radius is focalLength/(2 fStop)"),
-        ParamDecl::float("focalDistance", 1.0)
-            .range(ValueRange::greater_than(0.0))
-            .doc("distance to the plane in focus, scene units"),
-    ]
-});
+static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| dof::params().to_vec());
 
 /// Creates [`Orthographic`] projections.
 #[derive(Debug, Default, Clone, Copy)]
@@ -74,12 +58,7 @@ impl ProjectionFactory for OrthographicFactory {
     ) -> Result<Box<dyn Projection>, PluginError> {
         let p = Params::resolve(NAME, &TABLE, params)?;
         env.set_deep_metric(DeepMetric::CameraZ);
-        Ok(Box::new(Orthographic::new(
-            env,
-            p.float("fStop")?,
-            p.float("focalLength")?,
-            p.float("focalDistance")?,
-        )))
+        Ok(Box::new(Orthographic::new(env, DepthOfField::from_params(&p)?)))
     }
 }
 
@@ -87,38 +66,31 @@ impl ProjectionFactory for OrthographicFactory {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Orthographic {
     rays: OrthographicRays,
-    f_stop: f32,
-    focal_length: f32,
+    dof: DepthOfField,
 }
 
 impl Orthographic {
-    /// An orthographic camera for `env`, with a thin lens when `f_stop` is finite and positive and
-    /// `focal_length` positive.
+    /// An orthographic camera for `env`, with a thin lens when `dof` is on.
     #[must_use]
-    pub fn new(env: &ProjectionEnvironment, f_stop: f32, focal_length: f32, focal_distance: f32) -> Self {
+    pub fn new(env: &ProjectionEnvironment, dof: DepthOfField) -> Self {
         Orthographic {
             rays: OrthographicRays::new(
                 env.pixel_size(),
                 (env.clipping_near(), env.clipping_far()),
-                PerspectiveRays::lens_radius_for(f_stop, focal_length),
-                focal_distance,
+                dof.lens_radius(),
+                dof.focal_distance,
             ),
-            f_stop,
-            focal_length,
+            dof,
         }
     }
 }
 
 impl Projection for Orthographic {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        let dof = self.rays.lens_radius > 0.0;
         match property {
             ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Orthographic)),
             ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
-            ProjectionProperty::FStop if dof => Some(PropertyValue::Float(self.f_stop)),
-            ProjectionProperty::FocalLength if dof => Some(PropertyValue::Float(self.focal_length)),
-            ProjectionProperty::FocalDistance if dof => Some(PropertyValue::Float(self.rays.focal_distance)),
-            _ => None,
+            other => self.dof.property(other),
         }
     }
 

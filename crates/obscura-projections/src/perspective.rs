@@ -30,13 +30,14 @@ use obscura_sdk::{
     Vec3,
 };
 
+use crate::dof::{self, DepthOfField};
 use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrPerspective";
 
 static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
-    vec![
+    let mut table = vec![
         ParamDecl::float("fov", 90.0)
             .range(ValueRange::open(0.0, 180.0))
             .doc(
@@ -50,21 +51,9 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
                 max_inclusive: false,
             })
             .doc("field of view at shutter close, for zoom blur; 0 = same as fov"),
-        ParamDecl::float("fStop", f32::INFINITY)
-            .range(ValueRange::at_least(0.0))
-            .doc("aperture f-number; inf (or 0) = pinhole, no depth of field"),
-        ParamDecl::float("focalLength", 0.0)
-            .range(ValueRange {
-                min: 0.0,
-                max: f64::INFINITY,
-                min_inclusive: true,
-                max_inclusive: false,
-            })
-            .doc("focal length in scene units; the lens radius is focalLength/(2 fStop)"),
-        ParamDecl::float("focalDistance", 1.0)
-            .range(ValueRange::greater_than(0.0))
-            .doc("distance to the plane in focus, scene units"),
-    ]
+    ];
+    table.extend(dof::params());
+    table
 });
 
 /// Creates [`Perspective`] projections.
@@ -90,19 +79,13 @@ impl ProjectionFactory for PerspectiveFactory {
         params: &ParamList,
     ) -> Result<Box<dyn Projection>, PluginError> {
         let p = Params::resolve(NAME, &TABLE, params)?;
-        let fov = p.float("fov")?;
-        let fov_end = p.float("fovEnd")?;
-        let f_stop = p.float("fStop")?;
-        let focal_length = p.float("focalLength")?;
-        let focal_distance = p.float("focalDistance")?;
         env.set_deep_metric(DeepMetric::CameraZ);
+        let (fov, fov_end) = (p.float("fov")?, p.float("fovEnd")?);
         Ok(Box::new(Perspective::new(
             env,
             fov,
             fov_end,
-            f_stop,
-            focal_length,
-            focal_distance,
+            DepthOfField::from_params(&p)?,
         )))
     }
 }
@@ -115,35 +98,24 @@ pub struct Perspective {
     /// `Some(fovEnd)` when the field of view changes during the shutter.
     fov_end: Option<f32>,
     d: f32,
-    f_stop: f32,
-    focal_length: f32,
+    dof: DepthOfField,
 }
 
 impl Perspective {
-    /// A perspective camera for `env`; `fov_end` 0 means no zoom, an infinite or zero `f_stop` or a zero
-    /// `focal_length` means a pinhole.
+    /// A perspective camera for `env`; `fov_end` 0 means no zoom.
     #[must_use]
-    pub fn new(
-        env: &ProjectionEnvironment,
-        fov: f32,
-        fov_end: f32,
-        f_stop: f32,
-        focal_length: f32,
-        focal_distance: f32,
-    ) -> Self {
-        let lens_radius = PerspectiveRays::lens_radius_for(f_stop, focal_length);
+    pub fn new(env: &ProjectionEnvironment, fov: f32, fov_end: f32, dof: DepthOfField) -> Self {
         Perspective {
             rays: PerspectiveRays::new(
                 env.pixel_size(),
                 (env.clipping_near(), env.clipping_far()),
-                lens_radius,
-                focal_distance,
+                dof.lens_radius(),
+                dof.focal_distance,
             ),
             fov,
             fov_end: (fov_end > 0.0 && fov_end != fov).then_some(fov_end),
             d: screen_distance(fov),
-            f_stop,
-            focal_length,
+            dof,
         }
     }
 
@@ -160,23 +132,19 @@ impl Perspective {
     /// True when depth of field is on.
     #[must_use]
     pub fn has_depth_of_field(&self) -> bool {
-        self.rays.lens_radius > 0.0
+        self.dof.is_on()
     }
 }
 
 impl Projection for Perspective {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        let dof = self.has_depth_of_field();
         match property {
             ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Perspective)),
             ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
             ProjectionProperty::FieldOfView => Some(PropertyValue::Float(
                 self.fov_end.map_or(self.fov, |e| e.min(self.fov)),
             )),
-            ProjectionProperty::FStop if dof => Some(PropertyValue::Float(self.f_stop)),
-            ProjectionProperty::FocalLength if dof => Some(PropertyValue::Float(self.focal_length)),
-            ProjectionProperty::FocalDistance if dof => Some(PropertyValue::Float(self.rays.focal_distance)),
-            _ => None,
+            other => self.dof.property(other),
         }
     }
 
