@@ -1,0 +1,27 @@
+//! # obscura-render
+//!
+//! Obscura's renderer: the host that drives a projection the way RenderMan's document says and turns
+//! the rays into pictures.
+//!
+//! | module | job |
+//! |---|---|
+//! | [`ray`] | the ray, the hit, the [`ray::Tracer`] interface, triangle meshes |
+//! | [`rng`] | the per-path random number generator |
+//! | [`dice`] | quadrics and subdivision surfaces → triangles, at a rate from the dicing hint |
+//! | [`bvh`] | binned-SAH BVH per mesh, and the two-level motion-blurred scene accelerator |
+//! | [`material`], [`light`], [`integrator`] | shading: BSDFs, the four lights, the path tracer |
+//! | [`filter`], [`film`], [`output`], [`deep`] | pixel filters, AOV accumulation, EXR/PNG/deep EXR |
+//! | [`render`] | the render loop: camera stage → world rays → trace → film |
+
+pub mod bvh;
+pub mod deep;
+pub mod dice;
+pub mod film;
+pub mod filter;
+pub mod integrator;
+pub mod light;
+pub mod material;
+pub mod output;
+pub mod ray;
+pub mod render;
+pub mod rng;

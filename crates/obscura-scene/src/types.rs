@@ -1,0 +1,342 @@
+//! The scene description: what a reader produces and the renderer consumes.
+
+use std::path::PathBuf;
+
+use glam::{Mat4, Vec3};
+use obscura_host::CameraDesc;
+use obscura_sdk::{ParamList, Rgb};
+
+/// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
+/// least one. Matrices act on column vectors (`p' = M·p`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct MotionTransform {
+    /// `(time in scene units, matrix)`, sorted by time.
+    pub samples: Vec<(f32, Mat4)>,
+}
+
+impl MotionTransform {
+    /// A transform that does not move.
+    #[must_use]
+    pub fn fixed(m: Mat4) -> Self {
+        MotionTransform { samples: vec![(0.0, m)] }
+    }
+
+    /// True when there is more than one distinct sample.
+    #[must_use]
+    pub fn is_moving(&self) -> bool {
+        self.samples.windows(2).any(|w| w[0].1 != w[1].1)
+    }
+}
+
+impl Default for MotionTransform {
+    fn default() -> Self {
+        MotionTransform::fixed(Mat4::IDENTITY)
+    }
+}
+
+/// A triangle mesh (what polygons are triangulated into at load time).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Mesh {
+    /// Vertex positions, object space.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals, if the file gives them (`"N"`).
+    pub normals: Option<Vec<Vec3>>,
+    /// Triangles, as indices into `positions`.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// A Catmull–Clark subdivision control mesh (`SubdivisionMesh "catmull-clark"`).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SubdivMesh {
+    /// Control-point positions, object space.
+    pub positions: Vec<Vec3>,
+    /// Vertices per face.
+    pub face_counts: Vec<u32>,
+    /// Face vertex indices, face after face.
+    pub face_indices: Vec<u32>,
+    /// Edges tagged `"crease"`: (vertex a, vertex b, sharpness).
+    pub creases: Vec<(u32, u32, f32)>,
+    /// True when the `"interpolateboundary"` tag is present.
+    pub interpolate_boundary: bool,
+}
+
+/// A shape in object space, as the RenderMan Interface defines it. Angles in degrees.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Shape {
+    /// `Sphere radius zmin zmax thetamax`.
+    Sphere {
+        /// Radius.
+        radius: f32,
+        /// Lower z cut.
+        z_min: f32,
+        /// Upper z cut.
+        z_max: f32,
+        /// Sweep about z, degrees.
+        theta_max: f32,
+    },
+    /// `Cylinder radius zmin zmax thetamax` (open, around z).
+    Cylinder {
+        /// Radius.
+        radius: f32,
+        /// Lower z.
+        z_min: f32,
+        /// Upper z.
+        z_max: f32,
+        /// Sweep about z, degrees.
+        theta_max: f32,
+    },
+    /// `Cone height radius thetamax` (base on z = 0, apex at z = height).
+    Cone {
+        /// Height.
+        height: f32,
+        /// Base radius.
+        radius: f32,
+        /// Sweep, degrees.
+        theta_max: f32,
+    },
+    /// `Disk height radius thetamax` (at z = height).
+    Disk {
+        /// z of the disk.
+        height: f32,
+        /// Radius.
+        radius: f32,
+        /// Sweep, degrees.
+        theta_max: f32,
+    },
+    /// `Torus majorradius minorradius phimin phimax thetamax`.
+    Torus {
+        /// Distance from the z axis to the tube centre.
+        major_radius: f32,
+        /// Tube radius.
+        minor_radius: f32,
+        /// Start of the tube-angle sweep, degrees.
+        phi_min: f32,
+        /// End of the tube-angle sweep, degrees.
+        phi_max: f32,
+        /// Sweep about z, degrees.
+        theta_max: f32,
+    },
+    /// Polygons, already triangulated.
+    Mesh(Mesh),
+    /// A subdivision surface.
+    Subdiv(SubdivMesh),
+}
+
+/// A surface's material (`Bxdf`). Colours are linear RGB.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Material {
+    /// `Bxdf "PxrDiffuse"`: Lambertian, `diffuseColor` (default 0.18).
+    Diffuse {
+        /// Albedo.
+        color: Rgb,
+    },
+    /// `Bxdf "PxrConstant"`: emits `emitColor` (default 1), unlit.
+    Constant {
+        /// Emitted radiance.
+        color: Rgb,
+    },
+    /// `Bxdf "PxrSurface"`: a diffuse lobe (`diffuseColor`, `diffuseGain`) plus one GGX specular lobe
+    /// (`specularFaceColor` as F0, `specularRoughness`).
+    Surface {
+        /// Diffuse albedo (colour × gain).
+        diffuse: Rgb,
+        /// Specular reflectance at normal incidence (Schlick F0).
+        specular: Rgb,
+        /// GGX roughness in [0, 1] (α = roughness²).
+        roughness: f32,
+    },
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material::Diffuse { color: Rgb::new(0.18, 0.18, 0.18) }
+    }
+}
+
+/// A light. Intensity is `color · intensity · 2^exposure` (RenderMan's). Each light's `transform` is
+/// its light-to-world matrix at shutter open.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Light {
+    /// `PxrDomeLight`: the infinite environment; `lightColorMap` a lat-long image (EXR) or none.
+    Dome {
+        /// Colour.
+        color: Rgb,
+        /// Intensity.
+        intensity: f32,
+        /// Exposure (stops).
+        exposure: f32,
+        /// Lat-long environment map, if any.
+        map: Option<PathBuf>,
+        /// Light-to-world.
+        transform: Mat4,
+    },
+    /// `PxrDistantLight`: parallel light along the light's +Z axis, `angleExtent` degrees wide.
+    Distant {
+        /// Colour.
+        color: Rgb,
+        /// Intensity.
+        intensity: f32,
+        /// Exposure (stops).
+        exposure: f32,
+        /// Apparent angular diameter, degrees (RenderMan default 0.53).
+        angle_extent: f32,
+        /// Light-to-world.
+        transform: Mat4,
+    },
+    /// `PxrRectLight`: a 1×1 square in the light's XY plane centred on the origin, emitting toward +Z.
+    Rect {
+        /// Colour.
+        color: Rgb,
+        /// Intensity.
+        intensity: f32,
+        /// Exposure (stops).
+        exposure: f32,
+        /// Light-to-world.
+        transform: Mat4,
+    },
+    /// `PxrSphereLight`: a sphere of diameter 1 at the light's origin, emitting outward.
+    Sphere {
+        /// Colour.
+        color: Rgb,
+        /// Intensity.
+        intensity: f32,
+        /// Exposure (stops).
+        exposure: f32,
+        /// Light-to-world.
+        transform: Mat4,
+    },
+}
+
+/// One piece of geometry in the world.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Object {
+    /// The shape, object space.
+    pub shape: Shape,
+    /// Object-to-world, possibly moving.
+    pub transform: MotionTransform,
+    /// Index into [`Scene::materials`].
+    pub material: u32,
+    /// `Attribute "dice" "float micropolygonlength"` (default 1 pixel).
+    pub micropolygon_length: f32,
+    /// Where it was declared (`scene.rib:42`), for messages.
+    pub source: String,
+}
+
+/// The pixel filter kinds RenderMan offers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FilterKind {
+    /// `"box"`.
+    Box,
+    /// `"triangle"`.
+    Triangle,
+    /// `"gaussian"` (the default, 2×2).
+    Gaussian,
+    /// `"catmull-rom"`.
+    CatmullRom,
+    /// `"mitchell"`.
+    Mitchell,
+    /// `"blackman-harris"`.
+    BlackmanHarris,
+}
+
+/// `PixelFilter "name" xwidth ywidth` (full widths in pixels).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelFilter {
+    /// Which filter.
+    pub kind: FilterKind,
+    /// Full width in x, pixels.
+    pub width_x: f32,
+    /// Full width in y, pixels.
+    pub width_y: f32,
+}
+
+impl Default for PixelFilter {
+    fn default() -> Self {
+        PixelFilter { kind: FilterKind::Gaussian, width_x: 2.0, width_y: 2.0 }
+    }
+}
+
+/// A `Display` driver.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DisplayDriver {
+    /// `"openexr"` (also `"exr"`).
+    OpenExr,
+    /// `"png"`.
+    Png,
+    /// `"deepexr"`.
+    DeepExr,
+}
+
+/// One AOV a display writes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Aov {
+    /// Beauty, RGB (`rgb`, `Ci`).
+    Ci,
+    /// Coverage (`a`).
+    Alpha,
+    /// Depth in the projection's deep metric (`z`).
+    Z,
+    /// Shading normal, world space (`N`).
+    N,
+    /// Hit position, world space (`P`).
+    P,
+    /// The camera ray's direction, world space (`cameraDirection`).
+    CameraDirection,
+}
+
+/// `Display "file" "driver" "channels"`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Display {
+    /// Output file.
+    pub path: PathBuf,
+    /// Driver.
+    pub driver: DisplayDriver,
+    /// AOVs, in order (`rgbaz` → Ci, Alpha, Z).
+    pub aovs: Vec<Aov>,
+    /// Write half floats (`"string type" "half"`); EXR only.
+    pub half: bool,
+}
+
+/// Everything a render needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// Format, windows, shutter, clipping, camera motion, aperture and shutter opening.
+    pub camera: CameraDesc,
+    /// The projection's name (`PxrPerspective` when the scene names none).
+    pub projection: String,
+    /// The projection's parameters as given.
+    pub projection_params: ParamList,
+    /// `Hider "raytrace" "int maxsamples"` (default 64).
+    pub samples_per_pixel: u32,
+    /// `PixelFilter`.
+    pub filter: PixelFilter,
+    /// `Display`s; empty means the CLI chooses.
+    pub displays: Vec<Display>,
+    /// Geometry.
+    pub objects: Vec<Object>,
+    /// Materials, indexed by [`Object::material`]; index 0 is the default PxrDiffuse.
+    pub materials: Vec<Material>,
+    /// Lights.
+    pub lights: Vec<Light>,
+    /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    /// An empty scene for a camera: default projection, 64 samples, gaussian 2×2, one default material.
+    #[must_use]
+    pub fn new(camera: CameraDesc) -> Self {
+        Scene {
+            camera,
+            projection: "PxrPerspective".into(),
+            projection_params: ParamList::new(),
+            samples_per_pixel: 64,
+            filter: PixelFilter::default(),
+            displays: Vec::new(),
+            objects: Vec::new(),
+            materials: vec![Material::default()],
+            lights: Vec::new(),
+            warnings: Vec::new(),
+        }
+    }
+}
