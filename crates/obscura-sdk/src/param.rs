@@ -599,6 +599,14 @@ impl ParamList {
         self.push(decl, value, origin)
     }
 
+    /// Removes every entry named `name` (so that a later value, e.g. from the command line, replaces
+    /// the scene's instead of being reported as given twice). Returns how many were removed.
+    pub fn remove(&mut self, name: &str) -> usize {
+        let before = self.entries.len();
+        self.entries.retain(|e| e.name != name);
+        before - self.entries.len()
+    }
+
     /// The entries in the order given.
     #[must_use]
     pub fn entries(&self) -> &[ParamEntry] {
@@ -1170,6 +1178,15 @@ mod tests {
         // RIB writes integers for floats.
         l.push("float f", ParamValue::Ints(vec![3]), None).unwrap();
         assert_eq!(l.get("f").unwrap().value, ParamValue::Floats(vec![3.0]));
+    }
+
+    #[test]
+    fn remove_lets_a_later_value_replace_an_earlier_one() {
+        let mut l = list("float fov", &["45"]);
+        assert_eq!(l.remove("fov"), 1);
+        l.push_text("float fov", &["50"], None).unwrap();
+        assert_eq!(Params::resolve("P", &table(), &l).unwrap().float("fov").unwrap(), 50.0);
+        assert_eq!(l.remove("nothing"), 0);
     }
 
     #[test]
