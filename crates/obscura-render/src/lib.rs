@@ -19,6 +19,7 @@ pub mod dice;
 pub mod film;
 pub mod filter;
 pub mod integrator;
+pub mod job;
 pub mod light;
 pub mod material;
 pub mod output;

@@ -1,1 +1,1354 @@
-//! (being written)
+//! The four RenderMan lights: `PxrDomeLight`, `PxrDistantLight`, `PxrRectLight`, `PxrSphereLight`.
+//!
+//! Every light's strength is `S = color · intensity · 2^exposure` (negative or non-finite channels
+//! count as 0); its `transform` is light-to-world, taken at shutter open (lights do not move).
+//!
+//! | light | emission | sampling (solid-angle pdf `p`) |
+//! |---|---|---|
+//! | dome | radiance `S · map(ω)` from every direction `ω` (`map ≡ 1` without `lightColorMap`) | map: 2-D piecewise-constant in `(u, v)` ∝ `mean(rgb) · sin θ`, `p = p_uv / (2π² sin θ)`; no map: uniform sphere, `p = 1/(4π)` |
+//! | distant | radiance `S / Ω` inside a cone of half-angle `θ_c = angleExtent/2` around the direction *to* the light, `Ω = 2π(1 − cos θ_c)`; so `∫_cone L dω = S` and the irradiance at normal incidence is `S` | uniform in the cone, `p = 1/Ω`; `angleExtent = 0`: a delta |
+//! | rect | radiance `S` from the light's `+Z` side of the 1×1 square `[−½, ½]²` of the light's XY plane (one-sided; RenderMan's `normalize` off: `S` is radiance whatever the size) | uniform in area, `p = d² / (cos θ_l · A)` |
+//! | sphere | radiance `S` outward from the sphere of diameter 1 at the light's origin (radius `½ · ∛|det M|`) | uniform in the cone the sphere subtends, `p = 1 / (2π(1 − cos θ_max))`, `sin θ_max = r/d` |
+//!
+//! **Dome orientation.** With an identity transform `+Y` is up, and the centre of the lat-long map
+//! (`u = v = ½`) is seen looking down `+Z`. A light-space direction `d` reads the map at
+//!
+//! `u = ½ + atan2(d.x, d.z) / (2π)`, `v = acos(d.y) / π`,
+//!
+//! with `(u, v) = (0, 0)` the top-left corner of the image (`v` grows down the rows): the top row is
+//! `+Y`, the bottom row `−Y`, `u = ¾` is `+X` and `u = ¼` is `−X`; the seam (`u = 0` and `1`) is
+//! `−Z`. Inversely, `θ = π v`, `φ = 2π(u − ½)`, `d = (sin θ sin φ, cos θ, sin θ cos φ)`. This is
+//! OpenEXR's latitude-longitude layout (centre = `+Z`, top = `+Y`) mirrored left–right, because
+//! OpenEXR's spec is written for a right-handed space and RenderMan's is left-handed: a camera with
+//! an identity transform looking down `+Z` (`+X` to its right) sees the middle of the map upright and
+//! unmirrored. Texels are looked up without filtering (nearest), so the sampling density is exactly
+//! proportional to what is seen. Only the rotation of a dome's or distant light's transform is used
+//! (its columns orthonormalised; RenderMan lets these lights rotate only).
+//!
+//! **Distant direction.** The light travels along its light-to-world transform's `+Z` axis: with an
+//! identity transform, light moves toward `+Z`, so it falls on surfaces whose normal faces `−Z`, and
+//! the direction *to* the light is `−Z`.
+//!
+//! **Selection and MIS.** [`Lights::sample`] picks one light uniformly among those that can emit (a
+//! light with `S = 0` or a degenerate transform is dropped at [`Lights::new`]). Infinite lights that
+//! a BSDF ray can find ([`Lights::escaped`]: domes, and distant lights whose `angleExtent` is at
+//! least [`DISTANT_MIS_MIN_DEGREES`]) are sampled as one mixture: a sample from any of them reports
+//! the radiance of all of them along its direction and the mixture's pdf
+//! `Σ_j P(select j) p_j(ω)`, exactly what [`Lights::escaped`] reports for a BSDF ray, so the power
+//! heuristic weights of the two strategies sum to 1. Narrower distant lights are reached by light
+//! sampling only (`mis = false`). Area lights are found by BSDF rays through
+//! [`Lights::intersect_area`]; they are opaque (a light sample blocked by another area light is
+//! dropped), but the scene's geometry does not know them, so they cast no shadows of their own on
+//! it beyond that.
+
+use std::f32::consts::{PI, TAU};
+use std::path::{Path, PathBuf};
+
+use glam::{Mat3A, Mat4, Vec3A};
+use obscura_scene::Light;
+
+use crate::material::{Frame, color, sanitize};
+use crate::ray::Ray;
+
+/// Distant lights at least this wide (`angleExtent`, degrees) are also found by BSDF rays and
+/// weighted by MIS; narrower ones (the 0.53° default sun) are reached by light sampling only.
+pub const DISTANT_MIS_MIN_DEGREES: f32 = 2.0;
+
+/// Cones narrower than this solid angle (sr) are treated as a delta direction.
+const MIN_CONE_SOLID_ANGLE: f32 = 1e-12;
+
+/// Why the lights could not be prepared.
+#[derive(Debug, thiserror::Error)]
+pub enum ShadeError {
+    /// A dome's `lightColorMap` could not be read as an RGB(A) EXR.
+    #[error("PxrDomeLight lightColorMap {}: {source}", path.display())]
+    MapRead {
+        /// The file, as resolved against the scene's directory.
+        path: PathBuf,
+        /// What the EXR reader said.
+        #[source]
+        source: exr::error::Error,
+    },
+    /// A dome's `lightColorMap` has no pixels.
+    #[error("PxrDomeLight lightColorMap {}: the image is empty", path.display())]
+    MapEmpty {
+        /// The file, as resolved against the scene's directory.
+        path: PathBuf,
+    },
+}
+
+/// One light sample toward a shading point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightSample {
+    /// Unit direction from the shading point toward the light.
+    pub wi: Vec3A,
+    /// Distance to the sampled point on the light; `f32::INFINITY` for dome and distant lights.
+    pub dist: f32,
+    /// Radiance arriving along `wi` (for a delta distant light: its irradiance at normal incidence,
+    /// `S`). The estimate of the reflected radiance is `f · |n·wi| · radiance / pdf`.
+    pub radiance: Vec3A,
+    /// Solid-angle density of `wi`, including the probability of selecting the light (for a
+    /// delta distant light: that probability alone).
+    pub pdf: f32,
+    /// True when BSDF sampling can also find this light, so the sample is MIS-weighted; false for
+    /// delta-like lights (narrow distant lights).
+    pub mis: bool,
+}
+
+/// An area light found along a ray by [`Lights::intersect_area`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AreaHit {
+    /// Ray parameter of the hit (in units of the ray's direction length).
+    pub t: f32,
+    /// Radiance leaving the light toward the ray's origin (0 from a rect's back or a sphere's
+    /// inside).
+    pub radiance: Vec3A,
+    /// The density with which [`Lights::sample`] would have produced this direction from the
+    /// ray's origin (solid angle, including light selection); 0 where `radiance` is 0.
+    pub pdf: f32,
+}
+
+/// A lat-long map and its importance distribution.
+#[derive(Debug, Clone)]
+struct EnvMap {
+    width: usize,
+    height: usize,
+    texels: Vec<Vec3A>,
+    dist: Distribution2D,
+}
+
+impl EnvMap {
+    fn texel(&self, u: f32, v: f32) -> Vec3A {
+        let (x, y) = self.cell(u, v);
+        self.texels[y * self.width + x]
+    }
+
+    fn cell(&self, u: f32, v: f32) -> (usize, usize) {
+        let x = ((u * self.width as f32) as usize).min(self.width - 1);
+        let y = ((v * self.height as f32) as usize).min(self.height - 1);
+        (x, y)
+    }
+}
+
+/// A piecewise-constant density on `[0, 1)` with `n` equal cells.
+#[derive(Debug, Clone)]
+struct Distribution1D {
+    func: Vec<f32>,
+    cdf: Vec<f32>,
+    integral: f32,
+}
+
+impl Distribution1D {
+    fn new(func: Vec<f32>) -> Self {
+        let n = func.len().max(1);
+        let mut cdf = Vec::with_capacity(n + 1);
+        cdf.push(0.0f32);
+        let mut acc = 0.0f64;
+        for &f in &func {
+            acc += f64::from(f) / n as f64;
+            cdf.push(acc as f32);
+        }
+        let integral = acc as f32;
+        if integral > 0.0 && integral.is_finite() {
+            for c in &mut cdf {
+                *c /= integral;
+            }
+        } else {
+            for (i, c) in cdf.iter_mut().enumerate() {
+                *c = i as f32 / n as f32;
+            }
+        }
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        Distribution1D { func, cdf, integral }
+    }
+
+    fn len(&self) -> usize {
+        self.func.len()
+    }
+
+    /// The density of cell `i` (relative to the uniform density 1).
+    fn pdf(&self, i: usize) -> f32 {
+        if self.integral > 0.0 && self.integral.is_finite() {
+            self.func.get(i).copied().unwrap_or(0.0) / self.integral
+        } else {
+            1.0
+        }
+    }
+
+    /// `(x in [0, 1), cell, density)`.
+    fn sample(&self, u: f32) -> (f32, usize, f32) {
+        let n = self.len();
+        let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
+        let (c0, c1) = (self.cdf[i], self.cdf[i + 1]);
+        let du = if c1 > c0 {
+            ((u - c0) / (c1 - c0)).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let x = ((i as f32 + du) / n as f32).min(1.0 - f32::EPSILON);
+        (x, i, self.pdf(i))
+    }
+}
+
+/// A 2-D piecewise-constant density on `[0, 1)²`: a marginal over rows, a conditional per row.
+#[derive(Debug, Clone)]
+struct Distribution2D {
+    rows: Vec<Distribution1D>,
+    marginal: Distribution1D,
+}
+
+impl Distribution2D {
+    fn new(width: usize, height: usize, weight: impl Fn(usize, usize) -> f32) -> Self {
+        let rows: Vec<Distribution1D> = (0..height)
+            .map(|y| Distribution1D::new((0..width).map(|x| weight(x, y)).collect()))
+            .collect();
+        let marginal = Distribution1D::new(rows.iter().map(|r| r.integral).collect());
+        Distribution2D { rows, marginal }
+    }
+
+    /// `((u, v), density in (u, v))`.
+    fn sample(&self, u: (f32, f32)) -> ((f32, f32), f32) {
+        let (v, y, pv) = self.marginal.sample(u.1);
+        let (x, _, pu) = self.rows[y].sample(u.0);
+        ((x, v), pu * pv)
+    }
+
+    fn pdf(&self, x: usize, y: usize) -> f32 {
+        self.marginal.pdf(y) * self.rows[y].pdf(x)
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Dome {
+    strength: Vec3A,
+    to_world: Mat3A,
+    to_light: Mat3A,
+    map: Option<EnvMap>,
+}
+
+impl Dome {
+    /// `(u, v, sin θ)` of a world direction.
+    fn uv(&self, dir: Vec3A) -> (f32, f32, f32) {
+        let d = (self.to_light * dir).normalize_or(Vec3A::Y);
+        let u = 0.5 + d.x.atan2(d.z) / TAU;
+        let cos_t = d.y.clamp(-1.0, 1.0);
+        let v = cos_t.acos() / PI;
+        (
+            u.clamp(0.0, 1.0),
+            v.clamp(0.0, 1.0),
+            (1.0 - cos_t * cos_t).max(0.0).sqrt(),
+        )
+    }
+
+    fn radiance(&self, dir: Vec3A) -> Vec3A {
+        match &self.map {
+            None => self.strength,
+            Some(map) => {
+                let (u, v, _) = self.uv(dir);
+                self.strength * map.texel(u, v)
+            }
+        }
+    }
+
+    /// Solid-angle density of sampling `dir` from this dome (without light selection).
+    fn pdf(&self, dir: Vec3A) -> f32 {
+        match &self.map {
+            None => 1.0 / (4.0 * PI),
+            Some(map) => {
+                let (u, v, sin_t) = self.uv(dir);
+                if sin_t <= 0.0 {
+                    return 0.0;
+                }
+                let (x, y) = map.cell(u, v);
+                finite_or_zero(map.dist.pdf(x, y) / (2.0 * PI * PI * sin_t))
+            }
+        }
+    }
+
+    /// A world direction drawn with the density [`Dome::pdf`].
+    fn sample(&self, u: (f32, f32)) -> Option<Vec3A> {
+        match &self.map {
+            None => {
+                let z = 1.0 - 2.0 * u.0;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let phi = TAU * u.1;
+                Some(Vec3A::new(r * phi.cos(), r * phi.sin(), z))
+            }
+            Some(map) => {
+                let ((mu, mv), p_uv) = map.dist.sample(u);
+                let theta = PI * mv;
+                let phi = TAU * (mu - 0.5);
+                let sin_t = theta.sin();
+                if p_uv <= 0.0 || sin_t <= 0.0 {
+                    return None;
+                }
+                let d = Vec3A::new(sin_t * phi.sin(), theta.cos(), sin_t * phi.cos());
+                (self.to_world * d).try_normalize()
+            }
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Distant {
+    strength: Vec3A,
+    /// Unit direction toward the light (`−Z` of light space, in world space).
+    to_light: Vec3A,
+    frame: Frame,
+    cos_max: f32,
+    /// `1 − cos θ_c`, computed as `2 sin²(θ_c/2)`.
+    one_minus_cos: f32,
+    solid_angle: f32,
+    mis: bool,
+}
+
+impl Distant {
+    fn is_delta(&self) -> bool {
+        self.solid_angle < MIN_CONE_SOLID_ANGLE
+    }
+
+    fn radiance(&self, dir: Vec3A) -> Vec3A {
+        if self.is_delta() || dir.dot(self.to_light) < self.cos_max {
+            Vec3A::ZERO
+        } else {
+            self.strength / self.solid_angle
+        }
+    }
+
+    fn pdf(&self, dir: Vec3A) -> f32 {
+        if self.is_delta() || dir.dot(self.to_light) < self.cos_max {
+            0.0
+        } else {
+            1.0 / self.solid_angle
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Rect {
+    strength: Vec3A,
+    corner: Vec3A,
+    ex: Vec3A,
+    ey: Vec3A,
+    /// Unit normal on the emitting (`+Z` of light space) side.
+    normal: Vec3A,
+    /// `ex × ey`, and `1 / |ex × ey|²`.
+    cross: Vec3A,
+    inv_cross2: f32,
+    area: f32,
+}
+
+impl Rect {
+    fn intersect(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+        let denom = self.normal.dot(d);
+        if denom == 0.0 || !denom.is_finite() {
+            return None;
+        }
+        let t = self.normal.dot(self.corner - o) / denom;
+        if !(t > t_min && t < t_max) {
+            return None;
+        }
+        let q = o + d * t - self.corner;
+        let a = q.cross(self.ey).dot(self.cross) * self.inv_cross2;
+        let b = self.ex.cross(q).dot(self.cross) * self.inv_cross2;
+        ((0.0..=1.0).contains(&a) && (0.0..=1.0).contains(&b)).then_some(t)
+    }
+
+    /// Solid-angle density (without selection) of reaching the rect along unit `wi` at `dist`.
+    fn pdf(&self, wi: Vec3A, dist: f32) -> f32 {
+        let cos_l = -wi.dot(self.normal);
+        if cos_l <= 0.0 {
+            0.0
+        } else {
+            finite_or_zero(dist * dist / (cos_l * self.area))
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+struct SphereLight {
+    strength: Vec3A,
+    center: Vec3A,
+    radius: f32,
+}
+
+impl SphereLight {
+    /// `1 − cos θ_max` of the cone the sphere subtends from `p`, or `None` from inside.
+    fn cone(&self, p: Vec3A) -> Option<(f32, f32)> {
+        let d2 = (self.center - p).length_squared();
+        let r2 = self.radius * self.radius;
+        if d2 <= r2 {
+            return None;
+        }
+        let sin2 = r2 / d2;
+        let cos_max = (1.0 - sin2).max(0.0).sqrt();
+        // 1 − cos θ = sin²θ / (1 + cos θ): no cancellation for small spheres.
+        Some((cos_max, sin2 / (1.0 + cos_max)))
+    }
+
+    fn pdf(&self, p: Vec3A) -> f32 {
+        match self.cone(p) {
+            Some((_, omc)) if omc > 0.0 => finite_or_zero(1.0 / (TAU * omc)),
+            _ => 0.0,
+        }
+    }
+
+    fn intersect(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+        let a = d.length_squared();
+        if a <= 0.0 {
+            return None;
+        }
+        let oc = o - self.center;
+        let b = oc.dot(d);
+        // The discriminant from the closest approach (Haines et al., Ray Tracing Gems ch. 7).
+        let l = oc - d * (b / a);
+        let disc = a * (self.radius * self.radius - l.length_squared());
+        if disc.is_nan() || disc < 0.0 {
+            return None;
+        }
+        let c = oc.length_squared() - self.radius * self.radius;
+        let q = -b - b.signum() * disc.sqrt();
+        let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (q / a, c / q) };
+        let (t0, t1) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        [t0, t1].into_iter().find(|&t| t > t_min && t < t_max)
+    }
+}
+
+#[derive(Debug, Clone)]
+enum Emitter {
+    Dome(Dome),
+    Distant(Distant),
+    Rect(Rect),
+    Sphere(SphereLight),
+}
+
+/// All lights of a scene, in world space, ready for sampling.
+#[derive(Debug, Clone, Default)]
+pub struct Lights {
+    emitters: Vec<Emitter>,
+}
+
+impl Lights {
+    /// Prepares `lights`; a dome's relative `lightColorMap` is resolved against `base_dir` and read
+    /// as a lat-long EXR (channels R, G, B, optional A; the largest level of a mip-mapped file).
+    /// Lights that cannot emit (strength 0, a singular or non-finite transform) are dropped.
+    ///
+    /// # Errors
+    ///
+    /// [`ShadeError`] naming the map file when it cannot be read or is empty.
+    pub fn new(lights: &[Light], base_dir: &Path) -> Result<Self, ShadeError> {
+        let mut emitters = Vec::new();
+        for light in lights {
+            if let Some(e) = Self::prepare(light, base_dir)? {
+                emitters.push(e);
+            }
+        }
+        Ok(Lights { emitters })
+    }
+
+    fn prepare(light: &Light, base_dir: &Path) -> Result<Option<Emitter>, ShadeError> {
+        let strength = |c, i: f32, e: f32| sanitize(color(c) * (i * e.exp2()));
+        let e = match light {
+            Light::Dome {
+                color: c,
+                intensity,
+                exposure,
+                map,
+                transform,
+            } => {
+                let s = strength(*c, *intensity, *exposure);
+                let Some(to_world) = rotation_of(transform) else {
+                    return Ok(None);
+                };
+                let map = match map {
+                    Some(path) => Some(load_map(&base_dir.join(path))?),
+                    None => None,
+                };
+                if s == Vec3A::ZERO {
+                    return Ok(None);
+                }
+                Emitter::Dome(Dome {
+                    strength: s,
+                    to_world,
+                    to_light: to_world.transpose(),
+                    map,
+                })
+            }
+            Light::Distant {
+                color: c,
+                intensity,
+                exposure,
+                angle_extent,
+                transform,
+            } => {
+                let s = strength(*c, *intensity, *exposure);
+                let Some(rot) = rotation_of(transform) else {
+                    return Ok(None);
+                };
+                let extent = if angle_extent.is_finite() {
+                    angle_extent.clamp(0.0, 360.0)
+                } else {
+                    0.0
+                };
+                let half = (extent * 0.5).min(180.0).to_radians();
+                let s_half = (half * 0.5).sin();
+                let one_minus_cos = 2.0 * s_half * s_half;
+                let to_light = -(rot * Vec3A::Z).normalize();
+                Emitter::Distant(Distant {
+                    strength: s,
+                    to_light,
+                    frame: Frame::new(to_light),
+                    cos_max: 1.0 - one_minus_cos,
+                    one_minus_cos,
+                    solid_angle: TAU * one_minus_cos,
+                    mis: extent >= DISTANT_MIS_MIN_DEGREES,
+                })
+            }
+            Light::Rect {
+                color: c,
+                intensity,
+                exposure,
+                transform,
+            } => {
+                let s = strength(*c, *intensity, *exposure);
+                if !transform.is_finite() {
+                    return Ok(None);
+                }
+                let corner = Vec3A::from(transform.transform_point3(glam::Vec3::new(-0.5, -0.5, 0.0)));
+                let ex = Vec3A::from(transform.transform_vector3(glam::Vec3::X));
+                let ey = Vec3A::from(transform.transform_vector3(glam::Vec3::Y));
+                let det = Mat3A::from_mat4(*transform).determinant();
+                let cross = ex.cross(ey);
+                let area = cross.length();
+                if !(area > 0.0 && area.is_finite() && det != 0.0) {
+                    return Ok(None);
+                }
+                let normal = cross / area * det.signum();
+                Emitter::Rect(Rect {
+                    strength: s,
+                    corner,
+                    ex,
+                    ey,
+                    normal,
+                    cross,
+                    inv_cross2: 1.0 / (area * area),
+                    area,
+                })
+            }
+            Light::Sphere {
+                color: c,
+                intensity,
+                exposure,
+                transform,
+            } => {
+                let s = strength(*c, *intensity, *exposure);
+                if !transform.is_finite() {
+                    return Ok(None);
+                }
+                let center = Vec3A::from(transform.transform_point3(glam::Vec3::ZERO));
+                let radius = 0.5 * Mat3A::from_mat4(*transform).determinant().abs().cbrt();
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return Ok(None);
+                }
+                Emitter::Sphere(SphereLight {
+                    strength: s,
+                    center,
+                    radius,
+                })
+            }
+        };
+        let strength = match &e {
+            Emitter::Dome(d) => d.strength,
+            Emitter::Distant(d) => d.strength,
+            Emitter::Rect(r) => r.strength,
+            Emitter::Sphere(s) => s.strength,
+        };
+        Ok((strength != Vec3A::ZERO).then_some(e))
+    }
+
+    /// Number of lights that can emit.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.emitters.len()
+    }
+
+    /// True when no light can emit.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.emitters.is_empty()
+    }
+
+    /// The probability of selecting any one light: `1 / len` (uniform selection).
+    fn select_pdf(&self) -> f32 {
+        if self.emitters.is_empty() {
+            0.0
+        } else {
+            1.0 / self.emitters.len() as f32
+        }
+    }
+
+    /// Samples one light for the shading point `p` with surface normal `n`: `u_light` selects the
+    /// light (uniformly), `u` the point or direction on it; all in `[0, 1)`. Samples below the
+    /// tangent plane of `n` are dropped early (pass `Vec3A::ZERO` to keep them). `None` when there
+    /// is nothing to sample, the sample cannot contribute, or another area light blocks it. The
+    /// caller traces the shadow ray (to `dist`, or unbounded for infinite lights).
+    #[must_use]
+    pub fn sample(&self, p: Vec3A, n: Vec3A, u: (f32, f32), u_light: f32) -> Option<LightSample> {
+        let count = self.emitters.len();
+        if count == 0 {
+            return None;
+        }
+        let index = ((u_light.clamp(0.0, 1.0) * count as f32) as usize).min(count - 1);
+        let select = self.select_pdf();
+        let sample = match &self.emitters[index] {
+            Emitter::Dome(d) => {
+                let wi = d.sample(u)?;
+                self.infinite_sample(wi)?
+            }
+            Emitter::Distant(d) => {
+                if d.is_delta() {
+                    LightSample {
+                        wi: d.to_light,
+                        dist: f32::INFINITY,
+                        radiance: d.strength,
+                        pdf: select,
+                        mis: false,
+                    }
+                } else {
+                    let cos_t = 1.0 - u.0 * d.one_minus_cos;
+                    let sin_t = (u.0 * d.one_minus_cos * (1.0 + cos_t)).max(0.0).sqrt();
+                    let phi = TAU * u.1;
+                    let local = Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+                    let wi = d.frame.to_world(local).normalize_or(d.to_light);
+                    if d.mis {
+                        self.infinite_sample(wi)?
+                    } else {
+                        LightSample {
+                            wi,
+                            dist: f32::INFINITY,
+                            radiance: d.strength / d.solid_angle,
+                            pdf: select / d.solid_angle,
+                            mis: false,
+                        }
+                    }
+                }
+            }
+            Emitter::Rect(r) => {
+                let q = r.corner + r.ex * u.0 + r.ey * u.1;
+                let v = q - p;
+                let dist = v.length();
+                if !(dist > 0.0 && dist.is_finite()) {
+                    return None;
+                }
+                let wi = v / dist;
+                let pdf = r.pdf(wi, dist) * select;
+                if pdf.is_nan() || pdf <= 0.0 {
+                    return None;
+                }
+                LightSample {
+                    wi,
+                    dist,
+                    radiance: r.strength,
+                    pdf,
+                    mis: true,
+                }
+            }
+            Emitter::Sphere(s) => {
+                let (_, omc) = s.cone(p)?;
+                let to_c = s.center - p;
+                let dc = to_c.length();
+                let frame = Frame::new(to_c / dc);
+                let one_minus = u.0 * omc;
+                let cos_t = 1.0 - one_minus;
+                let sin_t = (one_minus * (1.0 + cos_t)).max(0.0).sqrt();
+                let phi = TAU * u.1;
+                let wi = frame
+                    .to_world(Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t))
+                    .normalize();
+                // Distance to the near side: d cos θ − √(r² − d² sin²θ).
+                let h2 = (s.radius * s.radius - dc * dc * sin_t * sin_t).max(0.0);
+                let dist = (dc * cos_t - h2.sqrt()).max(0.0);
+                let pdf = finite_or_zero(select / (TAU * omc));
+                if !(pdf > 0.0 && dist > 0.0) {
+                    return None;
+                }
+                LightSample {
+                    wi,
+                    dist,
+                    radiance: s.strength,
+                    pdf,
+                    mis: true,
+                }
+            }
+        };
+        if n != Vec3A::ZERO && sample.wi.dot(n) <= 0.0 {
+            return None;
+        }
+        if self.blocked_by_area(p, sample.wi, sample.dist, index) {
+            return None;
+        }
+        (sample.pdf > 0.0 && sample.pdf.is_finite() && sample.radiance.is_finite()).then_some(sample)
+    }
+
+    /// A sample of the infinite-light mixture along `wi` (see the module doc).
+    fn infinite_sample(&self, wi: Vec3A) -> Option<LightSample> {
+        let (radiance, pdf) = self.escaped(wi);
+        (pdf > 0.0).then_some(LightSample {
+            wi,
+            dist: f32::INFINITY,
+            radiance,
+            pdf,
+            mis: true,
+        })
+    }
+
+    /// True when an area light other than `except` lies on the segment from `p` along unit `wi`
+    /// up to `dist` (slightly short of it).
+    fn blocked_by_area(&self, p: Vec3A, wi: Vec3A, dist: f32, except: usize) -> bool {
+        let t_max = if dist.is_finite() {
+            dist * (1.0 - 1e-4)
+        } else {
+            f32::INFINITY
+        };
+        self.emitters.iter().enumerate().any(|(i, e)| {
+            i != except
+                && match e {
+                    Emitter::Rect(r) => r.intersect(p, wi, 0.0, t_max).is_some(),
+                    Emitter::Sphere(s) => s.intersect(p, wi, 0.0, t_max).is_some(),
+                    _ => false,
+                }
+        })
+    }
+
+    /// Radiance arriving along a ray that leaves the scene in direction `ray_dir` (any length), and
+    /// the density with which [`Lights::sample`] produces that direction (solid angle, including
+    /// selection): the sum over domes and over distant lights wide enough for MIS
+    /// ([`DISTANT_MIS_MIN_DEGREES`]). Weight a BSDF ray's contribution by the power heuristic
+    /// against this pdf.
+    #[must_use]
+    pub fn escaped(&self, ray_dir: Vec3A) -> (Vec3A, f32) {
+        let Some(dir) = ray_dir.try_normalize() else {
+            return (Vec3A::ZERO, 0.0);
+        };
+        let select = self.select_pdf();
+        let mut radiance = Vec3A::ZERO;
+        let mut pdf = 0.0;
+        for e in &self.emitters {
+            match e {
+                Emitter::Dome(d) => {
+                    radiance += d.radiance(dir);
+                    pdf += select * d.pdf(dir);
+                }
+                Emitter::Distant(d) if d.mis => {
+                    radiance += d.radiance(dir);
+                    pdf += select * d.pdf(dir);
+                }
+                _ => {}
+            }
+        }
+        (sanitize(radiance), finite_or_zero(pdf))
+    }
+
+    /// What a camera ray that leaves the scene sees: the domes' radiance along `ray_dir` (distant
+    /// lights are not visible to the camera, as in RenderMan).
+    #[must_use]
+    pub fn background(&self, ray_dir: Vec3A) -> Vec3A {
+        let Some(dir) = ray_dir.try_normalize() else {
+            return Vec3A::ZERO;
+        };
+        let l = self
+            .emitters
+            .iter()
+            .map(|e| {
+                if let Emitter::Dome(d) = e {
+                    d.radiance(dir)
+                } else {
+                    Vec3A::ZERO
+                }
+            })
+            .fold(Vec3A::ZERO, |a, b| a + b);
+        sanitize(l)
+    }
+
+    /// The nearest rect or sphere light along `ray` with `ray.t_min < t < t_max` (also bounded by
+    /// `ray.t_max`), with the radiance it sends back along the ray and the pdf with which
+    /// [`Lights::sample`] at `ray.origin` would have chosen that direction.
+    #[must_use]
+    pub fn intersect_area(&self, ray: &Ray, t_max: f32) -> Option<AreaHit> {
+        let len = ray.direction.length();
+        if !(len > 0.0 && len.is_finite()) {
+            return None;
+        }
+        let t_max = t_max.min(ray.t_max);
+        let (o, d) = (ray.origin, ray.direction);
+        let mut best: Option<(f32, usize)> = None;
+        for (i, e) in self.emitters.iter().enumerate() {
+            let limit = best.map_or(t_max, |b| b.0);
+            let t = match e {
+                Emitter::Rect(r) => r.intersect(o, d, ray.t_min, limit),
+                Emitter::Sphere(s) => s.intersect(o, d, ray.t_min, limit),
+                _ => None,
+            };
+            if let Some(t) = t {
+                best = Some((t, i));
+            }
+        }
+        let (t, i) = best?;
+        let wi = d / len;
+        let select = self.select_pdf();
+        let (radiance, pdf) = match &self.emitters[i] {
+            Emitter::Rect(r) => {
+                let pdf = r.pdf(wi, t * len);
+                if pdf > 0.0 {
+                    (r.strength, pdf * select)
+                } else {
+                    (Vec3A::ZERO, 0.0)
+                }
+            }
+            Emitter::Sphere(s) => {
+                let pdf = s.pdf(o);
+                if pdf > 0.0 {
+                    (s.strength, pdf * select)
+                } else {
+                    (Vec3A::ZERO, 0.0)
+                }
+            }
+            _ => (Vec3A::ZERO, 0.0),
+        };
+        Some(AreaHit {
+            t,
+            radiance,
+            pdf: finite_or_zero(pdf),
+        })
+    }
+}
+
+fn finite_or_zero(x: f32) -> f32 {
+    if x.is_finite() && x > 0.0 { x } else { 0.0 }
+}
+
+/// The rotation (possibly with a reflection) of a light-to-world matrix: its first two columns
+/// orthonormalised (Gram–Schmidt), the third their cross product with the sign of the determinant.
+fn rotation_of(m: &Mat4) -> Option<Mat3A> {
+    if !m.is_finite() {
+        return None;
+    }
+    let m3 = Mat3A::from_mat4(*m);
+    let det = m3.determinant();
+    let x = m3.x_axis.try_normalize()?;
+    let y = (m3.y_axis - x * x.dot(m3.y_axis)).try_normalize()?;
+    if det == 0.0 || !det.is_finite() {
+        return None;
+    }
+    let z = x.cross(y) * det.signum();
+    Some(Mat3A::from_cols(x, y, z))
+}
+
+/// Reads a lat-long EXR and builds its importance distribution (texel mean × sin θ of its row).
+fn load_map(path: &Path) -> Result<EnvMap, ShadeError> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |resolution, _| {
+            (
+                resolution.width(),
+                vec![Vec3A::ZERO; resolution.width() * resolution.height()],
+            )
+        },
+        |(width, texels): &mut (usize, Vec<Vec3A>), pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            if let Some(t) = texels.get_mut(pos.y() * *width + pos.x()) {
+                *t = sanitize(Vec3A::new(r, g, b));
+            }
+        },
+    )
+    .map_err(|source| ShadeError::MapRead {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let (width, texels) = image.layer_data.channel_data.pixels;
+    let height = texels.len().checked_div(width).unwrap_or(0);
+    if width == 0 || height == 0 {
+        return Err(ShadeError::MapEmpty {
+            path: path.to_path_buf(),
+        });
+    }
+    let dist = Distribution2D::new(width, height, |x, y| {
+        let sin_t = (PI * (y as f32 + 0.5) / height as f32).sin();
+        texels[y * width + x].element_sum() / 3.0 * sin_t
+    });
+    Ok(EnvMap {
+        width,
+        height,
+        texels,
+        dist,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::integrator::power_heuristic;
+    use crate::material::cosine_hemisphere;
+    use crate::rng::Rng;
+    use glam::{Quat, Vec3};
+    use obscura_sdk::Rgb;
+
+    fn prepare(lights: Vec<Light>) -> Lights {
+        Lights::new(&lights, Path::new(".")).expect("lights")
+    }
+
+    fn white() -> Rgb {
+        Rgb::new(1.0, 1.0, 1.0)
+    }
+
+    #[derive(Clone, Copy, PartialEq, Debug)]
+    enum Strategy {
+        Light,
+        Bsdf,
+        Mis,
+    }
+
+    /// The irradiance `∫ L cos θ dω` at `p` (normal `n`, unoccluded) estimated with `n_paths`
+    /// samples of light sampling, cosine-weighted (Lambert) BSDF sampling, or both combined by the
+    /// power heuristic — the same combination the path tracer uses.
+    fn irradiance(lights: &Lights, p: Vec3A, n: Vec3A, n_paths: usize, strategy: Strategy) -> f64 {
+        let mut rng = Rng::new(17, 5);
+        let frame = Frame::new(n);
+        let mut sum = 0.0f64;
+        for _ in 0..n_paths {
+            if strategy != Strategy::Bsdf
+                && let Some(ls) = lights.sample(p, n, rng.next_2d(), rng.next_f32())
+            {
+                let cos = n.dot(ls.wi).max(0.0);
+                let w = if strategy == Strategy::Mis && ls.mis {
+                    power_heuristic(ls.pdf, cos / PI)
+                } else {
+                    1.0
+                };
+                sum += f64::from(ls.radiance.x * cos * w / ls.pdf);
+            }
+            if strategy != Strategy::Light {
+                let wi = frame.to_world(cosine_hemisphere(rng.next_2d()));
+                let pdf_b = n.dot(wi) / PI;
+                if pdf_b <= 0.0 {
+                    continue;
+                }
+                let ray = Ray {
+                    origin: p,
+                    direction: wi,
+                    t_min: 0.0,
+                    t_max: f32::INFINITY,
+                    time: 0.0,
+                };
+                let (l, pdf_l) = match lights.intersect_area(&ray, f32::INFINITY) {
+                    Some(hit) => (hit.radiance, hit.pdf),
+                    None => lights.escaped(wi),
+                };
+                let w = if strategy == Strategy::Mis {
+                    power_heuristic(pdf_b, pdf_l)
+                } else {
+                    1.0
+                };
+                sum += f64::from(l.x * PI * w);
+            }
+        }
+        sum / n_paths as f64
+    }
+
+    fn assert_close(what: &str, got: f64, want: f64, rel: f64) {
+        assert!(
+            (got - want).abs() <= rel * want.abs().max(1e-3),
+            "{what}: {got} vs {want}"
+        );
+    }
+
+    /// Lambert's formula for the irradiance from a uniform polygon of radiance `le` (vertices in
+    /// order, fully above the horizon of `n` at `p`): `E = (le/2) |Σ γ_i n·(R_i × R_{i+1})/|…||`.
+    fn polygon_irradiance(le: f64, p: Vec3A, n: Vec3A, vertices: &[Vec3A]) -> f64 {
+        let to64 = |v: Vec3A| glam::DVec3::new(v.x.into(), v.y.into(), v.z.into());
+        let (p, n) = (to64(p), to64(n));
+        let r: Vec<glam::DVec3> = vertices.iter().map(|&v| (to64(v) - p).normalize()).collect();
+        let mut s = 0.0;
+        for i in 0..r.len() {
+            let (a, b) = (r[i], r[(i + 1) % r.len()]);
+            let gamma = a.dot(b).clamp(-1.0, 1.0).acos();
+            s += gamma * n.dot(a.cross(b).normalize());
+        }
+        0.5 * le * s.abs()
+    }
+
+    #[test]
+    fn rect_light_irradiance_matches_the_polygon_formula() {
+        // A 2 × 1 rect, tilted, 1.5 above a receiver facing +Y, emitting downward (+Z → −Y).
+        let rotation = Quat::from_rotation_z(0.3) * Quat::from_rotation_x(std::f32::consts::FRAC_PI_2);
+        let transform = Mat4::from_scale_rotation_translation(
+            Vec3::new(2.0, 1.0, 1.0),
+            rotation,
+            Vec3::new(0.3, 1.5, 0.2),
+        );
+        let le = 3.0;
+        let lights = prepare(vec![Light::Rect {
+            color: white(),
+            intensity: le,
+            exposure: 0.0,
+            transform,
+        }]);
+        let corners: Vec<Vec3A> = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (-0.5, 0.5)]
+            .iter()
+            .map(|&(x, y)| Vec3A::from(transform.transform_point3(Vec3::new(x, y, 0.0))))
+            .collect();
+        for (p, n) in [
+            (Vec3A::ZERO, Vec3A::Y),
+            (Vec3A::new(0.5, 0.0, -0.4), Vec3A::new(0.2, 1.0, 0.1).normalize()),
+        ] {
+            let exact = polygon_irradiance(f64::from(le), p, n, &corners);
+            for s in [Strategy::Light, Strategy::Bsdf, Strategy::Mis] {
+                let e = irradiance(&lights, p, n, 200_000, s);
+                assert_close(&format!("rect {s:?} at {p}"), e, exact, 0.02);
+            }
+        }
+        // One-sided: the same rect turned to face up sends nothing down.
+        let flipped = Mat4::from_rotation_translation(
+            Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
+            Vec3::new(0.0, 1.5, 0.0),
+        );
+        let lights = prepare(vec![Light::Rect {
+            color: white(),
+            intensity: le,
+            exposure: 0.0,
+            transform: flipped,
+        }]);
+        for s in [Strategy::Light, Strategy::Bsdf, Strategy::Mis] {
+            assert_eq!(
+                irradiance(&lights, Vec3A::ZERO, Vec3A::Y, 10_000, s),
+                0.0,
+                "{s:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn sphere_light_irradiance_is_pi_le_sin2_cos() {
+        let (center, scale, le) = (Vec3::new(0.8, 2.0, 0.3), 1.4f32, 2.0f32);
+        let transform = Mat4::from_scale_rotation_translation(Vec3::splat(scale), Quat::IDENTITY, center);
+        let lights = prepare(vec![Light::Sphere {
+            color: white(),
+            intensity: 1.0,
+            exposure: 1.0,
+            transform,
+        }]);
+        for n in [Vec3A::Y, Vec3A::new(0.3, 1.0, -0.2).normalize()] {
+            let to_c = Vec3A::from(center);
+            let d = to_c.length();
+            let r = 0.5 * scale;
+            let exact = f64::from(PI * le * (r / d).powi(2) * n.dot(to_c / d));
+            for s in [Strategy::Light, Strategy::Bsdf, Strategy::Mis] {
+                let e = irradiance(&lights, Vec3A::ZERO, n, 200_000, s);
+                assert_close(&format!("sphere {s:?} n {n}"), e, exact, 0.02);
+            }
+        }
+    }
+
+    #[test]
+    fn distant_light_irradiance_is_intensity_cos() {
+        // Travels along the light's +Z, here turned to travel down and sideways.
+        let rotation = Quat::from_rotation_x(1.9) * Quat::from_rotation_y(0.2);
+        let travel = Vec3A::from(rotation * Vec3::Z);
+        let transform = Mat4::from_quat(rotation);
+        let n = Vec3A::Y;
+        let cos = n.dot(-travel);
+        assert!(cos > 0.5);
+        for (extent, strategies) in [
+            (0.53f32, &[Strategy::Light, Strategy::Mis][..]),
+            (0.0, &[Strategy::Light, Strategy::Mis][..]),
+            (30.0, &[Strategy::Light, Strategy::Bsdf, Strategy::Mis][..]),
+        ] {
+            let lights = prepare(vec![Light::Distant {
+                color: white(),
+                intensity: 3.0,
+                exposure: 0.0,
+                angle_extent: extent,
+                transform,
+            }]);
+            // The mean of cos over a cone of half-angle θc around the axis: cos θ (1 + cos θc)/2.
+            let cos_c = (extent.to_radians() * 0.5).cos();
+            let exact = f64::from(3.0 * cos * (1.0 + cos_c) / 2.0);
+            for &s in strategies {
+                let e = irradiance(&lights, Vec3A::ZERO, n, 100_000, s);
+                assert_close(&format!("distant {extent}° {s:?}"), e, exact, 0.01);
+            }
+        }
+        // Identity: light travels toward +Z, so a surface facing −Z is lit and one facing +Z not.
+        let lights = prepare(vec![Light::Distant {
+            color: white(),
+            intensity: 1.0,
+            exposure: 0.0,
+            angle_extent: 0.53,
+            transform: Mat4::IDENTITY,
+        }]);
+        assert_close(
+            "facing -Z",
+            irradiance(&lights, Vec3A::ZERO, -Vec3A::Z, 1000, Strategy::Light),
+            1.0,
+            1e-3,
+        );
+        assert_eq!(
+            irradiance(&lights, Vec3A::ZERO, Vec3A::Z, 1000, Strategy::Light),
+            0.0
+        );
+    }
+
+    /// Writes a lat-long EXR whose texel (x, y) is `f(x, y)`.
+    fn write_map(
+        dir: &Path,
+        name: &str,
+        w: usize,
+        h: usize,
+        f: impl Fn(usize, usize) -> f32 + Sync,
+    ) -> PathBuf {
+        let path = dir.join(name);
+        exr::prelude::write_rgb_file(&path, w, h, |x, y| {
+            let v = f(x, y);
+            (v, v, v)
+        })
+        .expect("write map");
+        path
+    }
+
+    fn dome(map: Option<PathBuf>, transform: Mat4) -> Light {
+        Light::Dome {
+            color: white(),
+            intensity: 1.0,
+            exposure: 0.0,
+            map,
+            transform,
+        }
+    }
+
+    /// `∫ L cos⁺ dω` over the map by quadrature (8 × 8 points per texel).
+    fn dome_irradiance_quadrature(lights: &Lights, n: Vec3A, w: usize, h: usize) -> f64 {
+        let sub = 8;
+        let mut sum = 0.0f64;
+        for y in 0..h * sub {
+            let v = (y as f64 + 0.5) / (h * sub) as f64;
+            let theta = std::f64::consts::PI * v;
+            let d_omega = (2.0 * std::f64::consts::PI / (w * sub) as f64)
+                * (std::f64::consts::PI / (h * sub) as f64)
+                * theta.sin();
+            for x in 0..w * sub {
+                let u = (x as f64 + 0.5) / (w * sub) as f64;
+                let phi = 2.0 * std::f64::consts::PI * (u - 0.5);
+                let d = Vec3A::new(
+                    (theta.sin() * phi.sin()) as f32,
+                    theta.cos() as f32,
+                    (theta.sin() * phi.cos()) as f32,
+                );
+                let cos = f64::from(n.dot(d).max(0.0));
+                sum += f64::from(lights.escaped(d).0.x) * cos * d_omega;
+            }
+        }
+        sum
+    }
+
+    #[test]
+    fn dome_map_importance_sampling_agrees_with_cosine_sampling() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (64, 32);
+        // A bright band above the horizon plus a dim floor.
+        let path = write_map(dir.path(), "band.exr", w, h, |x, y| {
+            if (6..10).contains(&y) && x < 40 { 20.0 } else { 0.1 }
+        });
+        let lights = prepare(vec![dome(Some(path), Mat4::from_rotation_y(0.4))]);
+        for n in [
+            Vec3A::Y,
+            Vec3A::new(1.0, 1.0, 0.3).normalize(),
+            Vec3A::new(0.0, -0.2, 1.0).normalize(),
+        ] {
+            let exact = dome_irradiance_quadrature(&lights, n, w, h);
+            let light = irradiance(&lights, Vec3A::ZERO, n, 200_000, Strategy::Light);
+            let bsdf = irradiance(&lights, Vec3A::ZERO, n, 200_000, Strategy::Bsdf);
+            let mis = irradiance(&lights, Vec3A::ZERO, n, 200_000, Strategy::Mis);
+            assert_close(&format!("dome light sampling, n {n}"), light, exact, 0.02);
+            assert_close(&format!("dome cosine sampling, n {n}"), bsdf, exact, 0.03);
+            assert_close(&format!("dome MIS, n {n}"), mis, exact, 0.02);
+        }
+    }
+
+    #[test]
+    fn dome_map_orientation() {
+        let dir = tempfile::tempdir().unwrap();
+        let (w, h) = (64, 32);
+        // Bright only at the centre of the image (u ≈ ½, v ≈ ½): documented as +Z.
+        let centre = write_map(dir.path(), "centre.exr", w, h, |x, y| {
+            if (31..33).contains(&x) && (15..17).contains(&y) {
+                100.0
+            } else {
+                0.0
+            }
+        });
+        // Bright only at u ≈ ¾, v ≈ ½: documented as +X.
+        let east = write_map(dir.path(), "east.exr", w, h, |x, y| {
+            if (47..49).contains(&x) && (15..17).contains(&y) {
+                100.0
+            } else {
+                0.0
+            }
+        });
+        // Bright only in the top rows: +Y.
+        let top = write_map(
+            dir.path(),
+            "top.exr",
+            w,
+            h,
+            |_, y| if y < 2 { 100.0 } else { 0.0 },
+        );
+        let lit = |path: &PathBuf, transform: Mat4, n: Vec3A| {
+            let lights = prepare(vec![dome(Some(path.clone()), transform)]);
+            irradiance(&lights, Vec3A::ZERO, n, 4000, Strategy::Light)
+        };
+        let id = Mat4::IDENTITY;
+        assert!(lit(&centre, id, Vec3A::Z) > 0.5);
+        assert_eq!(lit(&centre, id, -Vec3A::Z), 0.0);
+        assert!(lit(&centre, id, Vec3A::Z) > 20.0 * lit(&centre, id, Vec3A::X));
+        assert!(lit(&east, id, Vec3A::X) > 0.5);
+        assert_eq!(lit(&east, id, -Vec3A::X), 0.0);
+        assert!(lit(&top, id, Vec3A::Y) > 0.5);
+        assert_eq!(lit(&top, id, -Vec3A::Y), 0.0);
+        // The light's transform turns the map: rotating 90° about +Y carries light-space +Z to +X.
+        let turned = Mat4::from_rotation_y(std::f32::consts::FRAC_PI_2);
+        assert!(lit(&centre, turned, Vec3A::X) > 0.5);
+        assert_eq!(lit(&centre, turned, -Vec3A::X), 0.0);
+        assert!(lit(&centre, turned, Vec3A::X) > 20.0 * lit(&centre, turned, Vec3A::Z));
+        // The lookup itself, without sampling.
+        let lights = prepare(vec![dome(Some(centre), id)]);
+        assert_eq!(lights.escaped(Vec3A::Z).0, Vec3A::splat(100.0));
+        assert_eq!(lights.background(Vec3A::new(0.01, 0.0, 1.0)), Vec3A::splat(100.0));
+        assert_eq!(lights.escaped(-Vec3A::Z).0, Vec3A::ZERO);
+    }
+
+    #[test]
+    fn unreadable_map_is_an_error_naming_the_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = PathBuf::from("no-such-sky.exr");
+        let err = Lights::new(&[dome(Some(missing), Mat4::IDENTITY)], dir.path()).unwrap_err();
+        assert!(err.to_string().contains("no-such-sky.exr"), "{err}");
+        let garbage = dir.path().join("garbage.exr");
+        std::fs::write(&garbage, b"not an exr").unwrap();
+        let err = Lights::new(&[dome(Some(garbage), Mat4::IDENTITY)], dir.path()).unwrap_err();
+        assert!(err.to_string().contains("garbage.exr"), "{err}");
+    }
+
+    /// What `sample` reports for a direction is what `intersect_area` and `escaped` report for a BSDF
+    /// ray in that direction: the condition for MIS weights that sum to 1.
+    #[test]
+    fn sample_and_lookup_pdfs_agree() {
+        let dir = tempfile::tempdir().unwrap();
+        let map = write_map(dir.path(), "ramp.exr", 32, 16, |x, y| 0.1 + (x * y) as f32);
+        let lights = prepare(vec![
+            Light::Rect {
+                color: white(),
+                intensity: 1.0,
+                exposure: 0.0,
+                transform: Mat4::from_rotation_translation(
+                    Quat::from_rotation_x(std::f32::consts::FRAC_PI_2),
+                    Vec3::new(0.0, 2.0, 0.0),
+                ),
+            },
+            Light::Sphere {
+                color: white(),
+                intensity: 1.0,
+                exposure: 0.0,
+                transform: Mat4::from_translation(Vec3::new(3.0, 1.0, 0.0)),
+            },
+            dome(Some(map), Mat4::from_rotation_z(0.3)),
+            Light::Distant {
+                color: white(),
+                intensity: 1.0,
+                exposure: 0.0,
+                angle_extent: 40.0,
+                transform: Mat4::from_rotation_x(2.0),
+            },
+        ]);
+        let mut rng = Rng::new(1, 9);
+        let p = Vec3A::new(0.1, 0.0, 0.2);
+        let mut checked = 0;
+        for _ in 0..4000 {
+            let Some(ls) = lights.sample(p, Vec3A::ZERO, rng.next_2d(), rng.next_f32()) else {
+                continue;
+            };
+            let ray = Ray {
+                origin: p,
+                direction: ls.wi,
+                t_min: 0.0,
+                t_max: f32::INFINITY,
+                time: 0.0,
+            };
+            let (l, pdf) = match lights.intersect_area(&ray, f32::INFINITY) {
+                Some(hit) => {
+                    assert!(
+                        (hit.t - ls.dist).abs() < 1e-3 * ls.dist,
+                        "{} vs {}",
+                        hit.t,
+                        ls.dist
+                    );
+                    (hit.radiance, hit.pdf)
+                }
+                None => {
+                    assert!(ls.dist.is_infinite());
+                    lights.escaped(ls.wi)
+                }
+            };
+            assert!((pdf - ls.pdf).abs() <= 1e-3 * ls.pdf, "{pdf} vs {}", ls.pdf);
+            assert!((l - ls.radiance).abs().max_element() <= 1e-4 * l.max_element().max(1.0));
+            checked += 1;
+        }
+        assert!(checked > 2000);
+    }
+
+    #[test]
+    fn lights_that_cannot_emit_are_dropped() {
+        let lights = prepare(vec![
+            Light::Rect {
+                color: white(),
+                intensity: 0.0,
+                exposure: 0.0,
+                transform: Mat4::IDENTITY,
+            },
+            Light::Sphere {
+                color: white(),
+                intensity: 1.0,
+                exposure: 0.0,
+                transform: Mat4::ZERO,
+            },
+            Light::Distant {
+                color: Rgb::new(f32::NAN, -1.0, 0.0),
+                intensity: 1.0,
+                exposure: 0.0,
+                angle_extent: 0.53,
+                transform: Mat4::IDENTITY,
+            },
+        ]);
+        assert!(lights.is_empty());
+        assert!(lights.sample(Vec3A::ZERO, Vec3A::Y, (0.5, 0.5), 0.5).is_none());
+        assert_eq!(lights.escaped(Vec3A::Y), (Vec3A::ZERO, 0.0));
+    }
+
+    #[test]
+    fn piecewise_constant_distribution_samples_its_density() {
+        let d = Distribution1D::new(vec![0.0, 3.0, 0.0, 1.0]);
+        let mut hist = [0usize; 4];
+        let n = 100_000;
+        let mut rng = Rng::new(2, 2);
+        for _ in 0..n {
+            let (x, i, pdf) = d.sample(rng.next_f32());
+            assert_eq!(i, (x * 4.0) as usize);
+            assert!(pdf > 0.0);
+            hist[i] += 1;
+        }
+        assert_eq!(hist[0] + hist[2], 0);
+        assert!((hist[1] as f64 / n as f64 - 0.75).abs() < 0.01);
+        assert_eq!(d.pdf(1), 3.0);
+    }
+}

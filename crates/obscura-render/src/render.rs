@@ -1,1 +1,557 @@
-//! (being written)
+//! The render loop: a scene in, a film (and optionally deep pixels) out.
+//!
+//! 1. **Setup** — the projection is created through the camera stage (its properties read once); every
+//!    object is diced at the rate its DicingHint and FieldOfView ask for (in parallel); the two-level
+//!    BVH is built over the meshes with object motion as instance transforms in shutter-normalised
+//!    time; the lights are prepared (the dome's map importance-sampled).
+//! 2. **Tiles** (rayon, 16×16 pixels) — for each pixel, `spp` Owen-scrambled Sobol samples go through
+//!    the camera stage in one batch per tile: aperture and shutter warps, default-ray pre-fill,
+//!    `project`, validation. Culled samples contribute nothing (RenderMan: a culled ray never writes its
+//!    pixel) and are counted. Each camera-space ray is taken to world space with the camera's motion at
+//!    that ray's own time; `min_dist`/`max_dist` bound the trace.
+//! 3. **Shading** — the path tracer returns radiance and the first hit. The beauty `Ci` is radiance ×
+//!    the projection's tint, *before* the pixel filter; alpha, z, N, P and cameraDirection are untinted.
+//!    `z` is camera-space z of the hit (DeepMetric CameraZ) or the distance along the camera ray
+//!    (RayLength), both in camera units.
+//! 4. **Film** — the samples are splatted into a per-tile film with the pixel filter and merged.
+//!
+//! A cancel flag is checked between tiles: a cancelled render keeps what it finished.
+
+use std::path::Path;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+use glam::{Affine3A, Mat4, Quat, Vec3, Vec3A};
+use obscura_host::sampler::Sampler;
+use obscura_host::{Batch, CameraStage, ContractReport, HostError, PixelRect};
+use obscura_scene::Scene;
+use obscura_sdk::{DeepMetric, Matrix4, Registry};
+use rayon::prelude::*;
+
+use crate::bvh::{Instance, SceneAccel};
+use crate::deep::{DeepImage, DeepSample};
+use crate::dice::{DiceError, DicingContext, dice};
+use crate::film::{Film, SampleValues};
+use crate::filter::{Filter, FilterError};
+use crate::integrator::{PathOptions, ShadingScene, trace_path};
+use crate::light::{Lights, ShadeError};
+use crate::ray::{Ray, TriangleMesh};
+use crate::rng::Rng;
+
+/// Why a render could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// The camera or projection could not be set up.
+    #[error(transparent)]
+    Host(#[from] HostError),
+    /// An object could not be diced.
+    #[error("{source_location}: {error}")]
+    Dice {
+        /// Where the object was declared.
+        source_location: String,
+        /// Why.
+        error: DiceError,
+    },
+    /// The pixel filter is invalid.
+    #[error(transparent)]
+    Filter(#[from] FilterError),
+    /// The lights could not be prepared.
+    #[error(transparent)]
+    Lights(#[from] ShadeError),
+    /// Too many samples per pixel.
+    #[error("{0} samples per pixel: at most 65536 are supported")]
+    TooManySamples(u32),
+}
+
+/// Knobs of one render that are not part of the scene.
+#[derive(Debug, Clone)]
+pub struct RenderOptions {
+    /// Samples per pixel (default: the scene's).
+    pub samples_per_pixel: Option<u32>,
+    /// Seed of the sample sequences.
+    pub seed: u32,
+    /// Path depth.
+    pub path: PathOptions,
+    /// Collect deep samples (for a `deepexr` display).
+    pub deep: bool,
+    /// Tile edge in pixels.
+    pub tile_size: u32,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            samples_per_pixel: None,
+            seed: 0,
+            path: PathOptions::default(),
+            deep: false,
+            tile_size: 16,
+        }
+    }
+}
+
+/// Counts and times of one render.
+#[derive(Debug, Clone, Default)]
+pub struct RenderStats {
+    /// Triangles after dicing, over all instances.
+    pub triangles: usize,
+    /// Seconds spent dicing and building the BVH.
+    pub setup_seconds: f64,
+    /// Seconds of the whole render (setup excluded).
+    pub render_seconds: f64,
+    /// Seconds spent in the camera stage (warps, pre-fill, `project`, validation, summed over threads).
+    pub camera_stage_seconds: f64,
+    /// Seconds spent tracing and shading (summed over threads).
+    pub shading_seconds: f64,
+    /// Camera samples handed to the projection, culled ones and contract breaches.
+    pub contract: ContractReport,
+    /// Tiles finished / all tiles.
+    pub tiles: (usize, usize),
+    /// True when the render was cancelled before finishing.
+    pub cancelled: bool,
+}
+
+/// A render ready to go: the projection, geometry and lights prepared.
+pub struct Prepared {
+    stage: CameraStage,
+    accel: SceneAccel,
+    shading: ShadingScene,
+    filter: Filter,
+    samples_per_pixel: u32,
+    /// Camera-to-world motion samples at shutter-normalised times.
+    camera_to_world: Vec<(f32, Affine3A)>,
+    deep_metric: DeepMetric,
+    setup_seconds: f64,
+}
+
+impl std::fmt::Debug for Prepared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Prepared")
+            .field("projection", &self.stage.name())
+            .field("triangles", &self.accel.triangle_count())
+            .finish_non_exhaustive()
+    }
+}
+
+/// A glam (column-vector) matrix from an SDK (row-vector) one.
+#[must_use]
+pub fn glam_from_sdk(m: &Matrix4) -> Mat4 {
+    Mat4::from_cols_array_2d(&m.0)
+}
+
+/// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, 0 for an instantaneous shutter.
+fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
+    let span = shutter.1 - shutter.0;
+    if span > 0.0 {
+        ((t - shutter.0) / span).clamp(0.0, 1.0)
+    } else {
+        0.0
+    }
+}
+
+/// Interpolates motion samples (sorted by time) at `t`: scale and translation linearly, rotation by
+/// spherical interpolation; clamped outside the sampled range.
+#[must_use]
+pub fn interpolate(samples: &[(f32, Affine3A)], t: f32) -> Affine3A {
+    match samples {
+        [] => Affine3A::IDENTITY,
+        [(_, m)] => *m,
+        _ => {
+            let i = samples.partition_point(|(st, _)| *st <= t);
+            if i == 0 {
+                return samples[0].1;
+            }
+            if i >= samples.len() {
+                return samples[samples.len() - 1].1;
+            }
+            let ((t0, m0), (t1, m1)) = (samples[i - 1], samples[i]);
+            let f = if t1 > t0 { (t - t0) / (t1 - t0) } else { 0.0 };
+            let (s0, r0, p0) = m0.to_scale_rotation_translation();
+            let (s1, r1, p1) = m1.to_scale_rotation_translation();
+            Affine3A::from_scale_rotation_translation(s0.lerp(s1, f), slerp(r0, r1, f), p0.lerp(p1, f))
+        }
+    }
+}
+
+fn slerp(a: Quat, b: Quat, f: f32) -> Quat {
+    let b = if a.dot(b) < 0.0 { -b } else { b };
+    a.slerp(b, f)
+}
+
+/// Sets up a render of `scene`: projection, dicing, BVH, lights.
+///
+/// # Errors
+/// A [`RenderError`] naming what could not be prepared.
+pub fn prepare(
+    scene: &Scene,
+    registry: &mut Registry,
+    base_dir: &Path,
+    opts: &RenderOptions,
+) -> Result<Prepared, RenderError> {
+    let start = Instant::now();
+    let stage = CameraStage::new(
+        registry,
+        &scene.projection,
+        &scene.projection_params,
+        &scene.camera,
+    )?;
+    let props = *stage.properties();
+    let env = stage.environment();
+    let shutter = scene.camera.shutter;
+
+    let camera_to_world: Vec<(f32, Affine3A)> = env
+        .world_to_camera()
+        .iter()
+        .map(|s| {
+            (
+                normalise_time(s.time, shutter),
+                Affine3A::from_mat4(glam_from_sdk(&s.world_to_camera).inverse()),
+            )
+        })
+        .collect();
+    let world_to_camera_open = interpolate(&camera_to_world, 0.0).inverse();
+
+    let diced: Vec<Result<TriangleMesh, RenderError>> = scene
+        .objects
+        .par_iter()
+        .map(|o| {
+            let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
+            let ctx = DicingContext {
+                hint: props.dicing_hint,
+                field_of_view: props.field_of_view.unwrap_or(90.0),
+                format: scene.camera.format,
+                screen_window: scene.camera.screen_window(),
+                object_to_camera: Mat4::from(world_to_camera_open) * object_to_world,
+                micropolygon_length: o.micropolygon_length,
+            };
+            dice(&o.shape, &ctx).map_err(|error| RenderError::Dice {
+                source_location: o.source.clone(),
+                error,
+            })
+        })
+        .collect();
+    let mut meshes = Vec::with_capacity(diced.len());
+    for m in diced {
+        meshes.push(m?);
+    }
+    let instances: Vec<Instance> = scene
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, o)| Instance {
+            mesh: i as u32,
+            transform: o
+                .transform
+                .samples
+                .iter()
+                .map(|(t, m)| (normalise_time(*t, shutter), Affine3A::from_mat4(*m)))
+                .collect(),
+        })
+        .collect();
+    let accel = SceneAccel::build(meshes, instances);
+    let shading = ShadingScene {
+        materials: scene.materials.clone(),
+        instance_material: scene.objects.iter().map(|o| o.material).collect(),
+        lights: Lights::new(&scene.lights, base_dir)?,
+    };
+    let spp = opts.samples_per_pixel.unwrap_or(scene.samples_per_pixel).max(1);
+    if spp > obscura_host::sampler::MAX_SAMPLES {
+        return Err(RenderError::TooManySamples(spp));
+    }
+    Ok(Prepared {
+        filter: Filter::new(&scene.filter)?,
+        deep_metric: props.deep_metric,
+        stage,
+        accel,
+        shading,
+        samples_per_pixel: spp,
+        camera_to_world,
+        setup_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The finished (or cancelled) render.
+#[derive(Debug)]
+pub struct RenderOutput {
+    /// The filtered AOVs.
+    pub film: Film,
+    /// Per-sample deep data, when asked for.
+    pub deep: Option<DeepImage>,
+    /// Counts and times.
+    pub stats: RenderStats,
+}
+
+impl Prepared {
+    /// The camera stage (projection, properties, warnings).
+    #[must_use]
+    pub fn stage(&self) -> &CameraStage {
+        &self.stage
+    }
+
+    /// The scene accelerator.
+    #[must_use]
+    pub fn accel(&self) -> &SceneAccel {
+        &self.accel
+    }
+
+    /// Renders every tile of the crop. `progress(done, total)` is called after each tile; `cancel` is
+    /// checked before each tile.
+    pub fn render(
+        &self,
+        opts: &RenderOptions,
+        progress: &(dyn Fn(usize, usize) + Sync),
+        cancel: &AtomicBool,
+    ) -> RenderOutput {
+        let start = Instant::now();
+        let cam = self.stage.camera();
+        let crop = cam.pixels();
+        let ts = opts.tile_size.max(1);
+        let mut tiles = Vec::new();
+        let mut y = crop.y0;
+        while y < crop.y1 {
+            let mut x = crop.x0;
+            while x < crop.x1 {
+                tiles.push(PixelRect {
+                    x0: x,
+                    x1: (x + ts).min(crop.x1),
+                    y0: y,
+                    y1: (y + ts).min(crop.y1),
+                });
+                x += ts;
+            }
+            y += ts;
+        }
+        let total = tiles.len();
+        let film = Mutex::new(Film::new(
+            cam.format.width,
+            cam.format.height,
+            crop,
+            self.filter.clone(),
+        ));
+        let deep_pixels: Mutex<Vec<Option<Vec<DeepSample>>>> = Mutex::new(if opts.deep {
+            vec![None; crop.len()]
+        } else {
+            Vec::new()
+        });
+        let report = Mutex::new(ContractReport::default());
+        let done = AtomicU64::new(0);
+        let camera_ns = AtomicU64::new(0);
+        let shading_ns = AtomicU64::new(0);
+        let sampler = Sampler::new(opts.seed);
+        let spp = self.samples_per_pixel;
+        let (fx, fy) = self.filter.radius();
+        let margin = ((fx.max(fy) - 0.5).max(0.0)).ceil() as u32;
+
+        tiles.par_iter().for_each(|rect| {
+            if cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            let t0 = Instant::now();
+            let pixels = sample_pixels(rect, &crop, margin, cam.format);
+            let mut batch = Batch::with_capacity(pixels.len() * spp as usize);
+            for &(px, py) in &pixels {
+                for s in 0..spp {
+                    let c = sampler.sample(px, py, s);
+                    let raster = (px as f64 + c.pixel.0 as f64, py as f64 + c.pixel.1 as f64);
+                    batch.push(
+                        cam.raster_to_screen(raster.0, raster.1),
+                        obscura_sdk::Point2::new(c.lens.0, c.lens.1),
+                        c.time,
+                    );
+                }
+            }
+            let tile_report = self.stage.run(&mut batch);
+            let t1 = Instant::now();
+
+            let mut tile = film.lock().expect("no panics while holding the film").tile(*rect);
+            let mut deep_tile: Vec<(usize, DeepSample)> = Vec::new();
+            let mut i = 0;
+            for &(px, py) in &pixels {
+                {
+                    for s in 0..spp {
+                        let r = batch.rays[i];
+                        let time = batch.time[i];
+                        let tint = batch.tint[i];
+                        i += 1;
+                        if r.is_culled() {
+                            continue;
+                        }
+                        let c = sampler.sample(px, py, s);
+                        let (rx, ry) = (px as f32 + c.pixel.0, py as f32 + c.pixel.1);
+                        let c2w = interpolate(&self.camera_to_world, time);
+                        let o_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
+                        let d_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z);
+                        let d_world = c2w.transform_vector3a(d_cam);
+                        let stretch = d_world.length();
+                        if !(stretch > 0.0 && stretch.is_finite()) {
+                            continue;
+                        }
+                        let ray = Ray {
+                            origin: c2w.transform_point3a(o_cam),
+                            direction: d_world / stretch,
+                            t_min: r.min_dist * stretch,
+                            t_max: r.max_dist * stretch,
+                            time,
+                        };
+                        let mut rng = Rng::new(
+                            ((px as u64) << 32 | py as u64) ^ (opts.seed as u64) << 16,
+                            s as u64,
+                        );
+                        let path = trace_path(&self.shading, &self.accel, &ray, &mut rng, &opts.path);
+                        let radiance = path.radiance;
+                        let ci = obscura_sdk::Rgb::new(
+                            radiance.x * tint.r,
+                            radiance.y * tint.g,
+                            radiance.z * tint.b,
+                        );
+                        let (z, n, p) = match path.first_hit {
+                            Some(h) => {
+                                let t_cam = h.t / stretch;
+                                let z = match self.deep_metric {
+                                    DeepMetric::CameraZ => o_cam.z + d_cam.z * t_cam,
+                                    DeepMetric::RayLength => t_cam,
+                                };
+                                (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
+                            }
+                            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
+                        };
+                        let v = SampleValues {
+                            ci,
+                            alpha: path.alpha,
+                            z,
+                            n,
+                            p,
+                            camera_direction: Vec3::from(ray.direction),
+                        };
+                        tile.add_sample(rx, ry, &v);
+                        let inside = px >= crop.x0 && px < crop.x1 && py >= crop.y0 && py < crop.y1;
+                        if opts.deep && inside && path.first_hit.is_some() {
+                            let idx =
+                                (py - crop.y0) as usize * crop.width() as usize + (px - crop.x0) as usize;
+                            deep_tile.push((
+                                idx,
+                                DeepSample {
+                                    z,
+                                    z_back: z,
+                                    r: ci.r,
+                                    g: ci.g,
+                                    b: ci.b,
+                                    a: path.alpha,
+                                },
+                            ));
+                        }
+                    }
+                }
+            }
+            let t2 = Instant::now();
+            camera_ns.fetch_add((t1 - t0).as_nanos() as u64, Ordering::Relaxed);
+            shading_ns.fetch_add((t2 - t1).as_nanos() as u64, Ordering::Relaxed);
+            film.lock().expect("no panics while holding the film").merge(tile);
+            report
+                .lock()
+                .expect("no panics while holding the report")
+                .merge(&tile_report);
+            if opts.deep {
+                let mut d = deep_pixels
+                    .lock()
+                    .expect("no panics while holding the deep pixels");
+                for (idx, sample) in deep_tile {
+                    d[idx].get_or_insert_with(Vec::new).push(sample);
+                }
+            }
+            let n = done.fetch_add(1, Ordering::Relaxed) as usize + 1;
+            progress(n, total);
+        });
+
+        let finished = done.load(Ordering::Relaxed) as usize;
+        let deep = opts.deep.then(|| {
+            let pixels = deep_pixels
+                .into_inner()
+                .expect("no panics while holding the deep pixels");
+            DeepImage {
+                width: cam.format.width,
+                height: cam.format.height,
+                data_window: crop,
+                pixels: pixels
+                    .into_iter()
+                    .map(|p| composite_deep(p.unwrap_or_default(), spp))
+                    .collect(),
+            }
+        });
+        RenderOutput {
+            film: film.into_inner().expect("no panics while holding the film"),
+            deep,
+            stats: RenderStats {
+                triangles: self.accel.triangle_count(),
+                setup_seconds: self.setup_seconds,
+                render_seconds: start.elapsed().as_secs_f64(),
+                camera_stage_seconds: camera_ns.load(Ordering::Relaxed) as f64 * 1e-9,
+                shading_seconds: shading_ns.load(Ordering::Relaxed) as f64 * 1e-9,
+                contract: report.into_inner().expect("no panics while holding the report"),
+                tiles: (finished, total),
+                cancelled: finished < total,
+            },
+        }
+    }
+}
+
+/// The pixels whose samples tile `rect` takes: its own, plus the pixels outside the crop (within the
+/// image) that lie within `margin` of the crop and whose nearest crop pixel is in `rect`. Every pixel the
+/// filter can reach from the crop is sampled exactly once, so a cropped render equals the same region of
+/// the full one.
+#[must_use]
+pub fn sample_pixels(
+    rect: &PixelRect,
+    crop: &PixelRect,
+    margin: u32,
+    format: obscura_sdk::Format,
+) -> Vec<(u32, u32)> {
+    let x0 = rect
+        .x0
+        .saturating_sub(if rect.x0 == crop.x0 { margin } else { 0 });
+    let y0 = rect
+        .y0
+        .saturating_sub(if rect.y0 == crop.y0 { margin } else { 0 });
+    let x1 = if rect.x1 == crop.x1 {
+        (rect.x1 + margin).min(format.width)
+    } else {
+        rect.x1
+    };
+    let y1 = if rect.y1 == crop.y1 {
+        (rect.y1 + margin).min(format.height)
+    } else {
+        rect.y1
+    };
+    let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+    for y in y0..y1 {
+        for x in x0..x1 {
+            out.push((x, y));
+        }
+    }
+    out
+}
+
+/// Turns one pixel's per-camera-sample hits into deep samples that composite ("over", front to back)
+/// to the box-filtered pixel: sample `i` covers `f = 1/spp` of the pixel, so with `F` the coverage in
+/// front of it its alpha is `f/(1 − F)` and its colour is premultiplied by the same factor.
+#[must_use]
+pub fn composite_deep(mut samples: Vec<DeepSample>, spp: u32) -> Vec<DeepSample> {
+    samples.sort_by(|a, b| a.z.total_cmp(&b.z));
+    let f = 1.0 / spp.max(1) as f32;
+    let mut covered = 0.0f32;
+    let mut out = Vec::with_capacity(samples.len());
+    for s in samples {
+        let remaining = (1.0 - covered).max(1e-6);
+        let k = (f * s.a / remaining).min(1.0);
+        out.push(DeepSample {
+            a: k,
+            r: s.r * f / remaining,
+            g: s.g * f / remaining,
+            b: s.b * f / remaining,
+            ..s
+        });
+        covered += f * s.a;
+    }
+    out
+}

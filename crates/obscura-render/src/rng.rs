@@ -11,7 +11,10 @@ impl Rng {
     /// A generator for `(seed, stream)`; different streams are independent sequences.
     #[must_use]
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Rng { state: 0, inc: (stream << 1) | 1 };
+        let mut r = Rng {
+            state: 0,
+            inc: (stream << 1) | 1,
+        };
         r.next_u32();
         r.state = r.state.wrapping_add(seed);
         r.next_u32();

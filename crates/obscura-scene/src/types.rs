@@ -18,7 +18,9 @@ impl MotionTransform {
     /// A transform that does not move.
     #[must_use]
     pub fn fixed(m: Mat4) -> Self {
-        MotionTransform { samples: vec![(0.0, m)] }
+        MotionTransform {
+            samples: vec![(0.0, m)],
+        }
     }
 
     /// True when there is more than one distinct sample.
@@ -149,7 +151,9 @@ pub enum Material {
 
 impl Default for Material {
     fn default() -> Self {
-        Material::Diffuse { color: Rgb::new(0.18, 0.18, 0.18) }
+        Material::Diffuse {
+            color: Rgb::new(0.18, 0.18, 0.18),
+        }
     }
 }
 
@@ -252,7 +256,11 @@ pub struct PixelFilter {
 
 impl Default for PixelFilter {
     fn default() -> Self {
-        PixelFilter { kind: FilterKind::Gaussian, width_x: 2.0, width_y: 2.0 }
+        PixelFilter {
+            kind: FilterKind::Gaussian,
+            width_x: 2.0,
+            width_y: 2.0,
+        }
     }
 }
 

@@ -1185,7 +1185,10 @@ mod tests {
         let mut l = list("float fov", &["45"]);
         assert_eq!(l.remove("fov"), 1);
         l.push_text("float fov", &["50"], None).unwrap();
-        assert_eq!(Params::resolve("P", &table(), &l).unwrap().float("fov").unwrap(), 50.0);
+        assert_eq!(
+            Params::resolve("P", &table(), &l).unwrap().float("fov").unwrap(),
+            50.0
+        );
         assert_eq!(l.remove("nothing"), 0);
     }
 
