@@ -1,6 +1,7 @@
 //! The `obscura` command. Argument parsing only: every job lives in the library crates.
 
-use std::path::PathBuf;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
@@ -10,6 +11,9 @@ use obscura_host::raymap::{trace_ray_map, write_exr};
 use obscura_host::shutter::ShutterDesc;
 use obscura_host::{CameraDesc, CameraStage, CropWindow, listing};
 use obscura_projections::builtin_registry;
+use obscura_render::integrator::PathOptions;
+use obscura_render::job;
+use obscura_render::render::{RenderOptions, prepare};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 /// Obscura: RenderMan-style camera projection plugins, and the host that drives them.
@@ -24,11 +28,50 @@ struct Cli {
 enum Command {
     /// Write every pixel's camera ray (origin, direction, radius, spread, tint, valid) as OpenEXR.
     Rays(Box<RaysArgs>),
+    /// Render a scene (RIB, glTF, OBJ, or the built-in one) through any projection: EXR + PNG.
+    Render(Box<RenderArgs>),
     /// List the projections and their parameter tables.
     Plugins {
         /// Show only this projection.
         name: Option<String>,
     },
+}
+
+#[derive(Args, Debug)]
+struct RenderArgs {
+    /// A scene: .rib, .gltf, .glb or .obj. Without one, the built-in scene.
+    scene: Option<PathBuf>,
+    /// Output EXR (beauty, alpha, z, N, P, cameraDirection) plus a PNG preview beside it. Default: the
+    /// scene's Display, else render.exr.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Use this projection instead of the scene's.
+    #[arg(short, long)]
+    projection: Option<String>,
+    /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
+    #[arg(long = "param", value_name = "PARAM")]
+    params: Vec<String>,
+    /// Image size in pixels, WIDTHxHEIGHT.
+    #[arg(long, value_parser = parse_format)]
+    format: Option<(u32, u32)>,
+    /// Samples per pixel (default: the scene's Hider maxsamples).
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// CropWindow xmin xmax ymin ymax, in NDC (y down).
+    #[arg(long, num_args = 4, value_names = ["XMIN", "XMAX", "YMIN", "YMAX"])]
+    crop: Option<Vec<f32>>,
+    /// Maximum path depth.
+    #[arg(long, default_value_t = 6)]
+    max_depth: u32,
+    /// Seed of the sample sequences.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// No progress bar or summary.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -184,10 +227,150 @@ fn rays(a: &RaysArgs) -> Result<(), String> {
     Ok(())
 }
 
+fn render(a: &RenderArgs) -> Result<(), String> {
+    let mut registry = builtin_registry();
+    let format = a
+        .format
+        .map(|(w, h)| Format::new(w, h))
+        .unwrap_or(Format::new(640, 360));
+    let (mut scene, base_dir) = match &a.scene {
+        None => (
+            obscura_scene::rib::parse_str(job::DEFAULT_SCENE, "<built-in scene>", Path::new("."))
+                .map_err(|e| e.to_string())?,
+            PathBuf::from("."),
+        ),
+        Some(path) => (
+            obscura_scene::load(path, CameraDesc::new(format)).map_err(|e| e.to_string())?,
+            path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        ),
+    };
+    if let Some((w, h)) = a.format {
+        scene.camera.format.width = w;
+        scene.camera.format.height = h;
+    }
+    if let Some(c) = &a.crop {
+        scene.camera.crop_window = CropWindow {
+            x_min: c[0],
+            x_max: c[1],
+            y_min: c[2],
+            y_max: c[3],
+        };
+    }
+    if let Some(p) = &a.projection {
+        scene.projection = p.clone();
+        scene.projection_params = ParamList::new();
+    }
+    let factory = registry.find(&scene.projection).map_err(|e| e.to_string())?;
+    for p in &a.params {
+        let mut one = ParamList::new();
+        push_param_arg(&mut one, p, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
+        for e in one.entries() {
+            scene.projection_params.remove(&e.name);
+            let decl = match e.array_len {
+                None => format!("{} {}", e.ty, e.name),
+                Some(n) => format!("{}[{n}] {}", e.ty, e.name),
+            };
+            scene
+                .projection_params
+                .push(&decl, e.value.clone(), e.origin.clone())
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    if !a.quiet {
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    let displays = job::displays(&scene, a.output.as_deref());
+    let opts = RenderOptions {
+        samples_per_pixel: a.spp,
+        seed: a.seed,
+        path: PathOptions {
+            max_depth: a.max_depth,
+            ..PathOptions::default()
+        },
+        deep: job::wants_deep(&displays),
+        ..RenderOptions::default()
+    };
+    if let Some(n) = a.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| e.to_string())?;
+    }
+    let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
+    if !a.quiet {
+        for w in prepared.stage().setup_warnings() {
+            eprintln!("{w}");
+        }
+    }
+    let _ = ctrlc::set_handler(|| {
+        if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!(
+            "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
+        );
+    });
+    let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
+        let b = indicatif::ProgressBar::new(0);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} tiles  {elapsed} elapsed, ETA {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        b
+    });
+    let progress = |done: usize, total: usize| {
+        if let Some(b) = &bar {
+            b.set_length(total as u64);
+            b.set_position(done as u64);
+        }
+    };
+    let out = prepared.render(&opts, &progress, &job::CANCEL);
+    if let Some(b) = &bar {
+        b.finish_and_clear();
+    }
+    let attributes = [("obscura:projection", scene.projection.clone())];
+    let written = job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
+        .map_err(|e| e.to_string())?;
+    let s = &out.stats;
+    if let Some(w) = s.contract.warning(&scene.projection) {
+        eprintln!("{w}");
+    }
+    if !a.quiet {
+        let frame = s.render_seconds.max(1e-9);
+        println!(
+            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled; \
+             camera stage {:.1} % of thread time{}",
+            scene.camera.pixels().width(),
+            scene.camera.pixels().height(),
+            scene.projection,
+            frame,
+            s.setup_seconds,
+            s.triangles,
+            s.contract.samples,
+            s.contract.culled,
+            100.0 * s.camera_stage_seconds / (s.camera_stage_seconds + s.shading_seconds).max(1e-9),
+            if s.cancelled {
+                format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
+            } else {
+                String::new()
+            }
+        );
+        for p in &written {
+            println!("wrote {}", p.display());
+        }
+    }
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Rays(a) => rays(a),
+        Command::Render(a) => render(a),
         Command::Plugins { name } => listing::list(&builtin_registry(), name.as_deref())
             .map(|text| print!("{text}"))
             .map_err(|e| e.to_string()),

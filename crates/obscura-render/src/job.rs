@@ -39,8 +39,10 @@ pub fn displays(scene: &Scene, output: Option<&Path>) -> Vec<Display> {
         }],
         None => scene.displays.clone(),
     };
-    if !list.iter().any(|d| d.driver == DisplayDriver::Png) {
-        if let Some(exr) = list.iter().find(|d| d.driver != DisplayDriver::Png) {
+    if !list.iter().any(|d| d.driver == DisplayDriver::Png)
+        && let Some(exr) = list.iter().find(|d| d.driver != DisplayDriver::Png)
+    {
+        {
             let preview = Display {
                 path: exr.path.with_extension("png"),
                 driver: DisplayDriver::Png,

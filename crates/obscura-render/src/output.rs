@@ -306,13 +306,13 @@ fn quantize(v: f32) -> u8 {
     (v.clamp(0.0, 1.0) * 255.0).round() as u8
 }
 
-/// Writes the film's crop as an 8-bit RGBA PNG preview, atomically.
+/// Writes the film's crop as an opaque 8-bit RGB PNG preview, atomically.
 ///
 /// Ci is clamped to [0, 1] and encoded with the exact piecewise sRGB curve ([`srgb_encode`]);
-/// alpha is stored linearly. Values are rounded to the nearest 8-bit code.
-/// Colours are written as the film holds them, premultiplied by coverage (as in the EXR), so
-/// anti-aliased edges over a transparent background look darker in viewers that composite PNGs
-/// as straight alpha. The file carries an `sRGB` chunk.
+/// values are rounded to the nearest 8-bit code. The preview shows the beauty exactly as rendered —
+/// including a dome seen behind the geometry, which has alpha 0 — so it carries no alpha channel
+/// (viewers would otherwise show the sky as transparent); alpha is in the EXR. The file carries an
+/// `sRGB` chunk.
 ///
 /// # Errors
 /// [`OutputError::EmptyImage`], [`OutputError::Io`], [`OutputError::Png`] or
@@ -324,13 +324,12 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
             path: path.to_path_buf(),
         });
     }
-    let mut data = Vec::with_capacity(crop.len() * 4);
+    let mut data = Vec::with_capacity(crop.len() * 3);
     for v in resolve(film) {
         data.extend_from_slice(&[
             quantize(srgb_encode(v.ci.r)),
             quantize(srgb_encode(v.ci.g)),
             quantize(srgb_encode(v.ci.b)),
-            quantize(v.alpha),
         ]);
     }
     let png_err = |source| OutputError::Png {
@@ -340,7 +339,7 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
     write_atomically(path, |tmp| {
         write_file(path, tmp, |out| {
             let mut encoder = png::Encoder::new(out, crop.width(), crop.height());
-            encoder.set_color(png::ColorType::Rgba);
+            encoder.set_color(png::ColorType::Rgb);
             encoder.set_depth(png::BitDepth::Eight);
             encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
             let mut writer = encoder.write_header().map_err(png_err)?;
@@ -751,24 +750,19 @@ mod tests {
         assert_eq!((info.width, info.height), (5, 3));
         assert_eq!(
             (info.color_type, info.bit_depth),
-            (png::ColorType::Rgba, png::BitDepth::Eight)
+            (png::ColorType::Rgb, png::BitDepth::Eight)
         );
         let px = |x: u32, y: u32| {
-            let i = ((y - crop.y0) * 5 + (x - crop.x0)) as usize * 4;
-            [buf[i], buf[i + 1], buf[i + 2], buf[i + 3]]
+            let i = ((y - crop.y0) * 5 + (x - crop.x0)) as usize * 3;
+            [buf[i], buf[i + 1], buf[i + 2]]
         };
         // A corner pixel far from (2, 3) sees only 0.5 grey samples: 0.5 linear → 188.
-        assert_eq!(px(5, 4), [188, 188, 188, 255]);
+        assert_eq!(px(5, 4), [188, 188, 188]);
         // The gaussian mixes (2, 3)'s out-of-range colour in; film values are clamped, never wrapped.
         let v = film.pixel(2, 3);
         assert_eq!(
             px(2, 3),
-            [
-                188,
-                quantize(srgb_encode(v.ci.g)),
-                quantize(srgb_encode(v.ci.b)),
-                255
-            ]
+            [188, quantize(srgb_encode(v.ci.g)), quantize(srgb_encode(v.ci.b)),]
         );
         assert!(px(2, 3)[1] > 188 && px(2, 3)[2] < 188);
     }

@@ -323,12 +323,7 @@ impl Prepared {
             y += ts;
         }
         let total = tiles.len();
-        let film = Mutex::new(Film::new(
-            cam.format.width,
-            cam.format.height,
-            crop,
-            self.filter.clone(),
-        ));
+        let film = Mutex::new(Film::new(cam.format.width, cam.format.height, crop, self.filter));
         let deep_pixels: Mutex<Vec<Option<Vec<DeepSample>>>> = Mutex::new(if opts.deep {
             vec![None; crop.len()]
         } else {

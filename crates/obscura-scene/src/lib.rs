@@ -15,3 +15,42 @@ pub mod rib;
 pub mod types;
 
 pub use types::*;
+
+use std::path::Path;
+
+use obscura_host::CameraDesc;
+
+/// A scene file could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// A RIB error (file:line: what).
+    #[error(transparent)]
+    Rib(#[from] rib::RibError),
+    /// A glTF error.
+    #[error(transparent)]
+    Gltf(#[from] gltf_scene::GltfError),
+    /// An OBJ error.
+    #[error(transparent)]
+    Obj(#[from] obj::ObjError),
+    /// The extension names no format we read.
+    #[error("{0}: unknown scene format; expected .rib, .gltf, .glb or .obj")]
+    Format(String),
+}
+
+/// Reads a scene by its extension: `.rib` (camera and all from the file), `.gltf`/`.glb`/`.obj`
+/// (geometry, materials, lights and the file's camera; format and the rest from `camera`).
+///
+/// # Errors
+/// A [`LoadError`] naming the file (and line, where the format has lines).
+pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    match ext.as_str() {
+        "rib" => Ok(rib::parse_file(path)?),
+        "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),
+        "obj" => Ok(obj::load_obj(path, camera)?),
+        _ => Err(LoadError::Format(path.display().to_string())),
+    }
+}
