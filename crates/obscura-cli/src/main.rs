@@ -343,7 +343,7 @@ fn render(a: &RenderArgs) -> Result<(), String> {
         let frame = s.render_seconds.max(1e-9);
         println!(
             "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled; \
-             camera stage {:.1} % of thread time{}",
+             camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
             scene.camera.pixels().width(),
             scene.camera.pixels().height(),
             scene.projection,
@@ -352,7 +352,10 @@ fn render(a: &RenderArgs) -> Result<(), String> {
             s.triangles,
             s.contract.samples,
             s.contract.culled,
-            100.0 * s.camera_stage_seconds / (s.camera_stage_seconds + s.shading_seconds).max(1e-9),
+            100.0 * s.camera_stage_seconds
+                / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
+            100.0 * s.sampling_seconds
+                / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
             if s.cancelled {
                 format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
             } else {

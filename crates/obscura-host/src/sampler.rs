@@ -3,8 +3,10 @@
 //! Each pixel draws its samples from its own scramble of the Sobol sequence (Burley's hash-based Owen
 //! scrambling, the `sobol_burley` crate), so every pixel's first `2^k` samples are stratified in each
 //! pair of dimensions — better than jittered strata for any sample count, with no visible pattern
-//! across pixels. The pixel position, the lens sample and the time sample use independent scrambles
-//! (padding), so they are not correlated with one another.
+//! across pixels. The pixel position uses one scramble (Sobol dimensions 0, 1); the lens sample and the
+//! time use another (dimensions 0, 1 and 2), so pixel and lens are independent (padding) while the lens
+//! pair keeps Sobol's (0, 2) stratification and time its 1-D stratification. Each scramble is one
+//! four-wide `sample_4d` call.
 
 /// The largest number of samples per pixel the sequence supports.
 pub const MAX_SAMPLES: u32 = 1 << 16;
@@ -28,7 +30,6 @@ pub struct Sampler {
 
 const PIXEL_STREAM: u32 = 0x9e37_79b9;
 const LENS_STREAM: u32 = 0x85eb_ca6b;
-const TIME_STREAM: u32 = 0xc2b2_ae35;
 
 /// A 32-bit mixing hash (the "lowbias32" finaliser): decorrelates nearby pixel coordinates.
 fn hash(mut x: u32) -> u32 {
@@ -51,11 +52,12 @@ impl Sampler {
     #[must_use]
     pub fn sample(&self, x: u32, y: u32, index: u32) -> CameraSample {
         let pixel_seed = hash(hash(x ^ hash(y ^ self.seed)) ^ self.seed.rotate_left(7));
-        let s = |stream: u32, dim: u32| sobol_burley::sample(index, dim, hash(pixel_seed ^ stream));
+        let p = sobol_burley::sample_4d(index, 0, hash(pixel_seed ^ PIXEL_STREAM));
+        let l = sobol_burley::sample_4d(index, 0, hash(pixel_seed ^ LENS_STREAM));
         CameraSample {
-            pixel: (s(PIXEL_STREAM, 0), s(PIXEL_STREAM, 1)),
-            lens: (s(LENS_STREAM, 0), s(LENS_STREAM, 1)),
-            time: s(TIME_STREAM, 0),
+            pixel: (p[0], p[1]),
+            lens: (l[0], l[1]),
+            time: l[2],
         }
     }
 }

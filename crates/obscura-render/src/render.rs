@@ -100,8 +100,11 @@ pub struct RenderStats {
     pub setup_seconds: f64,
     /// Seconds of the whole render (setup excluded).
     pub render_seconds: f64,
-    /// Seconds spent in the camera stage (warps, pre-fill, `project`, validation, summed over threads).
+    /// Seconds spent in the camera stage's driver (aperture and shutter warps, default-ray pre-fill,
+    /// `project`, validation), summed over threads.
     pub camera_stage_seconds: f64,
+    /// Seconds spent generating the Sobol pixel, lens and time samples, summed over threads.
+    pub sampling_seconds: f64,
     /// Seconds spent tracing and shading (summed over threads).
     pub shading_seconds: f64,
     /// Camera samples handed to the projection, culled ones and contract breaches.
@@ -332,6 +335,7 @@ impl Prepared {
         let report = Mutex::new(ContractReport::default());
         let done = AtomicU64::new(0);
         let camera_ns = AtomicU64::new(0);
+        let sampling_ns = AtomicU64::new(0);
         let shading_ns = AtomicU64::new(0);
         let sampler = Sampler::new(opts.seed);
         let spp = self.samples_per_pixel;
@@ -345,10 +349,12 @@ impl Prepared {
             let t0 = Instant::now();
             let pixels = sample_pixels(rect, &crop, margin, cam.format);
             let mut batch = Batch::with_capacity(pixels.len() * spp as usize);
+            let mut rasters = Vec::with_capacity(pixels.len() * spp as usize);
             for &(px, py) in &pixels {
                 for s in 0..spp {
                     let c = sampler.sample(px, py, s);
                     let raster = (px as f64 + c.pixel.0 as f64, py as f64 + c.pixel.1 as f64);
+                    rasters.push((raster.0 as f32, raster.1 as f32));
                     batch.push(
                         cam.raster_to_screen(raster.0, raster.1),
                         obscura_sdk::Point2::new(c.lens.0, c.lens.1),
@@ -356,6 +362,7 @@ impl Prepared {
                     );
                 }
             }
+            let t_samples = Instant::now();
             let tile_report = self.stage.run(&mut batch);
             let t1 = Instant::now();
 
@@ -372,8 +379,7 @@ impl Prepared {
                         if r.is_culled() {
                             continue;
                         }
-                        let c = sampler.sample(px, py, s);
-                        let (rx, ry) = (px as f32 + c.pixel.0, py as f32 + c.pixel.1);
+                        let (rx, ry) = rasters[i - 1];
                         let c2w = interpolate(&self.camera_to_world, time);
                         let o_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
                         let d_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z);
@@ -440,7 +446,8 @@ impl Prepared {
                 }
             }
             let t2 = Instant::now();
-            camera_ns.fetch_add((t1 - t0).as_nanos() as u64, Ordering::Relaxed);
+            sampling_ns.fetch_add((t_samples - t0).as_nanos() as u64, Ordering::Relaxed);
+            camera_ns.fetch_add((t1 - t_samples).as_nanos() as u64, Ordering::Relaxed);
             shading_ns.fetch_add((t2 - t1).as_nanos() as u64, Ordering::Relaxed);
             film.lock().expect("no panics while holding the film").merge(tile);
             report
@@ -482,6 +489,7 @@ impl Prepared {
                 setup_seconds: self.setup_seconds,
                 render_seconds: start.elapsed().as_secs_f64(),
                 camera_stage_seconds: camera_ns.load(Ordering::Relaxed) as f64 * 1e-9,
+                sampling_seconds: sampling_ns.load(Ordering::Relaxed) as f64 * 1e-9,
                 shading_seconds: shading_ns.load(Ordering::Relaxed) as f64 * 1e-9,
                 contract: report.into_inner().expect("no panics while holding the report"),
                 tiles: (finished, total),
