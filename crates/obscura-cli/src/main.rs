@@ -342,7 +342,8 @@ fn render(a: &RenderArgs) -> Result<(), String> {
     if !a.quiet {
         let frame = s.render_seconds.max(1e-9);
         println!(
-            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled; \
+            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, \
+             {:.1} Mrays/s traced (camera, bounce and shadow rays); \
              camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
             scene.camera.pixels().width(),
             scene.camera.pixels().height(),
@@ -352,6 +353,7 @@ fn render(a: &RenderArgs) -> Result<(), String> {
             s.triangles,
             s.contract.samples,
             s.contract.culled,
+            s.rays_traced as f64 / frame * 1e-6,
             100.0 * s.camera_stage_seconds
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
             100.0 * s.sampling_seconds

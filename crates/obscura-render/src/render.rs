@@ -36,7 +36,7 @@ use crate::film::{Film, SampleValues};
 use crate::filter::{Filter, FilterError};
 use crate::integrator::{PathOptions, ShadingScene, trace_path};
 use crate::light::{Lights, ShadeError};
-use crate::ray::{Ray, TriangleMesh};
+use crate::ray::{Ray, Tracer, TriangleMesh};
 use crate::rng::Rng;
 
 /// Why a render could not start.
@@ -105,6 +105,8 @@ pub struct RenderStats {
     pub camera_stage_seconds: f64,
     /// Seconds spent generating the Sobol pixel, lens and time samples, summed over threads.
     pub sampling_seconds: f64,
+    /// Rays traced through the BVH: camera rays, bounces and shadow rays.
+    pub rays_traced: u64,
     /// Seconds spent tracing and shading (summed over threads).
     pub shading_seconds: f64,
     /// Camera samples handed to the projection, culled ones and contract breaches.
@@ -141,6 +143,24 @@ impl std::fmt::Debug for Prepared {
 #[must_use]
 pub fn glam_from_sdk(m: &Matrix4) -> Mat4 {
     Mat4::from_cols_array_2d(&m.0)
+}
+
+/// Counts the rays one tile traces (nearest-hit and shadow queries); tile-local, so the count is free
+/// of contention.
+struct CountingTracer<'a> {
+    inner: &'a SceneAccel,
+    rays: AtomicU64,
+}
+
+impl Tracer for CountingTracer<'_> {
+    fn intersect(&self, ray: &Ray) -> Option<crate::ray::Hit> {
+        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.inner.intersect(ray)
+    }
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.inner.occluded(ray)
+    }
 }
 
 /// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, 0 for an instantaneous shutter.
@@ -336,6 +356,7 @@ impl Prepared {
         let done = AtomicU64::new(0);
         let camera_ns = AtomicU64::new(0);
         let sampling_ns = AtomicU64::new(0);
+        let traced = AtomicU64::new(0);
         let shading_ns = AtomicU64::new(0);
         let sampler = Sampler::new(opts.seed);
         let spp = self.samples_per_pixel;
@@ -368,6 +389,10 @@ impl Prepared {
 
             let mut tile = film.lock().expect("no panics while holding the film").tile(*rect);
             let mut deep_tile: Vec<(usize, DeepSample)> = Vec::new();
+            let tracer = CountingTracer {
+                inner: &self.accel,
+                rays: AtomicU64::new(0),
+            };
             let mut i = 0;
             for &(px, py) in &pixels {
                 {
@@ -399,7 +424,7 @@ impl Prepared {
                             ((px as u64) << 32 | py as u64) ^ (opts.seed as u64) << 16,
                             s as u64,
                         );
-                        let path = trace_path(&self.shading, &self.accel, &ray, &mut rng, &opts.path);
+                        let path = trace_path(&self.shading, &tracer, &ray, &mut rng, &opts.path);
                         let radiance = path.radiance;
                         let ci = obscura_sdk::Rgb::new(
                             radiance.x * tint.r,
@@ -446,6 +471,7 @@ impl Prepared {
                 }
             }
             let t2 = Instant::now();
+            traced.fetch_add(tracer.rays.load(Ordering::Relaxed), Ordering::Relaxed);
             sampling_ns.fetch_add((t_samples - t0).as_nanos() as u64, Ordering::Relaxed);
             camera_ns.fetch_add((t1 - t_samples).as_nanos() as u64, Ordering::Relaxed);
             shading_ns.fetch_add((t2 - t1).as_nanos() as u64, Ordering::Relaxed);
@@ -490,6 +516,7 @@ impl Prepared {
                 render_seconds: start.elapsed().as_secs_f64(),
                 camera_stage_seconds: camera_ns.load(Ordering::Relaxed) as f64 * 1e-9,
                 sampling_seconds: sampling_ns.load(Ordering::Relaxed) as f64 * 1e-9,
+                rays_traced: traced.load(Ordering::Relaxed),
                 shading_seconds: shading_ns.load(Ordering::Relaxed) as f64 * 1e-9,
                 contract: report.into_inner().expect("no panics while holding the report"),
                 tiles: (finished, total),
