@@ -1181,7 +1181,7 @@ pub struct Instance {
 
 /// One decomposed motion sample.
 #[derive(Debug, Clone, Copy)]
-struct Key {
+pub struct Key {
     time: f32,
     scale: Vec3A,
     rotation: Quat,
@@ -1210,14 +1210,29 @@ fn interpolate(a: &Key, b: &Key, f: f32) -> Affine3A {
     )
 }
 
+/// A transform over the shutter, ready to evaluate at any time: one matrix, or decomposed keys
+/// interpolated by scale/rotation/translation (used for instances here and for the camera by the
+/// render loop).
 #[derive(Debug, Clone)]
-enum Motion {
-    Static { to_world: Affine3A, to_object: Affine3A },
-    Moving { keys: Vec<Key> },
+pub enum Motion {
+    /// Does not move.
+    Static {
+        /// The transform.
+        to_world: Affine3A,
+        /// Its inverse.
+        to_object: Affine3A,
+    },
+    /// Moves: keys sorted by time.
+    Moving {
+        /// The decomposed samples.
+        keys: Vec<Key>,
+    },
 }
 
 impl Motion {
-    fn new(samples: &[(f32, Affine3A)]) -> Self {
+    /// From `(time, transform)` samples (sorted here; non-finite times dropped; none = identity).
+    #[must_use]
+    pub fn new(samples: &[(f32, Affine3A)]) -> Self {
         let mut samples: Vec<(f32, Affine3A)> = samples.iter().copied().filter(|s| s.0.is_finite()).collect();
         samples.sort_by(|a, b| a.0.total_cmp(&b.0));
         match samples.as_slice() {
@@ -1235,7 +1250,9 @@ impl Motion {
         }
     }
 
-    fn object_to_world(&self, time: f32) -> Affine3A {
+    /// The transform at `time` (clamped to the sampled range).
+    #[must_use]
+    pub fn object_to_world(&self, time: f32) -> Affine3A {
         match self {
             Self::Static { to_world, .. } => *to_world,
             Self::Moving { keys } => {

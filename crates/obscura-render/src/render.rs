@@ -22,14 +22,14 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Instant;
 
-use glam::{Affine3A, Mat4, Quat, Vec3, Vec3A};
+use glam::{Affine3A, Mat4, Vec3, Vec3A};
 use obscura_host::sampler::Sampler;
 use obscura_host::{Batch, CameraStage, ContractReport, HostError, PixelRect};
 use obscura_scene::Scene;
 use obscura_sdk::{DeepMetric, Matrix4, Registry};
 use rayon::prelude::*;
 
-use crate::bvh::{Instance, SceneAccel};
+use crate::bvh::{Instance, Motion, SceneAccel};
 use crate::deep::{DeepImage, DeepSample};
 use crate::dice::{DiceError, DicingContext, dice};
 use crate::film::{Film, SampleValues};
@@ -124,8 +124,8 @@ pub struct Prepared {
     shading: ShadingScene,
     filter: Filter,
     samples_per_pixel: u32,
-    /// Camera-to-world motion samples at shutter-normalised times.
-    camera_to_world: Vec<(f32, Affine3A)>,
+    /// Camera-to-world over the shutter (shutter-normalised time).
+    camera_to_world: Motion,
     deep_metric: DeepMetric,
     setup_seconds: f64,
 }
@@ -173,35 +173,6 @@ fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
     }
 }
 
-/// Interpolates motion samples (sorted by time) at `t`: scale and translation linearly, rotation by
-/// spherical interpolation; clamped outside the sampled range.
-#[must_use]
-pub fn interpolate(samples: &[(f32, Affine3A)], t: f32) -> Affine3A {
-    match samples {
-        [] => Affine3A::IDENTITY,
-        [(_, m)] => *m,
-        _ => {
-            let i = samples.partition_point(|(st, _)| *st <= t);
-            if i == 0 {
-                return samples[0].1;
-            }
-            if i >= samples.len() {
-                return samples[samples.len() - 1].1;
-            }
-            let ((t0, m0), (t1, m1)) = (samples[i - 1], samples[i]);
-            let f = if t1 > t0 { (t - t0) / (t1 - t0) } else { 0.0 };
-            let (s0, r0, p0) = m0.to_scale_rotation_translation();
-            let (s1, r1, p1) = m1.to_scale_rotation_translation();
-            Affine3A::from_scale_rotation_translation(s0.lerp(s1, f), slerp(r0, r1, f), p0.lerp(p1, f))
-        }
-    }
-}
-
-fn slerp(a: Quat, b: Quat, f: f32) -> Quat {
-    let b = if a.dot(b) < 0.0 { -b } else { b };
-    a.slerp(b, f)
-}
-
 /// Sets up a render of `scene`: projection, dicing, BVH, lights.
 ///
 /// # Errors
@@ -233,7 +204,8 @@ pub fn prepare(
             )
         })
         .collect();
-    let world_to_camera_open = interpolate(&camera_to_world, 0.0).inverse();
+    let camera_to_world = Motion::new(&camera_to_world);
+    let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
 
     let diced: Vec<Result<TriangleMesh, RenderError>> = scene
         .objects
@@ -405,7 +377,7 @@ impl Prepared {
                             continue;
                         }
                         let (rx, ry) = rasters[i - 1];
-                        let c2w = interpolate(&self.camera_to_world, time);
+                        let c2w = self.camera_to_world.object_to_world(time);
                         let o_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
                         let d_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z);
                         let d_world = c2w.transform_vector3a(d_cam);
