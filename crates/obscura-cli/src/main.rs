@@ -55,7 +55,7 @@ struct RenderArgs {
     #[arg(long, value_parser = parse_format)]
     format: Option<(u32, u32)>,
     /// Samples per pixel (default: the scene's Hider maxsamples).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     spp: Option<u32>,
     /// Worker threads (default: all cores).
     #[arg(long)]
@@ -368,6 +368,12 @@ fn render(a: &RenderArgs) -> Result<(), String> {
             println!("wrote {}", p.display());
         }
     }
+    if s.cancelled {
+        return Err(format!(
+            "interrupted: wrote the {} of {} tiles that were rendered",
+            s.tiles.0, s.tiles.1
+        ));
+    }
     Ok(())
 }
 
@@ -384,7 +390,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            ExitCode::FAILURE
+            if job::CANCEL.load(std::sync::atomic::Ordering::SeqCst) {
+                ExitCode::from(130)
+            } else {
+                ExitCode::FAILURE
+            }
         }
     }
 }

@@ -163,6 +163,21 @@ fn the_default_scene_renders_with_overrides_and_bad_input_is_named() {
     assert!(err.contains("bad.rib:3: Sphere"), "{err}");
     let r = obscura(&["render", "--param", "fov=500", "--format", "8x8"], dir.path());
     assert!(String::from_utf8_lossy(&r.stderr).contains("\"fov\""));
+    // Regression: a singular camera transform rendered a silent black image.
+    std::fs::write(
+        dir.path().join("flat.rib"),
+        "Format 8 8 1\nScale 0 0 0\nWorldBegin\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let r = obscura(&["render", "flat.rib"], dir.path());
+    assert!(!r.status.success());
+    assert!(
+        String::from_utf8_lossy(&r.stderr).contains("camera transform"),
+        "{}",
+        String::from_utf8_lossy(&r.stderr)
+    );
+    let r = obscura(&["render", "--spp", "0"], dir.path());
+    assert!(!r.status.success());
     let r = obscura(&["render", "scene.xyz"], dir.path());
     assert!(String::from_utf8_lossy(&r.stderr).contains("unknown scene format"));
 }

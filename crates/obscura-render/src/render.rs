@@ -20,7 +20,7 @@
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
 use obscura_host::sampler::Sampler;
@@ -59,6 +59,9 @@ pub enum RenderError {
     /// The lights could not be prepared.
     #[error(transparent)]
     Lights(#[from] ShadeError),
+    /// The camera transform cannot be inverted.
+    #[error("{0}")]
+    Camera(String),
     /// Too many samples per pixel.
     #[error("{0} samples per pixel: at most 65536 are supported")]
     TooManySamples(u32),
@@ -145,6 +148,16 @@ pub fn glam_from_sdk(m: &Matrix4) -> Mat4 {
     Mat4::from_cols_array_2d(&m.0)
 }
 
+/// Camera samples per batch handed to the camera stage: bounds memory at any sample count.
+const CHUNK_SAMPLES: usize = 4096;
+
+/// A 64-bit mixing hash (SplitMix64's finaliser): decorrelates seeds from pixel coordinates.
+fn mix64(mut x: u64) -> u64 {
+    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    x ^ (x >> 31)
+}
+
 /// Counts the rays one tile traces (nearest-hit and shadow queries); tile-local, so the count is free
 /// of contention.
 struct CountingTracer<'a> {
@@ -163,13 +176,15 @@ impl Tracer for CountingTracer<'_> {
     }
 }
 
-/// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, 0 for an instantaneous shutter.
+/// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, not clamped, so motion
+/// keys outside the shutter keep their place (a shutter shorter than the motion blurs less). For an
+/// instantaneous shutter, `t − open`: rays at time 0 then see the transform at the shutter time.
 fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
     let span = shutter.1 - shutter.0;
     if span > 0.0 {
-        ((t - shutter.0) / span).clamp(0.0, 1.0)
+        (t - shutter.0) / span
     } else {
-        0.0
+        t - shutter.0
     }
 }
 
@@ -204,6 +219,14 @@ pub fn prepare(
             )
         })
         .collect();
+    if let Some((t, m)) = camera_to_world
+        .iter()
+        .find(|(_, m)| !m.is_finite() || m.matrix3.determinant() == 0.0)
+    {
+        return Err(RenderError::Camera(format!(
+            "the camera transform at time {t} is singular or not finite ({m:?}): check the transforms before WorldBegin"
+        )));
+    }
     let camera_to_world = Motion::new(&camera_to_world);
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
 
@@ -319,8 +342,8 @@ impl Prepared {
         }
         let total = tiles.len();
         let film = Mutex::new(Film::new(cam.format.width, cam.format.height, crop, self.filter));
-        let deep_pixels: Mutex<Vec<Option<Vec<DeepSample>>>> = Mutex::new(if opts.deep {
-            vec![None; crop.len()]
+        let deep_pixels: Mutex<Vec<(Vec<DeepSample>, u32)>> = Mutex::new(if opts.deep {
+            vec![(Vec::new(), 0); crop.len()]
         } else {
             Vec::new()
         });
@@ -341,112 +364,129 @@ impl Prepared {
             }
             let t0 = Instant::now();
             let pixels = sample_pixels(rect, &crop, margin, cam.format);
-            let mut batch = Batch::with_capacity(pixels.len() * spp as usize);
-            let mut rasters = Vec::with_capacity(pixels.len() * spp as usize);
-            for &(px, py) in &pixels {
-                for s in 0..spp {
-                    let c = sampler.sample(px, py, s);
-                    let raster = (px as f64 + c.pixel.0 as f64, py as f64 + c.pixel.1 as f64);
-                    rasters.push((raster.0 as f32, raster.1 as f32));
-                    batch.push(
-                        cam.raster_to_screen(raster.0, raster.1),
-                        obscura_sdk::Point2::new(c.lens.0, c.lens.1),
-                        c.time,
-                    );
-                }
-            }
-            let t_samples = Instant::now();
-            let tile_report = self.stage.run(&mut batch);
-            let t1 = Instant::now();
-
             let mut tile = film.lock().expect("no panics while holding the film").tile(*rect);
-            let mut deep_tile: Vec<(usize, DeepSample)> = Vec::new();
+            // (pixel index in the crop, the sample's deep value when it hit something): one entry per
+            // sample that survived the camera stage, so deep coverage counts exactly those.
+            let mut deep_tile: Vec<(usize, Option<DeepSample>)> = Vec::new();
             let tracer = CountingTracer {
                 inner: &self.accel,
                 rays: AtomicU64::new(0),
             };
-            let mut i = 0;
-            for &(px, py) in &pixels {
-                {
+            let mut tile_report = ContractReport::default();
+            let (mut sampling, mut camera) = (Duration::ZERO, Duration::ZERO);
+            // The camera stage runs on bounded batches, whatever the sample count.
+            let chunk_pixels = (CHUNK_SAMPLES / spp as usize).max(1);
+            let mut batch = Batch::with_capacity(chunk_pixels * spp as usize);
+            let mut rasters: Vec<(f32, f32)> = Vec::with_capacity(chunk_pixels * spp as usize);
+            for chunk in pixels.chunks(chunk_pixels) {
+                let ta = Instant::now();
+                batch.clear();
+                rasters.clear();
+                for &(px, py) in chunk {
                     for s in 0..spp {
-                        let r = batch.rays[i];
-                        let time = batch.time[i];
-                        let tint = batch.tint[i];
-                        i += 1;
-                        if r.is_culled() {
-                            continue;
-                        }
-                        let (rx, ry) = rasters[i - 1];
-                        let c2w = self.camera_to_world.object_to_world(time);
-                        let o_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
-                        let d_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z);
-                        let d_world = c2w.transform_vector3a(d_cam);
-                        let stretch = d_world.length();
-                        if !(stretch > 0.0 && stretch.is_finite()) {
-                            continue;
-                        }
-                        let ray = Ray {
-                            origin: c2w.transform_point3a(o_cam),
-                            direction: d_world / stretch,
-                            t_min: r.min_dist * stretch,
-                            t_max: r.max_dist * stretch,
-                            time,
-                        };
-                        let mut rng = Rng::new(
-                            ((px as u64) << 32 | py as u64) ^ (opts.seed as u64) << 16,
-                            s as u64,
+                        let c = sampler.sample(px, py, s);
+                        let raster = (px as f64 + c.pixel.0 as f64, py as f64 + c.pixel.1 as f64);
+                        rasters.push((raster.0 as f32, raster.1 as f32));
+                        batch.push(
+                            cam.raster_to_screen(raster.0, raster.1),
+                            obscura_sdk::Point2::new(c.lens.0, c.lens.1),
+                            c.time,
                         );
-                        let path = trace_path(&self.shading, &tracer, &ray, &mut rng, &opts.path);
-                        let radiance = path.radiance;
-                        let ci = obscura_sdk::Rgb::new(
-                            radiance.x * tint.r,
-                            radiance.y * tint.g,
-                            radiance.z * tint.b,
-                        );
-                        let (z, n, p) = match path.first_hit {
-                            Some(h) => {
-                                let t_cam = h.t / stretch;
-                                let z = match self.deep_metric {
-                                    DeepMetric::CameraZ => o_cam.z + d_cam.z * t_cam,
-                                    DeepMetric::RayLength => t_cam,
-                                };
-                                (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
+                    }
+                }
+                let tb = Instant::now();
+                tile_report.merge(&self.stage.run(&mut batch));
+                let tc = Instant::now();
+                sampling += tb - ta;
+                camera += tc - tb;
+                let mut i = 0;
+                for &(px, py) in chunk {
+                    {
+                        for s in 0..spp {
+                            let r = batch.rays[i];
+                            let time = batch.time[i];
+                            let tint = batch.tint[i];
+                            i += 1;
+                            if r.is_culled() {
+                                continue;
                             }
-                            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
-                        };
-                        let v = SampleValues {
-                            ci,
-                            alpha: path.alpha,
-                            z,
-                            n,
-                            p,
-                            camera_direction: Vec3::from(ray.direction),
-                        };
-                        tile.add_sample(rx, ry, &v);
-                        let inside = px >= crop.x0 && px < crop.x1 && py >= crop.y0 && py < crop.y1;
-                        if opts.deep && inside && path.first_hit.is_some() {
-                            let idx =
-                                (py - crop.y0) as usize * crop.width() as usize + (px - crop.x0) as usize;
-                            deep_tile.push((
-                                idx,
-                                DeepSample {
-                                    z,
-                                    z_back: z,
-                                    r: ci.r,
-                                    g: ci.g,
-                                    b: ci.b,
-                                    a: path.alpha,
-                                },
-                            ));
+                            let (rx, ry) = rasters[i - 1];
+                            let c2w = self.camera_to_world.object_to_world(time);
+                            let o_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
+                            // Normalised here so that a ray length is exact even for a projection whose
+                            // directions are unit only to the contract's tolerance.
+                            let d_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
+                            let d_world = c2w.transform_vector3a(d_cam);
+                            let stretch = d_world.length();
+                            if !(stretch > 0.0 && stretch.is_finite()) {
+                                continue;
+                            }
+                            let ray = Ray {
+                                origin: c2w.transform_point3a(o_cam),
+                                direction: d_world / stretch,
+                                t_min: r.min_dist * stretch,
+                                t_max: r.max_dist * stretch,
+                                time,
+                            };
+                            let mut rng = Rng::new(
+                                ((px as u64) << 32 | py as u64) ^ mix64(opts.seed as u64),
+                                s as u64,
+                            );
+                            let path = trace_path(&self.shading, &tracer, &ray, &mut rng, &opts.path);
+                            let radiance = path.radiance;
+                            let ci = obscura_sdk::Rgb::new(
+                                radiance.x * tint.r,
+                                radiance.y * tint.g,
+                                radiance.z * tint.b,
+                            );
+                            let (z, n, p) = match path.first_hit {
+                                Some(h) => {
+                                    let t_cam = h.t / stretch;
+                                    let z = match self.deep_metric {
+                                        DeepMetric::CameraZ => o_cam.z + d_cam.z * t_cam,
+                                        DeepMetric::RayLength => t_cam,
+                                    };
+                                    (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
+                                }
+                                None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
+                            };
+                            let v = SampleValues {
+                                ci,
+                                alpha: path.alpha,
+                                z,
+                                n,
+                                p,
+                                camera_direction: Vec3::from(ray.direction),
+                            };
+                            tile.add_sample(rx, ry, &v);
+                            let inside = px >= crop.x0 && px < crop.x1 && py >= crop.y0 && py < crop.y1;
+                            if opts.deep && inside {
+                                let idx =
+                                    (py - crop.y0) as usize * crop.width() as usize + (px - crop.x0) as usize;
+                                deep_tile.push((
+                                    idx,
+                                    path.first_hit.is_some().then_some(DeepSample {
+                                        z,
+                                        z_back: z,
+                                        r: ci.r,
+                                        g: ci.g,
+                                        b: ci.b,
+                                        a: path.alpha,
+                                    }),
+                                ));
+                            }
                         }
                     }
                 }
             }
             let t2 = Instant::now();
             traced.fetch_add(tracer.rays.load(Ordering::Relaxed), Ordering::Relaxed);
-            sampling_ns.fetch_add((t_samples - t0).as_nanos() as u64, Ordering::Relaxed);
-            camera_ns.fetch_add((t1 - t_samples).as_nanos() as u64, Ordering::Relaxed);
-            shading_ns.fetch_add((t2 - t1).as_nanos() as u64, Ordering::Relaxed);
+            sampling_ns.fetch_add(sampling.as_nanos() as u64, Ordering::Relaxed);
+            camera_ns.fetch_add(camera.as_nanos() as u64, Ordering::Relaxed);
+            shading_ns.fetch_add(
+                ((t2 - t0).saturating_sub(sampling + camera)).as_nanos() as u64,
+                Ordering::Relaxed,
+            );
             film.lock().expect("no panics while holding the film").merge(tile);
             report
                 .lock()
@@ -457,7 +497,10 @@ impl Prepared {
                     .lock()
                     .expect("no panics while holding the deep pixels");
                 for (idx, sample) in deep_tile {
-                    d[idx].get_or_insert_with(Vec::new).push(sample);
+                    d[idx].1 += 1;
+                    if let Some(sample) = sample {
+                        d[idx].0.push(sample);
+                    }
                 }
             }
             let n = done.fetch_add(1, Ordering::Relaxed) as usize + 1;
@@ -475,7 +518,7 @@ impl Prepared {
                 data_window: crop,
                 pixels: pixels
                     .into_iter()
-                    .map(|p| composite_deep(p.unwrap_or_default(), spp))
+                    .map(|(samples, alive)| composite_deep(samples, alive))
                     .collect(),
             }
         });
@@ -535,12 +578,13 @@ pub fn sample_pixels(
 }
 
 /// Turns one pixel's per-camera-sample hits into deep samples that composite ("over", front to back)
-/// to the box-filtered pixel: sample `i` covers `f = 1/spp` of the pixel, so with `F` the coverage in
+/// to the box-filtered pixel: of the `alive` samples the camera stage kept (culled ones are not
+/// part of the pixel, as in the flat film), sample `i` covers `f = 1/alive` of the pixel, so with `F` the coverage in
 /// front of it its alpha is `f/(1 − F)` and its colour is premultiplied by the same factor.
 #[must_use]
-pub fn composite_deep(mut samples: Vec<DeepSample>, spp: u32) -> Vec<DeepSample> {
+pub fn composite_deep(mut samples: Vec<DeepSample>, alive: u32) -> Vec<DeepSample> {
     samples.sort_by(|a, b| a.z.total_cmp(&b.z));
-    let f = 1.0 / spp.max(1) as f32;
+    let f = 1.0 / alive.max(1) as f32;
     let mut covered = 0.0f32;
     let mut out = Vec::with_capacity(samples.len());
     for s in samples {
@@ -556,4 +600,76 @@ pub fn composite_deep(mut samples: Vec<DeepSample>, spp: u32) -> Vec<DeepSample>
         covered += f * s.a;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn motion_keys_outside_the_shutter_keep_their_place() {
+        // Regression: keys were clamped into [0, 1], so a shutter half as long as the motion blurred
+        // the whole move.
+        assert_eq!(normalise_time(1.0, (0.0, 0.5)), 2.0);
+        assert_eq!(normalise_time(-1.0, (0.0, 1.0)), -1.0);
+        assert_eq!(normalise_time(0.25, (0.0, 0.5)), 0.5);
+        // An instantaneous shutter at 0.3 sees the transform at scene time 0.3.
+        assert!((normalise_time(0.5, (0.3, 0.3)) - 0.2).abs() < 1e-6);
+    }
+
+    #[test]
+    fn deep_samples_composite_to_the_average_of_the_surviving_samples() {
+        let s = |z: f32, v: f32| DeepSample {
+            z,
+            z_back: z,
+            r: v,
+            g: v,
+            b: v,
+            a: 1.0,
+        };
+        // Four surviving samples, two hit (at different depths), two saw nothing.
+        let deep = composite_deep(vec![s(5.0, 1.0), s(2.0, 0.5)], 4);
+        let (mut c, mut a) = (0.0f32, 0.0f32);
+        for d in &deep {
+            c += (1.0 - a) * d.r;
+            a += (1.0 - a) * d.a;
+        }
+        assert!((c - (1.0 + 0.5) / 4.0).abs() < 1e-6, "{c}");
+        assert!((a - 0.5).abs() < 1e-6, "{a}");
+        assert!(deep[0].z < deep[1].z);
+        // Regression: coverage is over the samples the camera stage kept, not the sample count, so a
+        // half-culled pixel (a fisheye rim) is as opaque in deep as in the flat film.
+        let deep = composite_deep(vec![s(1.0, 1.0), s(1.5, 1.0)], 2);
+        let a = deep.iter().fold(0.0f32, |a, d| a + (1.0 - a) * d.a);
+        assert!((a - 1.0).abs() < 1e-6);
+    }
+
+    #[test]
+    fn margins_sample_each_outside_pixel_once() {
+        let format = obscura_sdk::Format::new(20, 10);
+        let crop = PixelRect {
+            x0: 5,
+            x1: 15,
+            y0: 2,
+            y1: 8,
+        };
+        let mut seen = std::collections::HashMap::new();
+        for (x0, y0) in [(5, 2), (10, 2), (5, 5), (10, 5)] {
+            let rect = PixelRect {
+                x0,
+                x1: (x0 + 5).min(15),
+                y0,
+                y1: (y0 + 3).min(8),
+            };
+            for p in sample_pixels(&rect, &crop, 2, format) {
+                *seen.entry(p).or_insert(0) += 1;
+            }
+        }
+        assert!(seen.values().all(|&n| n == 1));
+        assert_eq!(
+            seen.len(),
+            14 * 10,
+            "the crop plus a two-pixel margin, clipped to the image"
+        );
+    }
 }
