@@ -35,7 +35,7 @@ Rotate 5 1 0 0
 Scale 1 1 1
 ConcatTransform [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]
 WorldBegin
-  Light "PxrDomeLight" "dome" "color lightColor" [0.5 0.6 0.8] "float intensity" [1] "float exposure" [0]
+  Light "PxrDomeLight" "dome" "color lightColor" [0.5 0.6 0.8] "float intensity" [1] "float exposure" [0] "string lightColorMap" ["sky.exr"]
   Light "PxrDistantLight" "sun" "float intensity" [2] "float angleExtent" [2]
   AttributeBegin
     Translate 0 4 0
@@ -71,7 +71,10 @@ WorldBegin
     Translate 0 2 1
     SubdivisionMesh "catmull-clark" [4 4 4 4 4 4] [0 1 3 2 2 3 5 4 4 5 7 6 6 7 1 0 1 7 5 3 6 0 2 4] ["interpolateboundary" "crease"] [0 0 2 1] [0 1] [10] "P" [-0.3 -0.3 0.3  0.3 -0.3 0.3  -0.3 0.3 0.3  0.3 0.3 0.3  -0.3 0.3 -0.3  0.3 0.3 -0.3  -0.3 -0.3 -0.3  0.3 -0.3 -0.3]
   AttributeEnd
-  ReadArchive "archive.rib"
+  AttributeBegin
+    Transform [1 0 0 0 0 1 0 0 0 0 1 0 2.5 0.3 -1 1]
+    ReadArchive "archive.rib"
+  AttributeEnd
 WorldEnd
 "#;
 
@@ -80,6 +83,12 @@ fn a_rib_scene_using_every_request_renders_to_exr_png_and_deep_exr() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::write(dir.path().join("every.rib"), EVERY_REQUEST).unwrap();
     std::fs::write(dir.path().join("archive.rib"), "Sphere 0.3 -0.3 0.3 360\n").unwrap();
+    // A small lat-long sky for the dome: bright at the top, dark below.
+    exr::prelude::write_rgb_file(dir.path().join("sky.exr"), 16, 8, |_x, y| {
+        let v = if y < 4 { 2.0f32 } else { 0.2 };
+        (v, v, v)
+    })
+    .unwrap();
     let r = obscura(&["render", "every.rib"], dir.path());
     let err = String::from_utf8_lossy(&r.stderr);
     assert!(r.status.success(), "{err}");
@@ -180,4 +189,56 @@ fn the_default_scene_renders_with_overrides_and_bad_input_is_named() {
     assert!(!r.status.success());
     let r = obscura(&["render", "scene.xyz"], dir.path());
     assert!(String::from_utf8_lossy(&r.stderr).contains("unknown scene format"));
+}
+
+#[test]
+fn an_obj_scene_renders_with_the_projection_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut obj = String::new();
+    for (x, y, z) in [
+        (0, 0, 0),
+        (1, 0, 0),
+        (1, 1, 0),
+        (0, 1, 0),
+        (0, 0, 1),
+        (1, 0, 1),
+        (1, 1, 1),
+        (0, 1, 1),
+    ] {
+        obj.push_str(&format!("v {x} {y} {z}\n"));
+    }
+    obj.push_str("f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 5 1 4 8\n");
+    std::fs::write(dir.path().join("cube.obj"), obj).unwrap();
+    let r = obscura(
+        &[
+            "render",
+            "cube.obj",
+            "--format",
+            "32x24",
+            "--spp",
+            "4",
+            "-p",
+            "PxrPerspective",
+            "--param",
+            "fov=50",
+            "-o",
+            "cube.exr",
+        ],
+        dir.path(),
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let image = exr::prelude::read_all_flat_layers_from_file(dir.path().join("cube.exr")).unwrap();
+    let alpha = image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == "A")
+        .map(|c| match &c.sample_data {
+            exr::prelude::FlatSamples::F32(v) => v.clone(),
+            _ => Vec::new(),
+        })
+        .unwrap();
+    // The framed cube covers the centre and not the corners.
+    assert!(alpha[12 * 32 + 16] > 0.99, "centre alpha {}", alpha[12 * 32 + 16]);
+    assert!(alpha[0] < 0.01);
 }
