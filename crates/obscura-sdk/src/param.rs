@@ -273,8 +273,11 @@ pub struct ParamDecl {
     pub name: Cow<'static, str>,
     /// The element type.
     pub ty: ParamType,
-    /// `None` for a single value, `Some(n)` for a fixed-length array of `n` elements.
+    /// `None` for a single value (or a variable-length list, see `variable_len`), `Some(n)` for a
+    /// fixed-length array of `n` elements.
     pub array_len: Option<usize>,
+    /// True for a list of any length ≥ 1 (`float[] params`): calibration coefficients, polynomials.
+    pub variable_len: bool,
     /// The value used when the scene gives none.
     pub default: ParamValue,
     /// Allowed range of every numeric scalar, if limited.
@@ -291,6 +294,7 @@ impl ParamDecl {
             name: Cow::Borrowed(name),
             ty,
             array_len: None,
+            variable_len: false,
             default,
             range: None,
             choices: Vec::new(),
@@ -354,6 +358,13 @@ impl ParamDecl {
         d.array_len = Some(default.len());
         d
     }
+    /// A `float[]` parameter: a list of any length ≥ 1 (the default may be empty).
+    #[must_use]
+    pub fn float_list(name: &'static str, default: &[f32]) -> Self {
+        let mut d = Self::new(name, ParamType::Float, ParamValue::Floats(default.to_vec()));
+        d.variable_len = true;
+        d
+    }
     /// A fixed-length `int[n]` parameter.
     #[must_use]
     pub fn int_array(name: &'static str, default: &[i32]) -> Self {
@@ -383,6 +394,9 @@ impl ParamDecl {
     /// The RIB declaration: `float fov`, `float[5] polynomial`.
     #[must_use]
     pub fn rib_declaration(&self) -> String {
+        if self.variable_len {
+            return format!("{}[] {}", self.ty, self.name);
+        }
         match self.array_len {
             None => format!("{} {}", self.ty, self.name),
             Some(n) => format!("{}[{n}] {}", self.ty, self.name),
@@ -392,6 +406,9 @@ impl ParamDecl {
     /// The number of scalars a value of this parameter holds.
     #[must_use]
     pub fn scalar_count(&self) -> usize {
+        if self.variable_len {
+            return self.default.len();
+        }
         self.array_len.unwrap_or(1) * self.ty.components()
     }
 }
@@ -489,6 +506,8 @@ pub fn parse_declaration(decl: &str) -> Result<(ParamType, Option<usize>, String
     };
     let (ty_name, len) = match ty_word.split_once('[') {
         None => (ty_word, None),
+        // `float[] k`: the length is taken from the values.
+        Some((t, "]")) => (t, None),
         Some((t, rest)) => {
             let n = rest
                 .strip_suffix(']')
@@ -807,7 +826,18 @@ impl Params {
                 });
             }
             let got_elems = entry.value.len() / decl.ty.components();
-            if entry.value.len() != decl.scalar_count() {
+            if decl.variable_len {
+                if entry.value.is_empty() || entry.value.len() % decl.ty.components() != 0 {
+                    return Err(ParamError::WrongLength {
+                        plugin: plugin.to_string(),
+                        name: entry.name.clone(),
+                        decl: decl.rib_declaration(),
+                        expected: 1,
+                        got: got_elems,
+                        origin: entry.origin.clone(),
+                    });
+                }
+            } else if entry.value.len() != decl.scalar_count() {
                 return Err(ParamError::WrongLength {
                     plugin: plugin.to_string(),
                     name: entry.name.clone(),
@@ -853,7 +883,9 @@ impl Params {
     ) -> Result<&ParamValue, ParamError> {
         match self.decls.iter().position(|d| d.name == name) {
             Some(i)
-                if ty.contains(&self.decls[i].ty) && (len.is_none() || self.decls[i].array_len == len) =>
+                if ty.contains(&self.decls[i].ty)
+                    && !self.decls[i].variable_len
+                    && (len.is_none() || self.decls[i].array_len == len) =>
             {
                 Ok(&self.values[i])
             }
@@ -945,6 +977,29 @@ impl Params {
             row.copy_from_slice(&v[i * 4..i * 4 + 4]);
         }
         Ok(Matrix4(m))
+    }
+
+    /// A `float[]` (variable-length) parameter's values: the scene's list, or the default.
+    ///
+    /// # Errors
+    /// [`ParamError::Lookup`] when the table has no `float[] name`.
+    pub fn float_list(&self, name: &str) -> Result<&[f32], ParamError> {
+        match self.decls.iter().position(|d| d.name == name) {
+            Some(i) if self.decls[i].variable_len && self.decls[i].ty == ParamType::Float => {
+                match &self.values[i] {
+                    ParamValue::Floats(v) => Ok(v),
+                    _ => unreachable!("float declarations hold floats"),
+                }
+            }
+            found => Err(ParamError::Lookup {
+                plugin: self.plugin.clone(),
+                name: name.to_string(),
+                asked: "float[]".into(),
+                declared: found
+                    .map(|i| self.decls[i].rib_declaration())
+                    .unwrap_or_else(|| "nothing".into()),
+            }),
+        }
     }
 
     /// A `float[n]` parameter's values.
@@ -1117,6 +1172,26 @@ mod tests {
             ),
             "{err}"
         );
+    }
+
+    #[test]
+    fn variable_length_lists_take_any_nonempty_length() {
+        let table = vec![ParamDecl::float_list("params", &[]).doc("coefficients")];
+        assert_eq!(table[0].rib_declaration(), "float[] params");
+        for n in [1usize, 4, 14] {
+            let vals: Vec<String> = (0..n).map(|i| i.to_string()).collect();
+            let vals: Vec<&str> = vals.iter().map(String::as_str).collect();
+            for decl in ["float params", "float[] params"] {
+                let p = Params::resolve("P", &table, &list(decl, &vals)).unwrap();
+                assert_eq!(p.float_list("params").unwrap().len(), n);
+            }
+        }
+        let p = Params::resolve("P", &table, &ParamList::new()).unwrap();
+        assert!(p.float_list("params").unwrap().is_empty());
+        assert!(p.floats("params", 0).is_err() && p.float("params").is_err());
+        let fixed = vec![ParamDecl::float_array("k", &[0.0; 2]).doc("k")];
+        let p = Params::resolve("P", &fixed, &ParamList::new()).unwrap();
+        assert!(p.float_list("k").is_err(), "a fixed array is not a list");
     }
 
     #[test]
