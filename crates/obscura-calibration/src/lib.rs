@@ -3,3 +3,31 @@
 //! Render through a real camera's calibration: the camera models of COLMAP, OpenCV, Kalibr, OCamCalib
 //! and NVIDIA's f-theta as one Obscura projection, `CalibratedCamera`, exact in both directions, and
 //! readers for the calibration files those tools write.
+
+pub mod files;
+
+mod distortion;
+mod lift;
+pub mod models;
+pub mod projection;
+mod solve;
+#[cfg(test)]
+mod tests;
+
+use obscura_sdk::Registry;
+
+pub use models::{CameraModel, MODEL_NAMES, MODELS, ModelInfo, PixelConvention, PixelRay, model_info};
+pub use projection::{CalibratedCamera, CalibratedCameraFactory};
+
+/// The name scenes use for the calibrated-camera projection.
+pub const NAME: &str = "CalibratedCamera";
+
+/// Adds `CalibratedCamera` to `registry`.
+///
+/// # Panics
+/// When `registry` already holds a projection named [`NAME`].
+pub fn register(registry: &mut Registry) {
+    registry
+        .register(Box::new(CalibratedCameraFactory), "")
+        .expect("CalibratedCamera is registered once");
+}

@@ -9,6 +9,7 @@ use obscura_host::aperture::ApertureDesc;
 use obscura_host::cli_params::push_param_arg;
 use obscura_host::raymap::{trace_ray_map, write_exr};
 use obscura_host::shutter::ShutterDesc;
+use obscura_host::plugins::{PluginSearch, ensure};
 use obscura_host::{CameraDesc, CameraStage, CropWindow, listing};
 use obscura_projections::builtin_registry;
 use obscura_render::integrator::PathOptions;
@@ -16,12 +17,19 @@ use obscura_render::job;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
+mod check;
+mod stmap;
+
 /// Obscura: RenderMan-style camera projection plugins, and the host that drives them.
 #[derive(Parser, Debug)]
 #[command(name = "obscura", version, about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// A directory holding projection plugins (<Name>.so), searched before OBSCURA_PLUGIN_PATH.
+    /// Repeatable.
+    #[arg(long = "plugin-path", value_name = "DIR", global = true)]
+    plugin_path: Vec<PathBuf>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -34,7 +42,15 @@ enum Command {
     Plugins {
         /// Show only this projection.
         name: Option<String>,
+        /// Print only the projections' names, one per line.
+        #[arg(long, conflicts_with = "name")]
+        names: bool,
     },
+    /// Write the ST-map (Nuke's STMap convention) that turns images of one projection into another.
+    Stmap(Box<stmap::StmapArgs>),
+    /// Check a projection against the contract (directions, times, spread, field of view, deep metric,
+    /// dicing hint, unproject, determinism, thread safety, property types); exit 0 only when clean.
+    Check(Box<check::CheckArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -46,8 +62,16 @@ struct RenderArgs {
     #[arg(short, long)]
     output: Option<PathBuf>,
     /// Use this projection instead of the scene's.
-    #[arg(short, long)]
+    #[arg(short, long, conflicts_with = "calibration")]
     projection: Option<String>,
+    /// Render through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
+    /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. The image size defaults to
+    /// the calibration's; --format resamples the same camera. --param adds to or replaces its parameters.
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<PathBuf>,
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    #[arg(long, value_name = "ID", requires = "calibration")]
+    camera: Option<String>,
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
     #[arg(long = "param", value_name = "PARAM")]
     params: Vec<String>,
@@ -77,14 +101,22 @@ struct RenderArgs {
 #[derive(Args, Debug)]
 struct RaysArgs {
     /// The projection, e.g. PxrPerspective, PxrOrthographic.
-    #[arg(short, long, default_value = "PxrPerspective")]
+    #[arg(short, long, default_value = "PxrPerspective", conflicts_with = "calibration")]
     projection: String,
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
     #[arg(long = "param", value_name = "PARAM")]
     params: Vec<String>,
-    /// Image size in pixels, WIDTHxHEIGHT.
-    #[arg(long, default_value = "640x480", value_parser = parse_format)]
-    format: (u32, u32),
+    /// Trace through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
+    /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. --param adds to or replaces
+    /// its parameters.
+    #[arg(long, value_name = "FILE")]
+    calibration: Option<PathBuf>,
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    #[arg(long, value_name = "ID", requires = "calibration")]
+    camera: Option<String>,
+    /// Image size in pixels, WIDTHxHEIGHT (default: the calibration's resolution, else 640x480).
+    #[arg(long, value_parser = parse_format)]
+    format: Option<(u32, u32)>,
     /// Pixel aspect ratio (pixel width / height).
     #[arg(long, default_value_t = 1.0)]
     pixel_aspect: f32,
@@ -148,10 +180,70 @@ fn parse_format(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// The projection that renders through a calibration file.
+const CALIBRATED: &str = obscura_calibration::files::PROJECTION;
+
+/// Reads `--calibration FILE [--camera ID]` into the calibration and CalibratedCamera's parameters;
+/// says on stderr which camera was taken when the file holds several and none was named.
+fn load_calibration(
+    path: &Path,
+    camera: Option<&str>,
+    quiet: bool,
+) -> Result<(obscura_calibration::files::Calibration, ParamList), String> {
+    let c = obscura_calibration::files::load(path, camera).map_err(|e| e.to_string())?;
+    if !quiet && let Some(note) = c.selection_note() {
+        eprintln!("note: {note}");
+    }
+    let list = c.param_list().map_err(|e| e.to_string())?;
+    Ok((c, list))
+}
+
+/// Warns when `format`'s frame aspect differs from the calibration image's: the calibrated image
+/// still fills the frame, so the same camera is resampled with non-square pixels.
+fn warn_calibration_aspect(c: &obscura_calibration::files::Calibration, format: Format) {
+    let frame = f64::from(format.width) * f64::from(format.pixel_aspect) / f64::from(format.height);
+    let calibrated = f64::from(c.width) / f64::from(c.height);
+    if (frame / calibrated - 1.0).abs() > 1e-3 {
+        eprintln!(
+            "warning: the image is {}x{} (frame aspect {frame:.4}) but the calibration is {}x{} ({calibrated:.4}); \
+             the calibrated image fills the frame, so each pixel covers {:.3} x {:.3} calibration pixels",
+            format.width,
+            format.height,
+            c.width,
+            c.height,
+            f64::from(c.width) / f64::from(format.width),
+            f64::from(c.height) / f64::from(format.height)
+        );
+    }
+}
+
+/// Adds `--param` arguments to `list`, each replacing the entries of the same name.
+fn merge_param_args(
+    list: &mut ParamList,
+    args: &[String],
+    plugin: &str,
+    table: &[obscura_sdk::ParamDecl],
+) -> Result<(), String> {
+    for p in args {
+        let mut one = ParamList::new();
+        push_param_arg(&mut one, p, plugin, table).map_err(|e| e.to_string())?;
+        for e in one.entries() {
+            list.remove(&e.name);
+            let decl = match e.array_len {
+                None => format!("{} {}", e.ty, e.name),
+                Some(n) => format!("{}[{n}] {}", e.ty, e.name),
+            };
+            list.push(&decl, e.value.clone(), e.origin.clone())
+                .map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(())
+}
+
 fn camera(a: &RaysArgs) -> CameraDesc {
     let mut cam = CameraDesc::new(Format {
-        width: a.format.0,
-        height: a.format.1,
+        width: a.format.map_or(640, |f| f.0),
+        height: a.format.map_or(480, |f| f.1),
         pixel_aspect: a.pixel_aspect,
     });
     cam.screen_window = a
@@ -191,15 +283,27 @@ fn camera(a: &RaysArgs) -> CameraDesc {
     cam
 }
 
-fn rays(a: &RaysArgs) -> Result<(), String> {
+fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     let mut registry = builtin_registry();
-    let factory = registry.find(&a.projection).map_err(|e| e.to_string())?;
-    let mut params = ParamList::new();
-    for p in &a.params {
-        push_param_arg(&mut params, p, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
+    let calibration = match &a.calibration {
+        Some(path) => Some(load_calibration(path, a.camera.as_deref(), false)?),
+        None => None,
+    };
+    let projection = match calibration {
+        Some(_) => CALIBRATED.to_string(),
+        None => ensure(&mut registry, &a.projection, search).map_err(|e| e.to_string())?,
+    };
+    let factory = registry.find(&projection).map_err(|e| e.to_string())?;
+    let mut params = calibration.as_ref().map(|(_, l)| l.clone()).unwrap_or_default();
+    merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
+    let mut cam = camera(a);
+    if let Some((c, _)) = &calibration {
+        if a.format.is_none() {
+            (cam.format.width, cam.format.height) = (c.width, c.height);
+        }
+        warn_calibration_aspect(c, cam.format);
     }
-    let cam = camera(a);
-    let stage = CameraStage::new(&mut registry, &a.projection, &params, &cam).map_err(|e| e.to_string())?;
+    let stage = CameraStage::new(&mut registry, &projection, &params, &cam).map_err(|e| e.to_string())?;
     for w in stage.setup_warnings() {
         eprintln!("{w}");
     }
@@ -207,16 +311,19 @@ fn rays(a: &RaysArgs) -> Result<(), String> {
     if let Some(w) = report.warning(stage.name()) {
         eprintln!("{w}");
     }
-    let attributes = [
-        ("obscura:projection", a.projection.clone()),
+    let mut attributes = vec![
+        ("obscura:projection", projection.clone()),
         ("obscura:parameters", a.params.join("; ")),
     ];
+    if let Some((c, _)) = &calibration {
+        attributes.push(("obscura:calibration", c.summary()));
+    }
     write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
     println!(
         "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} culled for breaking the contract",
         a.output.display(),
         report.samples,
-        a.projection,
+        projection,
         map.pixels.width(),
         map.pixels.height(),
         map.layers.len(),
@@ -227,7 +334,7 @@ fn rays(a: &RaysArgs) -> Result<(), String> {
     Ok(())
 }
 
-fn render(a: &RenderArgs) -> Result<(), String> {
+fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     let mut registry = builtin_registry();
     let format = a
         .format
@@ -260,6 +367,18 @@ fn render(a: &RenderArgs) -> Result<(), String> {
         scene.projection = p.clone();
         scene.projection_params = ParamList::new();
     }
+    if let Some(path) = &a.calibration {
+        let (c, list) = load_calibration(path, a.camera.as_deref(), a.quiet)?;
+        scene.projection = CALIBRATED.to_string();
+        scene.projection_params = list;
+        if a.format.is_none() {
+            scene.camera.format = Format::new(c.width, c.height);
+        }
+        if !a.quiet {
+            warn_calibration_aspect(&c, scene.camera.format);
+        }
+    }
+    scene.projection = ensure(&mut registry, &scene.projection, search).map_err(|e| e.to_string())?;
     let factory = registry.find(&scene.projection).map_err(|e| e.to_string())?;
     for p in &a.params {
         let mut one = ParamList::new();
@@ -377,14 +496,31 @@ fn render(a: &RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// `obscura plugins [NAME]`: a NAME that is not built in (or a path) is loaded as a plugin first.
+fn plugins(name: Option<&str>, search: &PluginSearch) -> Result<(), String> {
+    let mut registry = builtin_registry();
+    let name = match name {
+        Some(n) => Some(ensure(&mut registry, n, search).map_err(|e| e.to_string())?),
+        None => None,
+    };
+    let text = listing::list(&registry, name.as_deref()).map_err(|e| e.to_string())?;
+    print!("{text}");
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let search = PluginSearch::from_env(&cli.plugin_path);
     let result = match &cli.command {
-        Command::Rays(a) => rays(a),
-        Command::Render(a) => render(a),
-        Command::Plugins { name } => listing::list(&builtin_registry(), name.as_deref())
-            .map(|text| print!("{text}"))
-            .map_err(|e| e.to_string()),
+        Command::Rays(a) => rays(a, &search),
+        Command::Render(a) => render(a, &search),
+        Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
+        Command::Check(a) => check::run(a, &search),
+        Command::Plugins { names: true, .. } => {
+            builtin_registry().names().iter().for_each(|n| println!("{n}"));
+            Ok(())
+        }
+        Command::Plugins { name, .. } => plugins(name.as_deref(), &search),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -245,7 +245,7 @@ fn bad_input_gets_a_clear_error_and_exit_code() {
         ),
         (
             vec!["plugins", "Nope"],
-            "known projections: PxrOrthographic, PxrPerspective",
+            "known projections: CalibratedCamera, ",
         ),
     ] {
         let r = obscura(&args);

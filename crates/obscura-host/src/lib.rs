@@ -19,9 +19,11 @@ pub mod camera;
 pub mod cli_params;
 pub mod driver;
 pub mod listing;
+pub mod plugins;
 pub mod raymap;
 pub mod sampler;
 pub mod shutter;
+pub mod stmap;
 
 pub use camera::{CameraDesc, CameraError, CropWindow, PixelRect};
 pub use driver::{Batch, CameraStage, ContractReport, HostError, Violation};

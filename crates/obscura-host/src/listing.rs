@@ -97,7 +97,7 @@ mod tests {
         assert!(text.contains("PxrOrthographic\n") && text.contains("PxrPerspective\n"));
         let err = list(&builtin_registry(), Some("Nope")).unwrap_err().to_string();
         assert!(
-            err.contains("known projections: PxrOrthographic, PxrPerspective"),
+            err.contains("known projections: CalibratedCamera, ") && err.contains(", PxrOrthographic, "),
             "{err}"
         );
     }

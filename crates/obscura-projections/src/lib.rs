@@ -7,31 +7,92 @@
 //! |---|---|---|---|
 //! | `PxrPerspective` | [`perspective`] | Perspective | CameraZ |
 //! | `PxrOrthographic` | [`orthographic`] | Orthographic | CameraZ |
+//! | `PxrCamera` | [`pxrcamera`] | Perspective | CameraZ |
+//! | `PxrRollingShutter` | [`rolling_shutter`] | of its base camera | CameraZ |
+//! | `PxrSphereCamera` | [`sphere`] | Spherical | RayLength |
+//! | `PxrCylinderCamera` | [`cylinder`] | Spherical | RayLength |
+//! | `PxrPanini` | [`panini`] | Spherical (Perspective at compression 0) | RayLength (CameraZ at 0) |
+//! | `OmnidirectionalStereo` | [`omnistereo`] | Spherical | RayLength |
+//! | `Fisheye` | [`fisheye`] | Spherical | RayLength |
+//! | `MirrorBall` | [`mirrorball`] | Spherical | RayLength |
+//! | `EquiangularCubemapFace` | [`cubemap`] | Spherical | RayLength |
+//! | `Octahedral` | [`octahedral`] | Spherical | RayLength |
 //!
 //! [`register_builtins`] adds them all to a [`Registry`]; [`builtin_registry`] makes one holding them.
 
+pub mod cylinder;
+pub mod cubemap;
 pub mod dof;
+pub mod fisheye;
+pub mod mirrorball;
+pub mod octahedral;
+pub mod omnistereo;
 pub mod orthographic;
+pub mod panini;
 pub mod perspective;
+pub mod pxrcamera;
+pub mod rolling_shutter;
 pub mod simd;
+pub mod sphere;
 #[cfg(test)]
 mod testing;
 
 use obscura_sdk::Registry;
 
+pub use cubemap::{CubemapFace, CubemapFaceFactory, Face as CubemapFaceName};
+pub use fisheye::{Fisheye, FisheyeFactory, Mapping as FisheyeMapping};
+pub use mirrorball::{MirrorBall, MirrorBallFactory};
+pub use octahedral::{Octahedral, OctahedralFactory};
 pub use orthographic::{Orthographic, OrthographicFactory};
+pub use omnistereo::{Eye, OdsSettings, OmnidirectionalStereo, OmnidirectionalStereoFactory};
+pub use panini::{Panini, PaniniFactory};
 pub use perspective::{Perspective, PerspectiveFactory};
+pub use pxrcamera::{PxrCamera, PxrCameraFactory};
+pub use cylinder::{CylinderCamera, CylinderCameraFactory};
+pub use sphere::{SphereCamera, SphereCameraFactory};
+pub use rolling_shutter::{RollingShutter, RollingShutterFactory, RollingShutterModifier, Sweep};
 
 /// Adds every built-in projection to `registry`.
 ///
 /// # Panics
 /// When `registry` already holds a projection of a built-in's name (register built-ins first).
 pub fn register_builtins(registry: &mut Registry) {
+    obscura_calibration::register(registry);
+    registry
+        .register(Box::new(FisheyeFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(MirrorBallFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(CubemapFaceFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(OctahedralFactory), "")
+        .expect("built-in names are unique");
     registry
         .register(Box::new(PerspectiveFactory), "")
         .expect("built-in names are unique");
     registry
         .register(Box::new(OrthographicFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(PxrCameraFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(RollingShutterFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(SphereCameraFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(CylinderCameraFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(PaniniFactory), "")
+        .expect("built-in names are unique");
+    registry
+        .register(Box::new(OmnidirectionalStereoFactory), "")
         .expect("built-in names are unique");
 }
 
@@ -58,10 +119,9 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(err.contains("did you mean \"PxrPerspective\""), "{err}");
-        assert!(
-            err.contains("known projections: PxrOrthographic, PxrPerspective"),
-            "{err}"
-        );
+        let known = format!("known projections: {}", reg.names().join(", "));
+        assert!(err.contains(&known), "{err}");
+        assert!(reg.names().len() > 2, "{err}");
         assert!(reg.create("PxrOrthographic", &mut env, &ParamList::new()).is_ok());
     }
 

@@ -1,6 +1,6 @@
 //! Test helpers: run a projection on hand-made samples.
 
-use obscura_sdk::{Format, Point2, Projection, ProjectionContext, RayGeometry, Rgb, ScreenWindow};
+use obscura_sdk::{Format, Point2, Projection, ProjectionContext, RayGeometry, Rgb, ScreenWindow, Vec3};
 
 /// Projects one batch of hand-made samples and returns the rays.
 pub fn project_points(
@@ -31,4 +31,299 @@ pub fn pixel_centre_rays(p: &dyn Projection, format: Format) -> Vec<RayGeometry>
         .collect();
     let n = screen.len();
     project_points(p, &screen, &vec![Point2::ZERO; n], &vec![0.0; n])
+}
+
+/// What [`assert_contract`] checks a projection against, and how strictly.
+///
+/// The projection must have been created with `ProjectionEnvironment::for_format(format)` (the default
+/// screen window of `format`).
+#[derive(Debug, Clone)]
+pub struct ContractTest {
+    /// The image the projection was created for.
+    pub format: Format,
+    /// Largest `unproject(project(s))` error, in pixels.
+    pub roundtrip_px: f64,
+    /// Largest relative difference between `ray_spread` and half the finite-difference pixel angle.
+    pub spread_rel_tol: f64,
+    /// Distance along each ray of the point handed to `unproject`.
+    pub depth: f32,
+    /// Shutter times the rays are made at.
+    pub times: Vec<f32>,
+    /// Check `unproject` (false for a projection that offers none).
+    pub check_unproject: bool,
+}
+
+impl ContractTest {
+    /// The issue's tolerances: 1e-4 pixel round trips, spread within 2 % of finite differences.
+    pub fn new(format: Format) -> Self {
+        ContractTest {
+            format,
+            roundtrip_px: 1e-4,
+            spread_rel_tol: 0.02,
+            depth: 10.0,
+            times: vec![0.0, 0.5],
+            check_unproject: true,
+        }
+    }
+}
+
+/// What [`assert_contract`] saw, for tests that want to assert more.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ContractStats {
+    /// Samples projected (pixel centres, edges and the margin, at every time).
+    pub samples: usize,
+    /// Samples with a non-zero direction.
+    pub valid: usize,
+    /// Samples whose direction has `z < 0`.
+    pub backward: usize,
+    /// Samples whose footprint was compared with finite differences.
+    pub spread_checked: usize,
+    /// Samples whose round trip was checked.
+    pub roundtrips: usize,
+}
+
+/// Screen points the contract is checked at: every pixel centre, the window's edges and corners, its
+/// centre and axes, and a margin two pixels outside (where filters reach).
+pub fn contract_points(format: Format) -> Vec<Point2> {
+    let w = ScreenWindow::default_for(format);
+    let (fw, fh) = (format.width as f64, format.height as f64);
+    let mut pts: Vec<Point2> = (0..format.height)
+        .flat_map(|y| (0..format.width).map(move |x| (x, y)))
+        .map(|(x, y)| w.raster_to_screen(format, x as f64 + 0.5, y as f64 + 0.5))
+        .collect();
+    let n = 64;
+    for i in 0..=n {
+        let f = i as f64 / n as f64;
+        for (x, y) in [
+            (f * fw, 0.0),
+            (f * fw, fh),
+            (0.0, f * fh),
+            (fw, f * fh),
+            (f * fw, 0.5 * fh),
+            (0.5 * fw, f * fh),
+            (f * fw, -2.0),
+            (f * fw, fh + 2.0),
+            (-2.0, f * fh),
+            (fw + 2.0, f * fh),
+        ] {
+            pts.push(w.raster_to_screen(format, x, y));
+        }
+    }
+    pts.push(Point2::ZERO);
+    pts
+}
+
+/// Checks issue 4's contract on one projection and panics with a description of the first breach:
+///
+/// - every field finite (`max_dist` may be +∞), radius and spread ≥ 0, `min_dist ≤ max_dist`;
+/// - directions unit length (±1e-5) or exactly zero;
+/// - DeepMetric RayLength whenever a direction has `z < 0`;
+/// - DicingHint Perspective ⇒ one shared origin; Orthographic ⇒ one shared direction;
+/// - every property answer of the right type;
+/// - `unproject(O + depth·D) = s` within `roundtrip_px` pixels for every valid sample inside the window
+///   (or, where a map glues edges, a screen point whose ray is within `roundtrip_px` pixels' angle);
+/// - `ray_spread` within `spread_rel_tol` of ½·sqrt(αx·αy), with αx, αy one-sided finite differences of
+///   the direction over a hundredth of a pixel — their means, or one side's where a fold makes the
+///   sides differ (skipped where a neighbour is culled).
+pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
+    use obscura_sdk::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
+
+    let format = t.format;
+    let window = ScreenWindow::default_for(format);
+    let (px, py) = window.pixel_size(format);
+    let pts = contract_points(format);
+    let mut stats = ContractStats::default();
+    for prop in ProjectionProperty::ALL {
+        if let Some(v) = p.property(prop) {
+            assert!(prop.accepts(v), "{prop:?} answered with {v:?}");
+            if let PropertyValue::Float(f) = v {
+                assert!(f.is_finite() && f > 0.0, "{prop:?} = {f}");
+            }
+        }
+    }
+    let hint = p.property(ProjectionProperty::DicingHint);
+    let metric = p.property(ProjectionProperty::DeepMetric);
+    let inside = |s: Point2| {
+        s.x >= window.left && s.x <= window.right && s.y >= window.bottom && s.y <= window.top
+    };
+    let mut first_origin: Option<Vec3> = None;
+    let mut first_dir: Option<Vec3> = None;
+    for &time in &t.times {
+        let n = pts.len();
+        let rays = project_points(p, &pts, &vec![Point2::ZERO; n], &vec![time; n]);
+        // Neighbours a hundredth of a pixel away, for the finite differences.
+        let h = 0.01f32;
+        let offsets = [(h * px, 0.0), (-h * px, 0.0), (0.0, h * py), (0.0, -h * py)];
+        let nb: Vec<Vec<RayGeometry>> = offsets
+            .iter()
+            .map(|&(dx, dy)| {
+                let moved: Vec<Point2> = pts.iter().map(|s| Point2::new(s.x + dx, s.y + dy)).collect();
+                project_points(p, &moved, &vec![Point2::ZERO; n], &vec![time; n])
+            })
+            .collect();
+        for (i, (s, r)) in pts.iter().zip(&rays).enumerate() {
+            stats.samples += 1;
+            let at = format!("screen ({}, {}) time {time}", s.x, s.y);
+            assert!(
+                r.origin.is_finite()
+                    && r.direction.is_finite()
+                    && r.origin_radius.is_finite()
+                    && r.ray_spread.is_finite()
+                    && r.min_dist.is_finite()
+                    && !r.max_dist.is_nan(),
+                "non-finite ray at {at}: {r:?}"
+            );
+            assert!(r.origin_radius >= 0.0 && r.ray_spread >= 0.0, "negative footprint at {at}: {r:?}");
+            assert!(r.min_dist >= 0.0 && r.min_dist <= r.max_dist, "bad clipping range at {at}: {r:?}");
+            if r.direction == Vec3::ZERO {
+                continue;
+            }
+            let len = r.direction.length();
+            assert!((len - 1.0).abs() <= 1e-5, "direction not unit ({len}) at {at}: {r:?}");
+            stats.valid += 1;
+            if r.direction.z < 0.0 {
+                stats.backward += 1;
+                assert_eq!(
+                    metric,
+                    Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
+                    "a ray leaves +Z at {at} ({r:?}) but the deep metric is {metric:?}"
+                );
+            }
+            match hint {
+                Some(PropertyValue::DicingHint(DicingHint::Perspective)) => {
+                    let o = *first_origin.get_or_insert(r.origin);
+                    assert!((r.origin - o).length() <= 1e-6, "Perspective hint but origins differ at {at}");
+                }
+                Some(PropertyValue::DicingHint(DicingHint::Orthographic)) => {
+                    let d = *first_dir.get_or_insert(r.direction);
+                    assert!((r.direction - d).length() <= 1e-6, "Orthographic hint but directions differ at {at}");
+                }
+                _ => {}
+            }
+            if t.check_unproject && inside(*s) {
+                let point = r.origin + r.direction * t.depth;
+                let back = p
+                    .unproject(point, time)
+                    .unwrap_or_else(|| panic!("unproject gave None for the valid ray at {at}: {r:?}"));
+                let ex = ((back.x - s.x) / px).abs() as f64;
+                let ey = ((back.y - s.y) / py).abs() as f64;
+                if ex > t.roundtrip_px || ey > t.roundtrip_px {
+                    // A map that glues edges (octahedral, a pole of a panorama) sees one direction at
+                    // two screen points; the inverse may return either, so compare what they see.
+                    let again = project_points(p, &[back], &[Point2::ZERO], &[time])[0];
+                    let miss = angle(again.direction, r.direction);
+                    let pixel_angle = 2.0 * r.ray_spread.max(again.ray_spread) as f64;
+                    assert!(
+                        again.direction != Vec3::ZERO && miss <= t.roundtrip_px * pixel_angle + 1e-6,
+                        "round trip off by ({ex}, {ey}) px at {at}: got ({}, {}), whose ray misses by {miss} rad",
+                        back.x,
+                        back.y
+                    );
+                }
+                stats.roundtrips += 1;
+            }
+            let [xp, xm, yp, ym] = [&nb[0][i], &nb[1][i], &nb[2][i], &nb[3][i]];
+            if [xp, xm, yp, ym].iter().any(|q| q.direction == Vec3::ZERO) {
+                continue;
+            }
+            // Angle per pixel along x and y from the one-sided chords over h pixel. Where the map folds
+            // or glues edges the two sides differ and the footprint is that of one side, so the spread
+            // must match one of the side combinations; on smooth ground they all agree.
+            let d = r.direction;
+            let hh = h as f64;
+            let (axp, axm) = (angle(xp.direction, d) / hh, angle(d, xm.direction) / hh);
+            let (ayp, aym) = (angle(yp.direction, d) / hh, angle(d, ym.direction) / hh);
+            let got = r.ray_spread as f64;
+            let candidates = [
+                (0.5 * (axp + axm), 0.5 * (ayp + aym)),
+                (axp, ayp),
+                (axp, aym),
+                (axm, ayp),
+                (axm, aym),
+            ];
+            let (ax, ay) = candidates[0];
+            let expected = 0.5 * (ax * ay).sqrt();
+            let fits = candidates.iter().any(|&(cx, cy)| {
+                let e = 0.5 * (cx * cy).sqrt();
+                (got - e).abs() <= t.spread_rel_tol * e + 1e-7
+            });
+            assert!(
+                fits,
+                "ray_spread {got} but half the measured pixel angle is {expected} (αx {ax}, αy {ay}; one-sided {axp} {axm} {ayp} {aym}) at {at}"
+            );
+            stats.spread_checked += 1;
+        }
+    }
+    stats
+}
+
+fn angle(a: Vec3, b: Vec3) -> f64 {
+    let (a, b) = (
+        [a.x as f64, a.y as f64, a.z as f64],
+        [b.x as f64, b.y as f64, b.z as f64],
+    );
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+    let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    sin.atan2(cos)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obscura_sdk::{ParamList, ProjectionEnvironment, ProjectionFactory};
+
+    fn make(factory: &dyn ProjectionFactory, params: &[(&str, &str)], format: Format) -> Box<dyn Projection> {
+        let mut list = ParamList::new();
+        for (d, v) in params {
+            list.push_text(d, &[v], None).unwrap();
+        }
+        factory
+            .create_projection(&mut ProjectionEnvironment::for_format(format), &list)
+            .unwrap()
+    }
+
+    #[test]
+    fn the_builtin_perspective_and_orthographic_keep_the_contract() {
+        let f = Format::new(48, 32);
+        for fov in ["20", "90", "160"] {
+            let p = make(&crate::PerspectiveFactory, &[("float fov", fov)], f);
+            let s = assert_contract(p.as_ref(), &ContractTest::new(f));
+            assert!(s.valid == s.samples && s.roundtrips > 1500 && s.spread_checked > 1500, "{s:?}");
+        }
+        let p = make(&crate::OrthographicFactory, &[], f);
+        let mut t = ContractTest::new(f);
+        t.spread_rel_tol = 0.0;
+        assert_contract(p.as_ref(), &t);
+    }
+
+    /// The checker must fail a projection that breaks the contract; a spread twice too wide is one.
+    struct WideSpread(Box<dyn Projection>);
+
+    impl Projection for WideSpread {
+        fn property(&self, p: obscura_sdk::ProjectionProperty) -> Option<obscura_sdk::PropertyValue> {
+            self.0.property(p)
+        }
+        fn project(&self, ctx: &mut ProjectionContext<'_>) {
+            self.0.project(ctx);
+            for r in ctx.parts_mut().rays.iter_mut() {
+                r.ray_spread *= 2.0;
+            }
+        }
+        fn unproject(&self, point: Vec3, time: f32) -> Option<Point2> {
+            self.0.unproject(point, time)
+        }
+    }
+
+    #[test]
+    #[should_panic(expected = "ray_spread")]
+    fn a_wrong_spread_fails_the_contract() {
+        let f = Format::new(16, 16);
+        let p = WideSpread(make(&crate::PerspectiveFactory, &[], f));
+        assert_contract(&p, &ContractTest::new(f));
+    }
 }

@@ -45,7 +45,9 @@
 //! }
 //! ```
 
+pub mod abi;
 mod context;
+pub mod contract;
 mod environment;
 mod geometry;
 pub mod optics;

@@ -1,0 +1,167 @@
+//! `project` throughput of `CalibratedCamera` for each model family: one batch of 4096 screen
+//! samples spread over the calibration image (valid and culled samples alike).
+
+use obscura_calibration::CalibratedCameraFactory;
+use obscura_sdk::{
+    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, ProjectionFactory,
+    RayGeometry, Rgb, ScreenWindow,
+};
+
+const BATCH: usize = 4096;
+
+/// (label, model, params, polynomial, inversePolynomial).
+type Case = (
+    &'static str,
+    &'static str,
+    &'static [f32],
+    &'static [f32],
+    &'static [f32],
+);
+
+const CASES: &[Case] = &[
+    ("PINHOLE", "PINHOLE", &[500.0, 490.0, 320.0, 240.0], &[], &[]),
+    (
+        "OPENCV",
+        "OPENCV",
+        &[500.0, 490.0, 322.0, 241.0, -0.28, 0.07, 0.001, -0.0005],
+        &[],
+        &[],
+    ),
+    ("RADIAL", "RADIAL", &[500.0, 320.0, 240.0, -0.2, 0.05], &[], &[]),
+    (
+        "FULL_OPENCV",
+        "FULL_OPENCV",
+        &[
+            500.0, 490.0, 322.0, 241.0, -0.28, 0.07, 0.001, -0.0005, -0.002, 0.01, 0.003, 0.0002,
+        ],
+        &[],
+        &[],
+    ),
+    (
+        "OPENCV_PINHOLE_14",
+        "OPENCV_PINHOLE",
+        &[
+            500.0, 490.0, 322.0, 241.0, -0.28, 0.07, 0.001, -0.0005, -0.002, 0.01, 0.003, 0.0002, 0.001,
+            -0.0002, 0.0008, 0.0001, 0.01, -0.008,
+        ],
+        &[],
+        &[],
+    ),
+    (
+        "KANNALA_BRANDT",
+        "KANNALA_BRANDT",
+        &[300.0, 300.0, 320.0, 240.0, -0.01, 0.02, -0.003, 0.0005],
+        &[],
+        &[],
+    ),
+    (
+        "RAD_TAN_THIN_PRISM_FISHEYE",
+        "RAD_TAN_THIN_PRISM_FISHEYE",
+        &[
+            240.0, 241.0, 320.0, 240.0, 0.02, -0.004, 0.0005, -0.0001, 0.00002, -0.000003, 0.0008, -0.0006,
+            0.0004, -0.0001, 0.0003, 0.00005,
+        ],
+        &[],
+        &[],
+    ),
+    ("FISHEYE", "FISHEYE", &[200.0, 210.0, 320.0, 240.0], &[], &[]),
+    ("FOV", "FOV", &[300.0, 300.0, 320.0, 240.0, 0.9], &[], &[]),
+    (
+        "DIVISION",
+        "DIVISION",
+        &[400.0, 405.0, 320.0, 240.0, -0.15],
+        &[],
+        &[],
+    ),
+    ("EUCM", "EUCM", &[350.0, 350.0, 320.0, 240.0, 0.6, 1.1], &[], &[]),
+    ("UCM", "UCM", &[300.0, 300.0, 320.0, 240.0, 0.58], &[], &[]),
+    (
+        "DOUBLE_SPHERE",
+        "DOUBLE_SPHERE",
+        &[250.0, 250.0, 320.0, 240.0, -0.2, 0.59],
+        &[],
+        &[],
+    ),
+    (
+        "OPENCV_OMNIDIR",
+        "OPENCV_OMNIDIR",
+        &[400.0, 400.0, 320.0, 240.0, 0.5, 1.2, -0.1, 0.02, 0.001, -0.0005],
+        &[],
+        &[],
+    ),
+    ("EQUIRECTANGULAR", "EQUIRECTANGULAR", &[640.0, 480.0], &[], &[]),
+    (
+        "OCAMCALIB",
+        "OCAMCALIB",
+        &[239.5, 319.5, 1.00033, 0.000219, 0.000257],
+        &[-206.517, 0.0, 2.207161e-03, -4.879622e-06, 1.865656e-08],
+        &[],
+    ),
+    (
+        "FTHETA_backward",
+        "FTHETA",
+        &[319.5, 239.5],
+        &[0.0, 0.004, 1e-7, -2e-10],
+        &[],
+    ),
+    (
+        "FTHETA_forward_only",
+        "FTHETA",
+        &[319.5, 239.5, 1.7],
+        &[],
+        &[0.0, 250.0, -5.0, 1.0],
+    ),
+];
+
+fn main() {
+    divan::main();
+}
+
+fn list(model: &str, params: &[f32], pol: &[f32], inv: &[f32]) -> ParamList {
+    let mut l = ParamList::new();
+    let text = |v: &[f32]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    let push = |l: &mut ParamList, decl: &str, vals: Vec<String>| {
+        let vals: Vec<&str> = vals.iter().map(String::as_str).collect();
+        l.push_text(decl, &vals, None).unwrap();
+    };
+    push(&mut l, "string model", vec![model.to_string()]);
+    push(&mut l, "float[] params", text(params));
+    if !pol.is_empty() {
+        push(&mut l, "float[] polynomial", text(pol));
+    }
+    if !inv.is_empty() {
+        push(&mut l, "float[] inversePolynomial", text(inv));
+    }
+    push(&mut l, "int[2] resolution", vec!["640".into(), "480".into()]);
+    l
+}
+
+#[divan::bench(args = CASES.iter().map(|c| c.0))]
+fn project(bencher: divan::Bencher, label: &str) {
+    let (_, model, params, pol, inv) = *CASES.iter().find(|c| c.0 == label).unwrap();
+    let format = Format::new(640, 480);
+    let mut env = ProjectionEnvironment::for_format(format);
+    let p: Box<dyn Projection> = CalibratedCameraFactory
+        .create_projection(&mut env, &list(model, params, pol, inv))
+        .unwrap();
+    let w = ScreenWindow::default_for(format);
+    let screen: Vec<Point2> = (0..BATCH)
+        .map(|i| {
+            let fx = (i as f64 * 0.618_033_988_75).fract();
+            let fy = (i as f64 * 0.754_877_666_25).fract();
+            w.raster_to_screen(format, fx * 640.0, fy * 480.0)
+        })
+        .collect();
+    let lens = vec![Point2::new(0.5, 0.5); BATCH];
+    let aperture = vec![Point2::ZERO; BATCH];
+    let mut time = vec![0.0f32; BATCH];
+    let mut rays = vec![RayGeometry::CULLED; BATCH];
+    let mut tint = vec![Rgb::WHITE; BATCH];
+    bencher
+        .counter(divan::counter::ItemsCount::new(BATCH))
+        .bench_local(|| {
+            let mut ctx =
+                ProjectionContext::new(&screen, &lens, &aperture, &mut time, &mut rays, &mut tint).unwrap();
+            p.project(divan::black_box(&mut ctx));
+        });
+}

@@ -1,0 +1,282 @@
+//! Kalibr's `camchain.yaml` (and the single-camera `camera.yaml` of the same layout): a mapping of
+//! cameras `cam0`, `cam1`, … each with `camera_model`, `intrinsics`, `distortion_model`,
+//! `distortion_coeffs` and `resolution` (extrinsics such as `T_cn_cnm1` are ignored).
+//!
+//! Kalibr's intrinsics vectors are reordered into the target model's order:
+//!
+//! | Kalibr | intrinsics, distortion | model | params |
+//! |---|---|---|---|
+//! | pinhole-none | fu fv pu pv | `PINHOLE` | fx fy cx cy |
+//! | pinhole-radtan | fu fv pu pv; k1 k2 r1 r2 | `OPENCV` | fx fy cx cy k1 k2 p1 p2 |
+//! | pinhole-equi | fu fv pu pv; k1 k2 k3 k4 | `OPENCV_FISHEYE` | fx fy cx cy k1 k2 k3 k4 |
+//! | pinhole-fov | fu fv pu pv; w | `FOV` | fx fy cx cy omega |
+//! | omni-radtan | xi fu fv pu pv; k1 k2 r1 r2 | `OPENCV_OMNIDIR` | fx fy cx cy s=0 xi k1 k2 p1 p2 |
+//! | omni-none | xi fu fv pu pv | `OPENCV_OMNIDIR` | fx fy cx cy 0 xi 0 0 0 0 |
+//! | ds-none | xi alpha fu fv pu pv | `DOUBLE_SPHERE` | fx fy cx cy xi alpha |
+//! | eucm-none | alpha beta fu fv pu pv | `EUCM` | fx fy cx cy alpha beta (COLMAP's order) |
+//!
+//! Kalibr's radtan is OpenCV's k1 k2 p1 p2 on the normalised plane, its equidistant model OpenCV's
+//! fisheye, its FOV model Devernay–Faugeras as COLMAP's `FOV`, and its omni camera Mei's unified model
+//! followed by radtan, as OpenCV's omnidir. Kalibr (aslam-cv) measures pixels as OpenCV does, centres
+//! at integer coordinates: `pixelConvention` `opencv`.
+
+use super::tree::{Node, Value};
+use super::{Calibration, CalibrationFileError, FileFormat, Number, PixelConvention, Src, choose_camera};
+
+/// True when `root` is a mapping holding at least one camera entry (a mapping with `camera_model` or
+/// `intrinsics`).
+pub(crate) fn looks_like(root: &Node) -> bool {
+    root.entries()
+        .is_some_and(|entries| entries.iter().any(|(_, v)| is_camera(v)))
+}
+
+fn is_camera(node: &Node) -> bool {
+    node.get("camera_model").is_some() || node.get("intrinsics").is_some()
+}
+
+fn text_field<'a>(
+    src: &Src<'_>,
+    cam: &'a Node,
+    id: &str,
+    key: &str,
+    what: &str,
+) -> Result<(&'a str, usize), CalibrationFileError> {
+    let node = cam
+        .get(key)
+        .ok_or_else(|| src.err(cam.line, format!("{id}.{key}: missing; expected {what}")))?;
+    match node.text() {
+        Some(t) => Ok((t.trim(), node.line)),
+        None => Err(src.err(
+            node.line,
+            format!("{id}.{key}: expected {what}, got {}", node.describe()),
+        )),
+    }
+}
+
+fn list_field(
+    src: &Src<'_>,
+    cam: &Node,
+    id: &str,
+    key: &str,
+    what: &str,
+) -> Result<(Vec<Number>, usize), CalibrationFileError> {
+    let node = cam
+        .get(key)
+        .ok_or_else(|| src.err(cam.line, format!("{id}.{key}: missing; expected {what}")))?;
+    let items = node.items().ok_or_else(|| {
+        src.err(
+            node.line,
+            format!("{id}.{key}: expected a list ({what}), got {}", node.describe()),
+        )
+    })?;
+    let values = items
+        .iter()
+        .enumerate()
+        .map(|(i, n)| match &n.value {
+            Value::Scalar { text, quoted: false } => src.number(text, n.line, &format!("{id}.{key}[{i}]")),
+            _ => Err(src.err(
+                n.line,
+                format!("{id}.{key}[{i}]: expected a number, got {}", n.describe()),
+            )),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((values, node.line))
+}
+
+/// A zero written by us (for a parameter Kalibr's model lacks), attributed to `line`.
+fn zero(line: usize) -> Number {
+    Number {
+        text: "0".into(),
+        value: 0.0,
+        line,
+    }
+}
+
+/// Reads the camera `camera` (a key such as `cam1`; the first camera when `None`) of a camchain.
+///
+/// # Errors
+/// The line and field at fault: a missing field, an unknown or unsupported camera/distortion model
+/// pair (with the supported ones), an intrinsics or distortion vector of the wrong length (with the
+/// expected names), a resolution that is not two positive integers, or no camera `camera`.
+pub(crate) fn read(
+    src: &Src<'_>,
+    root: &Node,
+    camera: Option<&str>,
+) -> Result<Calibration, CalibrationFileError> {
+    let entries = root.entries().unwrap_or_default();
+    let cams: Vec<&(String, Node)> = entries.iter().filter(|(_, v)| is_camera(v)).collect();
+    let ids: Vec<String> = cams.iter().map(|(k, _)| k.clone()).collect();
+    let (index, by_default) = choose_camera(src, "Kalibr camchain", &ids, camera)?;
+    let (id, cam) = cams[index];
+    let (camera_model, model_line) = text_field(src, cam, id, "camera_model", "pinhole, omni, ds or eucm")?;
+    let (distortion, dist_line) = match cam.get("distortion_model") {
+        None => ("none", cam.line),
+        Some(_) => text_field(
+            src,
+            cam,
+            id,
+            "distortion_model",
+            "radtan, equidistant, fov or none",
+        )?,
+    };
+    let (intr, intr_line) = list_field(src, cam, id, "intrinsics", "the intrinsics vector")?;
+    let coeffs = match cam.get("distortion_coeffs") {
+        None => (Vec::new(), dist_line),
+        Some(_) => list_field(src, cam, id, "distortion_coeffs", "the distortion coefficients")?,
+    };
+    let (res, res_line) = list_field(src, cam, id, "resolution", "[width, height] in pixels")?;
+    if res.len() != 2 {
+        return Err(src.err(
+            res_line,
+            format!(
+                "{id}.resolution: expected [width, height], got {} values",
+                res.len()
+            ),
+        ));
+    }
+    let width = src.size(&res[0].text, res[0].line, &format!("{id}.resolution width"))?;
+    let height = src.size(&res[1].text, res[1].line, &format!("{id}.resolution height"))?;
+
+    let distortion = match distortion {
+        "equi" | "equidistant" => "equidistant",
+        other => other,
+    };
+    let expect_intr = |names: &[&str]| -> Result<(), CalibrationFileError> {
+        if intr.len() == names.len() {
+            Ok(())
+        } else {
+            Err(src.err(
+                intr_line,
+                format!(
+                    "{id}.intrinsics: a Kalibr {camera_model} camera has {} intrinsics [{}], got {}",
+                    names.len(),
+                    names.join(" "),
+                    intr.len()
+                ),
+            ))
+        }
+    };
+    let expect_coeffs = |names: &[&str]| -> Result<(), CalibrationFileError> {
+        if coeffs.0.len() == names.len() {
+            Ok(())
+        } else {
+            Err(src.err(
+                coeffs.1,
+                format!(
+                    "{id}.distortion_coeffs: Kalibr's {distortion} distortion has {} coefficients [{}], got {}",
+                    names.len(),
+                    names.join(" "),
+                    coeffs.0.len()
+                ),
+            ))
+        }
+    };
+    let unsupported = || {
+        src.err(
+            if distortion == "none" {
+                model_line
+            } else {
+                dist_line
+            },
+            format!(
+                "{id}: Kalibr's {camera_model}-{distortion} is not supported; supported: pinhole-none, \
+                 pinhole-radtan, pinhole-equi, pinhole-fov, omni-none, omni-radtan, ds-none, eucm-none"
+            ),
+        )
+    };
+    let i = |k: usize| intr[k].clone();
+    let (model, mut params) = match camera_model {
+        "pinhole" => {
+            expect_intr(&["fu", "fv", "pu", "pv"])?;
+            let base = vec![i(0), i(1), i(2), i(3)];
+            match distortion {
+                "none" => {
+                    expect_coeffs(&[])?;
+                    ("PINHOLE", base)
+                }
+                "radtan" => {
+                    expect_coeffs(&["k1", "k2", "r1", "r2"])?;
+                    ("OPENCV", base)
+                }
+                "equidistant" => {
+                    expect_coeffs(&["k1", "k2", "k3", "k4"])?;
+                    ("OPENCV_FISHEYE", base)
+                }
+                "fov" => {
+                    expect_coeffs(&["w"])?;
+                    ("FOV", base)
+                }
+                _ => return Err(unsupported()),
+            }
+        }
+        "omni" => {
+            expect_intr(&["xi", "fu", "fv", "pu", "pv"])?;
+            let base = vec![i(1), i(2), i(3), i(4), zero(intr_line), i(0)];
+            match distortion {
+                "none" => {
+                    expect_coeffs(&[])?;
+                    let mut p = base;
+                    p.extend((0..4).map(|_| zero(dist_line)));
+                    ("OPENCV_OMNIDIR", p)
+                }
+                "radtan" => {
+                    expect_coeffs(&["k1", "k2", "r1", "r2"])?;
+                    ("OPENCV_OMNIDIR", base)
+                }
+                _ => return Err(unsupported()),
+            }
+        }
+        "ds" => {
+            expect_intr(&["xi", "alpha", "fu", "fv", "pu", "pv"])?;
+            if distortion != "none" {
+                return Err(unsupported());
+            }
+            expect_coeffs(&[])?;
+            ("DOUBLE_SPHERE", vec![i(2), i(3), i(4), i(5), i(0), i(1)])
+        }
+        "eucm" => {
+            expect_intr(&["alpha", "beta", "fu", "fv", "pu", "pv"])?;
+            if distortion != "none" {
+                return Err(unsupported());
+            }
+            expect_coeffs(&[])?;
+            ("EUCM", vec![i(2), i(3), i(4), i(5), i(0), i(1)])
+        }
+        other => {
+            return Err(src.err(
+                model_line,
+                format!("{id}.camera_model: unknown Kalibr camera model \"{other}\"; expected pinhole, omni, ds or eucm"),
+            ));
+        }
+    };
+    if !matches!(distortion, "none") {
+        params.extend(coeffs.0);
+    }
+    let mut notes = vec![format!(
+        "Kalibr {camera_model}-{distortion} read as {model}, intrinsics reordered to the model's order"
+    )];
+    if cam
+        .entries()
+        .is_some_and(|e| e.iter().any(|(k, _)| k.starts_with("T_")))
+    {
+        notes.push(format!(
+            "{id}: extrinsics (T_*) are not part of the projection and were ignored"
+        ));
+    }
+    Ok(Calibration {
+        file: src.file.to_string(),
+        format: FileFormat::Kalibr,
+        camera: Some(id.clone()),
+        cameras: ids,
+        first_by_default: by_default,
+        width,
+        height,
+        model: model.to_string(),
+        params,
+        polynomial: Vec::new(),
+        inverse_polynomial: Vec::new(),
+        pixel_convention: PixelConvention::OpenCv,
+        source: format!("{}:{}", src.file, cam.line),
+        notes,
+    })
+}

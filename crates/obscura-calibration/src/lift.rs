@@ -1,0 +1,536 @@
+//! The last stage of each model: an undistorted 2-D point `m` lifted to a 3-D ray `V` (not unit
+//! length) with its derivative `∂V/∂m`, and back ("unlift": ray → `m`, or `None` outside the model's
+//! valid set). Every formula is in OpenCV/COLMAP camera space: x right, **y down**, z forward.
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+use crate::solve::{self, Mat32};
+
+/// How an undistorted point becomes a ray.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) enum Lift {
+    /// `V = (x, y, 1)`: the pinhole.
+    Perspective,
+    /// Equidistant fisheye `θ = |m|`: `V = (sin θ·m/θ, cos θ)`, θ up to π.
+    Equidistant,
+    /// Enhanced unified model (Khomutenko et al.; UCM when β = 1):
+    /// `V = (x, y, (1 − βα²q)/(α·sqrt(1 − (2α − 1)βq) + 1 − α))`, `q = |m|²`.
+    Unified {
+        /// α ∈ [0, 1].
+        alpha: f64,
+        /// β > 0.
+        beta: f64,
+    },
+    /// Mei's unified omnidirectional model: `λ = (ξ + sqrt(1 + (1 − ξ²)q))/(1 + q)`,
+    /// `V = (λx, λy, λ − ξ)`.
+    Mei {
+        /// ξ ≥ 0.
+        xi: f64,
+    },
+    /// Double sphere (Usenko et al. 2018).
+    DoubleSphere {
+        /// ξ ∈ [−1, 1].
+        xi: f64,
+        /// α ∈ [0, 1].
+        alpha: f64,
+    },
+    /// Fitzgibbon's division model: `V = (x, y, 1 + k·q)`.
+    Division {
+        /// k.
+        k: f64,
+    },
+    /// Devernay–Faugeras FOV model on the distorted plane: `V = (sin(ωr)·m/r, 2·tan(ω/2)·cos(ωr))`,
+    /// `ωr < π/2`.
+    Fov {
+        /// ω (radians).
+        omega: f64,
+        /// `2·tan(ω/2)`.
+        c: f64,
+    },
+    /// COLMAP's equirectangular model on pixel coordinates: azimuth `2π(u/w − ½)`, elevation
+    /// `π(½ − v/h)`, `V = (cos φ sin θ, −sin φ, cos φ cos θ)`.
+    Equirect {
+        /// Width the azimuth spans.
+        w: f64,
+        /// Height the elevation spans.
+        h: f64,
+    },
+    /// Scaramuzza's OCamCalib, with `m` the (row/column-swapped) sensor point:
+    /// `V = (x, y, −pol(|m|))`.
+    OCam {
+        /// `pol`, ascending.
+        pol: Vec<f64>,
+        /// `invpol`, ascending (only seeds the exact inverse); may be empty.
+        invpol: Vec<f64>,
+        /// Largest sensor radius where the ray angle still increases.
+        rho_max: f64,
+    },
+    /// NVIDIA f-theta: ray angle θ from the pixel distance ρ = |m|, `V = (sin θ·m/ρ, cos θ)`.
+    FTheta {
+        /// Pixel distance → angle (the reference when given).
+        bw: Option<Vec<f64>>,
+        /// Angle → pixel distance (the reference when `bw` is absent, else a seed).
+        fw: Option<Vec<f64>>,
+        /// Largest pixel distance in the valid set.
+        rho_max: f64,
+        /// Largest angle in the valid set.
+        theta_max: f64,
+    },
+}
+
+/// A lifted ray and its derivative by the lift's input.
+pub(crate) type Lifted = ([f64; 3], Mat32);
+
+/// `dmz/dq` pieces of the unified-type formula `mz = (1 − a·q)/(α·sqrt(1 − b·q) + 1 − α)`.
+#[inline]
+fn unified_mz(alpha: f64, a: f64, b: f64, q: f64) -> Option<(f64, f64)> {
+    let rad = 1.0 - b * q;
+    if rad <= 0.0 {
+        return None;
+    }
+    let sq = rad.sqrt();
+    let den = alpha * sq + 1.0 - alpha;
+    if den <= 0.0 {
+        return None;
+    }
+    let num = 1.0 - a * q;
+    let dden = -alpha * b / (2.0 * sq);
+    Some((num / den, (-a * den - num * dden) / (den * den)))
+}
+
+/// `V = (s·x, s·y, vz)` with `s = s(q)`, `vz = vz(q)`: the derivative by `m` given `ds/dq`, `dvz/dq`.
+#[inline]
+fn radial_jacobian(m: [f64; 2], s: f64, ds: f64, dvz: f64) -> Mat32 {
+    let (x, y) = (m[0], m[1]);
+    [
+        [s + 2.0 * ds * x * x, 2.0 * ds * x * y],
+        [2.0 * ds * x * y, s + 2.0 * ds * y * y],
+        [2.0 * dvz * x, 2.0 * dvz * y],
+    ]
+}
+
+/// `V = (sin θ·m/ρ, cos θ)` for `θ = θ(ρ)` with `θ'(ρ)`: value and derivative.
+#[inline]
+fn angle_lift(m: [f64; 2], rho: f64, theta: f64, dtheta: f64) -> Lifted {
+    let (sin, cos) = theta.sin_cos();
+    if rho < 1e-12 {
+        return (
+            [m[0] * dtheta, m[1] * dtheta, cos],
+            [[dtheta, 0.0], [0.0, dtheta], [0.0, 0.0]],
+        );
+    }
+    let (ux, uy) = (m[0] / rho, m[1] / rho);
+    let a = sin / rho;
+    let b = cos * dtheta - a;
+    (
+        [sin * ux, sin * uy, cos],
+        [
+            [a + b * ux * ux, b * ux * uy],
+            [b * ux * uy, a + b * uy * uy],
+            [-sin * dtheta * ux, -sin * dtheta * uy],
+        ],
+    )
+}
+
+impl Lift {
+    /// The radius of the plane the lift is defined on (for the distortion's fold search).
+    pub fn plane_limit(&self) -> f64 {
+        match self {
+            Lift::Equidistant => PI,
+            Lift::Mei { xi } if *xi > 1.0 => 1.0 / (xi * xi - 1.0).sqrt(),
+            _ => f64::INFINITY,
+        }
+    }
+
+    /// True when some valid ray has `z ≤ 0` (the deep metric must then be the ray length).
+    pub fn may_leave_front(&self, max_radius: f64) -> bool {
+        match self {
+            Lift::Perspective | Lift::Fov { .. } => false,
+            Lift::Equidistant => max_radius > FRAC_PI_2,
+            Lift::Unified { alpha, .. } => *alpha > 0.0 && *alpha < 1.0,
+            Lift::Mei { xi } => *xi > 0.0,
+            Lift::DoubleSphere { xi, alpha } => ds_w2(*xi, *alpha) > 0.0,
+            Lift::Division { k } => *k < 0.0,
+            Lift::Equirect { .. } => true,
+            Lift::OCam { pol, rho_max, .. } => solve::poly(pol, *rho_max).0 >= 0.0,
+            Lift::FTheta { theta_max, .. } => *theta_max > FRAC_PI_2,
+        }
+    }
+
+    /// The ray of `m` and `∂V/∂m`, or `None` outside the valid set.
+    #[inline]
+    pub fn lift(&self, m: [f64; 2]) -> Option<Lifted> {
+        let q = m[0] * m[0] + m[1] * m[1];
+        match self {
+            Lift::Perspective => Some(([m[0], m[1], 1.0], [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])),
+            Lift::Equidistant => {
+                let t = q.sqrt();
+                if t > PI {
+                    return None;
+                }
+                let (sin, cos) = t.sin_cos();
+                let (s, ds) = if t < 1e-3 {
+                    // sin t / t and its derivative by q = t², by series.
+                    (1.0 - q / 6.0 + q * q / 120.0, -1.0 / 6.0 + q / 60.0)
+                } else {
+                    (sin / t, (t * cos - sin) / (2.0 * t * q))
+                };
+                // d cos t / dq = −sin t/(2t) = −s/2.
+                Some(([s * m[0], s * m[1], cos], radial_jacobian(m, s, ds, -0.5 * s)))
+            }
+            Lift::Unified { alpha, beta } => {
+                let (mz, dmz) = unified_mz(*alpha, alpha * alpha * beta, (2.0 * alpha - 1.0) * beta, q)?;
+                Some(([m[0], m[1], mz], radial_jacobian(m, 1.0, 0.0, dmz)))
+            }
+            Lift::Mei { xi } => {
+                let rad = 1.0 + (1.0 - xi * xi) * q;
+                if rad <= 0.0 {
+                    return None;
+                }
+                let sq = rad.sqrt();
+                let lam = (xi + sq) / (1.0 + q);
+                let dlam = ((1.0 - xi * xi) / (2.0 * sq) - lam) / (1.0 + q);
+                Some((
+                    [lam * m[0], lam * m[1], lam - xi],
+                    radial_jacobian(m, lam, dlam, dlam),
+                ))
+            }
+            Lift::DoubleSphere { xi, alpha } => {
+                let (mz, dmz) = unified_mz(*alpha, alpha * alpha, 2.0 * alpha - 1.0, q)?;
+                let srad = mz * mz + (1.0 - xi * xi) * q;
+                if srad < 0.0 {
+                    return None;
+                }
+                let s = srad.sqrt();
+                let ds = (2.0 * mz * dmz + 1.0 - xi * xi) / (2.0 * s);
+                let (p, dp) = (mz * xi + s, dmz * xi + ds);
+                let (qq, dqq) = (mz * mz + q, 2.0 * mz * dmz + 1.0);
+                let k = p / qq;
+                let dk = (dp * qq - p * dqq) / (qq * qq);
+                Some((
+                    [k * m[0], k * m[1], k * mz - xi],
+                    radial_jacobian(m, k, dk, dk * mz + k * dmz),
+                ))
+            }
+            Lift::Division { k } => {
+                if *k > 0.0 && k * q >= 1.0 {
+                    return None;
+                }
+                Some(([m[0], m[1], 1.0 + k * q], radial_jacobian(m, 1.0, 0.0, *k)))
+            }
+            Lift::Fov { omega, c } => {
+                let r = q.sqrt();
+                let phi = omega * r;
+                if phi >= FRAC_PI_2 {
+                    return None;
+                }
+                let (sin, cos) = phi.sin_cos();
+                // g(r) = sin(ωr)/r and g'(r)/r, by series near 0.
+                let (g, dg_over_r) = if phi < 1e-3 {
+                    let w2 = omega * omega;
+                    (
+                        omega * (1.0 - w2 * q / 6.0),
+                        omega * w2 * (-1.0 / 3.0 + w2 * q / 30.0),
+                    )
+                } else {
+                    (sin / r, (phi * cos - sin) / (r * q))
+                };
+                // V = (g·m, c·cos(ωr)); ∂/∂q: ds = g'/(2r), dvz = −c·ω·sin(ωr)/(2r) = −c·ω·g/2.
+                Some((
+                    [g * m[0], g * m[1], c * cos],
+                    radial_jacobian(m, g, 0.5 * dg_over_r, -0.5 * c * omega * g),
+                ))
+            }
+            Lift::Equirect { w, h } => {
+                let (u, v) = (m[0], m[1]);
+                if !(0.0..=*h).contains(&v) {
+                    return None;
+                }
+                let theta = TAU * (u / w - 0.5);
+                let phi = PI * (0.5 - v / h);
+                let (st, ct) = theta.sin_cos();
+                let (sp, cp) = phi.sin_cos();
+                let (a, b) = (TAU / w, PI / h);
+                Some((
+                    [cp * st, -sp, cp * ct],
+                    [
+                        [a * cp * ct, b * sp * st],
+                        [0.0, b * cp],
+                        [-a * cp * st, b * sp * ct],
+                    ],
+                ))
+            }
+            Lift::OCam { pol, rho_max, .. } => {
+                let rho = q.sqrt();
+                if rho > *rho_max {
+                    return None;
+                }
+                let (p, dp) = solve::poly(pol, rho);
+                let g = if rho > 0.0 { -dp / rho } else { 0.0 };
+                Some(([m[0], m[1], -p], [[1.0, 0.0], [0.0, 1.0], [g * m[0], g * m[1]]]))
+            }
+            Lift::FTheta {
+                bw,
+                fw,
+                rho_max,
+                theta_max,
+            } => {
+                let rho = q.sqrt();
+                if rho > *rho_max {
+                    return None;
+                }
+                let (theta, dtheta) = match (bw, fw) {
+                    (Some(bw), _) => solve::poly(bw, rho),
+                    (None, Some(fw)) => {
+                        let guess = rho / solve::poly(fw, 0.0).1.max(1e-300);
+                        let t = solve::solve_increasing(|t| solve::poly(fw, t), rho, 0.0, *theta_max, guess)?;
+                        (t, 1.0 / solve::poly(fw, t).1)
+                    }
+                    (None, None) => return None,
+                };
+                Some(angle_lift(m, rho, theta, dtheta))
+            }
+        }
+    }
+
+    /// The point `m` whose ray is `d` (any length), or `None` when the ray is outside the valid set.
+    #[inline]
+    pub fn unlift(&self, d: [f64; 3]) -> Option<[f64; 2]> {
+        let [x, y, z] = d;
+        let rho = x.hypot(y);
+        let len = (rho * rho + z * z).sqrt();
+        if len.is_nan() || len <= 0.0 || !len.is_finite() {
+            return None;
+        }
+        // (x, y) scaled to length s, the axis when rho is 0 (only for a forward ray).
+        let along = |s: f64| {
+            if rho > 0.0 {
+                Some([x * s / rho, y * s / rho])
+            } else if z > 0.0 {
+                Some([0.0, 0.0])
+            } else {
+                None
+            }
+        };
+        match self {
+            Lift::Perspective => (z > 0.0).then(|| [x / z, y / z]),
+            Lift::Equidistant => along(rho.atan2(z)),
+            Lift::Unified { alpha, beta } => {
+                let re = (beta * rho * rho + z * z).sqrt();
+                let w = if *alpha > 0.5 {
+                    (1.0 - alpha) / alpha
+                } else {
+                    alpha / (1.0 - alpha)
+                };
+                let den = alpha * re + (1.0 - alpha) * z;
+                (z > -w * re && den > 0.0).then(|| [x / den, y / den])
+            }
+            Lift::Mei { xi } => {
+                let zs = z / len;
+                let den = zs + xi;
+                let ok = den > 0.0 && (*xi <= 1.0 || zs > -1.0 / xi);
+                ok.then(|| [x / len / den, y / len / den])
+            }
+            Lift::DoubleSphere { xi, alpha } => {
+                let zz = xi * len + z;
+                let d2 = (rho * rho + zz * zz).sqrt();
+                let den = alpha * d2 + (1.0 - alpha) * zz;
+                (z > -ds_w2(*xi, *alpha) * len && den > 0.0).then(|| [x / den, y / den])
+            }
+            Lift::Division { k } => {
+                let disc = z * z - 4.0 * rho * rho * k;
+                if disc < 0.0 {
+                    return None;
+                }
+                let den = z + disc.sqrt();
+                (den > 0.0).then(|| [2.0 * x / den, 2.0 * y / den])
+            }
+            Lift::Fov { omega, c } => {
+                if z <= 0.0 {
+                    return None;
+                }
+                along((c * rho).atan2(z) / omega)
+            }
+            Lift::Equirect { w, h } => {
+                let theta = x.atan2(z);
+                let phi = (-y).atan2(x.hypot(z));
+                Some([(theta / TAU + 0.5) * w, (0.5 - phi / PI) * h])
+            }
+            Lift::OCam { pol, invpol, rho_max } => {
+                let target = rho.atan2(z);
+                let angle = |r: f64| {
+                    let (p, dp) = solve::poly(pol, r);
+                    let (qv, dq) = (-p, -dp);
+                    (r.atan2(qv), (qv - r * dq) / (r * r + qv * qv))
+                };
+                let guess = if invpol.is_empty() {
+                    0.0
+                } else {
+                    solve::poly(invpol, target - FRAC_PI_2).0
+                };
+                let r = solve::solve_increasing(angle, target, 0.0, *rho_max, guess)?;
+                along(r)
+            }
+            Lift::FTheta {
+                bw,
+                fw,
+                rho_max,
+                theta_max,
+            } => {
+                let theta = rho.atan2(z);
+                if theta > *theta_max {
+                    return None;
+                }
+                let r = match (bw, fw) {
+                    (Some(bw), fw) => {
+                        let guess = match fw {
+                            Some(fw) => solve::poly(fw, theta).0,
+                            None => theta / solve::poly(bw, 0.0).1.max(1e-300),
+                        };
+                        solve::solve_increasing(|r| solve::poly(bw, r), theta, 0.0, *rho_max, guess)?
+                    }
+                    (None, Some(fw)) => solve::poly(fw, theta).0,
+                    (None, None) => return None,
+                };
+                if r > *rho_max {
+                    return None;
+                }
+                along(r)
+            }
+        }
+    }
+}
+
+/// The double-sphere validity bound `w₂`: a point is valid when `z > −w₂·|X|`.
+fn ds_w2(xi: f64, alpha: f64) -> f64 {
+    let w1 = if alpha <= 0.5 {
+        alpha / (1.0 - alpha)
+    } else {
+        (1.0 - alpha) / alpha
+    };
+    (w1 + xi) / (2.0 * w1 * xi + xi * xi + 1.0).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn lifts() -> Vec<Lift> {
+        vec![
+            Lift::Perspective,
+            Lift::Equidistant,
+            Lift::Unified {
+                alpha: 0.6,
+                beta: 1.1,
+            },
+            Lift::Unified {
+                alpha: 0.3,
+                beta: 0.9,
+            },
+            Lift::Mei { xi: 0.8 },
+            Lift::Mei { xi: 1.4 },
+            Lift::DoubleSphere {
+                xi: -0.2,
+                alpha: 0.59,
+            },
+            Lift::DoubleSphere { xi: 0.4, alpha: 0.3 },
+            Lift::Division { k: -0.2 },
+            Lift::Division { k: 0.15 },
+            Lift::Fov {
+                omega: 0.9,
+                c: 2.0 * 0.45f64.tan(),
+            },
+            Lift::OCam {
+                pol: vec![-1.0, 0.0, 0.4, -0.02],
+                invpol: vec![],
+                rho_max: 2.0,
+            },
+            Lift::FTheta {
+                bw: Some(vec![0.0, 1.0, 0.05, -0.01]),
+                fw: None,
+                rho_max: 2.5,
+                theta_max: 3.0,
+            },
+            Lift::FTheta {
+                bw: None,
+                fw: Some(vec![0.0, 1.0, -0.04, 0.002]),
+                rho_max: 2.5,
+                theta_max: 2.5,
+            },
+        ]
+    }
+
+    #[test]
+    fn jacobians_match_finite_differences() {
+        let mut lifts = lifts();
+        lifts.push(Lift::Equirect { w: 6.0, h: 3.0 });
+        for l in &lifts {
+            for m in [[0.3, -0.2], [-0.5, 0.41], [0.05, 0.7], [1.2, 0.9]] {
+                let Some((_, j)) = l.lift(m) else { continue };
+                let h = 1e-6;
+                for k in 0..2 {
+                    let (mut a, mut b) = (m, m);
+                    a[k] += h;
+                    b[k] -= h;
+                    let (Some((fa, _)), Some((fb, _))) = (l.lift(a), l.lift(b)) else {
+                        continue;
+                    };
+                    for i in 0..3 {
+                        let fd = (fa[i] - fb[i]) / (2.0 * h);
+                        assert!(
+                            (fd - j[i][k]).abs() < 1e-6 * (1.0 + fd.abs()),
+                            "{l:?} m {m:?} ∂V{i}/∂m{k}: fd {fd} vs {}",
+                            j[i][k]
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn unlift_inverts_lift(x in -1.6f64..1.6, y in -1.6f64..1.6) {
+            for l in lifts() {
+                let Some((v, _)) = l.lift([x, y]) else { continue };
+                let m = l.unlift(v);
+                prop_assert!(m.is_some(), "{:?}: valid point ({}, {}) has a ray {:?} that does not unlift", l, x, y, v);
+                let m = m.unwrap();
+                prop_assert!((m[0] - x).abs() < 1e-9 && (m[1] - y).abs() < 1e-9, "{:?}: ({}, {}) came back as {:?}", l, x, y, m);
+            }
+        }
+
+        #[test]
+        fn lift_inverts_unlift(x in -1.0f64..1.0, y in -1.0f64..1.0, z in -1.0f64..1.0) {
+            let mut lifts = lifts();
+            lifts.push(Lift::Equirect { w: 6.0, h: 3.0 });
+            for l in lifts {
+                let Some(m) = l.unlift([x, y, z]) else { continue };
+                let lifted = l.lift(m);
+                prop_assert!(lifted.is_some(), "{:?}: ray ({}, {}, {}) unlifted to {:?}, which does not lift", l, x, y, z, m);
+                let (v, _) = lifted.unwrap();
+                let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+                let d = (x * x + y * y + z * z).sqrt();
+                for (a, b) in v.iter().zip([x, y, z]) {
+                    prop_assert!((a / n - b / d).abs() < 1e-9, "{:?}: ({}, {}, {}) → {:?} → {:?}", l, x, y, z, m, v);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn wide_models_see_behind_the_camera() {
+        // Equidistant at |m| = 2.5 rad (143° off axis), Mei with ξ > 1, double sphere, equirect.
+        assert!(Lift::Equidistant.lift([2.5, 0.0]).unwrap().0[2] < 0.0);
+        let mei = Lift::Mei { xi: 1.4 };
+        assert!(mei.lift([0.9, 0.0]).unwrap().0[2] < 0.0);
+        assert!(
+            mei.lift([1.0 / (1.4f64 * 1.4 - 1.0).sqrt() + 1e-6, 0.0])
+                .is_none()
+        );
+        assert!(Lift::Division { k: -0.2 }.lift([3.0, 0.0]).unwrap().0[2] < 0.0);
+        assert!(Lift::Equirect { w: 4.0, h: 2.0 }.lift([0.1, 1.0]).unwrap().0[2] < 0.0);
+        assert!(Lift::Perspective.unlift([0.0, 0.0, -1.0]).is_none());
+    }
+}

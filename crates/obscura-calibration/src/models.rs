@@ -1,0 +1,648 @@
+//! Every calibration model, as one pipeline in f64.
+//!
+//! Pixel → ray (what rendering needs, "unprojection" in computer-vision terms):
+//!
+//! ```text
+//! pixel (u, v) ─A⁻¹─▶ m_t ─tilt⁻¹─▶ m_d ─undistort─▶ m ─lift─▶ V (camera space, y down)
+//! ```
+//!
+//! - `A`, `c`: the intrinsic affine map `pixel = A·m_t + c` (`A = [[fx, s], [0, fy]]` for the
+//!   pinhole family, OCamCalib's `[c d; e 1]` with its row/column swap, f-theta's linear term);
+//! - tilt: OpenCV's tilted-sensor homography (14-coefficient model only);
+//! - undistort: the exact inverse of the model's polynomial distortion
+//!   ([`crate::distortion`]), on the perspective plane (`m = (x/z, y/z)`) or the equidistant plane
+//!   (`m = θ·(x, y)/|(x, y)|`) of COLMAP's fisheye models;
+//! - lift: the model's ray of `m` ([`crate::lift`]): pinhole, equidistant, unified/EUCM, Mei,
+//!   double sphere, division, FOV, equirectangular, OCamCalib's `pol`, f-theta's angle polynomial.
+//!
+//! Ray → pixel ("projection" in CV terms) runs the same stages forward. Each stage's Jacobian is
+//! chained analytically so the projection can size each ray's footprint.
+//!
+//! Pixel coordinates here are the model's own (its library's pixel convention); the projection
+//! converts from raster space.
+
+use crate::distortion::{Distortion, Tilt};
+use crate::lift::Lift;
+use crate::solve::{self, Mat2, Mat32, apply2, inv2, mul2, mul32};
+
+/// Where a library puts pixel centres, relative to raster space (top-left image corner at (0, 0)).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PixelConvention {
+    /// COLMAP: the top-left pixel's centre is (0.5, 0.5); model pixel = raster position.
+    Colmap,
+    /// OpenCV (and Kalibr, basalt, OCamCalib's `calib_results.txt`, NVIDIA): the top-left pixel's
+    /// centre is (0, 0); model pixel = raster position − 0.5.
+    OpenCv,
+    /// MATLAB (OCamCalib's workspace values, 1-based): the top-left pixel's centre is (1, 1); model
+    /// pixel = raster position + 0.5.
+    Matlab,
+}
+
+impl PixelConvention {
+    /// The name the `pixelConvention` parameter uses.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            PixelConvention::Colmap => "colmap",
+            PixelConvention::OpenCv => "opencv",
+            PixelConvention::Matlab => "matlab",
+        }
+    }
+
+    /// Model pixel coordinate minus raster coordinate.
+    #[must_use]
+    pub fn shift(self) -> f64 {
+        match self {
+            PixelConvention::Colmap => 0.0,
+            PixelConvention::OpenCv => -0.5,
+            PixelConvention::Matlab => 0.5,
+        }
+    }
+}
+
+/// One model the `model` parameter names: its parameters in the source library's order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModelInfo {
+    /// The name (COLMAP's for ids 0–17).
+    pub name: &'static str,
+    /// The parameter names in order, as the source library lists them.
+    pub params: &'static str,
+    /// The accepted `params` counts.
+    pub counts: &'static [usize],
+    /// The pixel convention `pixelConvention "auto"` picks.
+    pub convention: PixelConvention,
+    /// True for the models that take `polynomial`/`inversePolynomial`.
+    pub polynomials: bool,
+}
+
+const fn info(
+    name: &'static str,
+    params: &'static str,
+    counts: &'static [usize],
+    convention: PixelConvention,
+    polynomials: bool,
+) -> ModelInfo {
+    ModelInfo {
+        name,
+        params,
+        counts,
+        convention,
+        polynomials,
+    }
+}
+
+use PixelConvention::{Colmap as C, OpenCv as O};
+
+/// Every model, COLMAP's ids 0–17 first in id order.
+pub const MODELS: [ModelInfo; 25] = [
+    info("SIMPLE_PINHOLE", "f, cx, cy", &[3], C, false),
+    info("PINHOLE", "fx, fy, cx, cy", &[4], C, false),
+    info("SIMPLE_RADIAL", "f, cx, cy, k", &[4], C, false),
+    info("RADIAL", "f, cx, cy, k1, k2", &[5], C, false),
+    info("OPENCV", "fx, fy, cx, cy, k1, k2, p1, p2", &[8], C, false),
+    info("OPENCV_FISHEYE", "fx, fy, cx, cy, k1, k2, k3, k4", &[8], C, false),
+    info(
+        "FULL_OPENCV",
+        "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6",
+        &[12],
+        C,
+        false,
+    ),
+    info("FOV", "fx, fy, cx, cy, omega", &[5], C, false),
+    info("SIMPLE_RADIAL_FISHEYE", "f, cx, cy, k", &[4], C, false),
+    info("RADIAL_FISHEYE", "f, cx, cy, k1, k2", &[5], C, false),
+    info(
+        "THIN_PRISM_FISHEYE",
+        "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1",
+        &[12],
+        C,
+        false,
+    ),
+    info(
+        "RAD_TAN_THIN_PRISM_FISHEYE",
+        "fx, fy, cx, cy, k0, k1, k2, k3, k4, k5, p0, p1, s0, s1, s2, s3",
+        &[16],
+        C,
+        false,
+    ),
+    info("SIMPLE_DIVISION", "f, cx, cy, k", &[4], C, false),
+    info("DIVISION", "fx, fy, cx, cy, k", &[5], C, false),
+    info("SIMPLE_FISHEYE", "f, cx, cy", &[3], C, false),
+    info("FISHEYE", "fx, fy, cx, cy", &[4], C, false),
+    info("EUCM", "fx, fy, cx, cy, alpha, beta", &[6], C, false),
+    info("EQUIRECTANGULAR", "w, h", &[2], C, false),
+    info(
+        "OPENCV_PINHOLE",
+        "fx, fy, cx, cy, k1, k2, p1, p2 [, k3 [, k4, k5, k6 [, s1, s2, s3, s4 [, taux, tauy]]]]",
+        &[8, 9, 12, 16, 18],
+        O,
+        false,
+    ),
+    info(
+        "OPENCV_OMNIDIR",
+        "fx, fy, cx, cy, s, xi, k1, k2, p1, p2",
+        &[10],
+        O,
+        false,
+    ),
+    info("UCM", "fx, fy, cx, cy, alpha", &[5], O, false),
+    info("DOUBLE_SPHERE", "fx, fy, cx, cy, xi, alpha", &[6], O, false),
+    info("KANNALA_BRANDT", "fx, fy, cx, cy, k1, k2, k3, k4", &[8], O, false),
+    info("OCAMCALIB", "xc, yc, c, d, e", &[5], O, true),
+    info("FTHETA", "cx, cy [, maxAngle [, c, d, e]]", &[2, 3, 6], O, true),
+];
+
+/// The names of [`MODELS`], in order.
+pub const MODEL_NAMES: [&str; 25] = {
+    let mut names = [""; 25];
+    let mut i = 0;
+    while i < 25 {
+        names[i] = MODELS[i].name;
+        i += 1;
+    }
+    names
+};
+
+/// Looks a model up by name.
+#[must_use]
+pub fn model_info(name: &str) -> Option<&'static ModelInfo> {
+    MODELS.iter().find(|m| m.name == name)
+}
+
+/// A calibrated camera model, ready to map pixels to rays and back, exactly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraModel {
+    info: &'static ModelInfo,
+    a: Mat2,
+    a_inv: Mat2,
+    c: [f64; 2],
+    tilt: Option<Tilt>,
+    distortion: Option<Distortion>,
+    lift: Lift,
+}
+
+/// A ray of a pixel with its derivative: `v` is the (not unit) ray in OpenCV camera space (y down),
+/// `dv` its derivative by the model pixel `(u, v)` (columns).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelRay {
+    /// The ray, any positive length.
+    pub v: [f64; 3],
+    /// `∂v/∂u` and `∂v/∂v` as the two columns of a 3×2 matrix, row-major.
+    pub dv: [[f64; 2]; 3],
+}
+
+/// Checks a value is positive.
+fn positive(model: &str, name: &str, x: f64) -> Result<f64, String> {
+    if x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("model {model}: {name} must be > 0, got {x}"))
+    }
+}
+
+fn within(model: &str, name: &str, x: f64, lo: f64, hi: f64) -> Result<f64, String> {
+    if (lo..=hi).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("model {model}: {name} must lie in [{lo}, {hi}], got {x}"))
+    }
+}
+
+impl CameraModel {
+    /// Builds a model from its parameters in the source library's order (see [`MODELS`]);
+    /// `polynomial` and `inverse_polynomial` only for OCAMCALIB (`pol`, `invpol`) and FTHETA (the
+    /// backward pixel-distance → angle and forward angle → pixel-distance polynomials), ascending.
+    /// `width` and `height` are the calibration image's size, in pixels.
+    ///
+    /// # Errors
+    /// A message naming the model and what is wrong: an unknown model, a wrong parameter count (with
+    /// the expected names), a parameter out of its range, a polynomial given to a model without one.
+    pub fn new(
+        model: &str,
+        params: &[f64],
+        polynomial: &[f64],
+        inverse_polynomial: &[f64],
+        width: f64,
+        height: f64,
+    ) -> Result<Self, String> {
+        let info = model_info(model).ok_or_else(|| {
+            let hint = obscura_sdk::did_you_mean(model, MODEL_NAMES)
+                .map(|h| format!(" (did you mean \"{h}\"?)"))
+                .unwrap_or_default();
+            format!(
+                "unknown model \"{model}\"{hint}; known models: {}",
+                MODEL_NAMES.join(", ")
+            )
+        })?;
+        if !info.counts.contains(&params.len()) {
+            let counts: Vec<String> = info.counts.iter().map(|c| c.to_string()).collect();
+            return Err(format!(
+                "model {model} takes {} params ({}), got {}",
+                counts.join(", ").replace(", ", " or "),
+                info.params,
+                params.len()
+            ));
+        }
+        if let Some(bad) = params.iter().find(|x| !x.is_finite()) {
+            return Err(format!("model {model}: params must be finite, got {bad}"));
+        }
+        if !info.polynomials && (!polynomial.is_empty() || !inverse_polynomial.is_empty()) {
+            return Err(format!(
+                "model {model} takes no polynomial or inversePolynomial (only OCAMCALIB and FTHETA do)"
+            ));
+        }
+        let p = params;
+        let diag = |fx: f64, fy: f64| [[fx, 0.0], [0.0, fy]];
+        let zero6 = [0.0; 6];
+        let radial = |k: &[f64]| {
+            let mut n = zero6;
+            n[..k.len()].copy_from_slice(k);
+            n
+        };
+        let plain = |k: &[f64]| Distortion::new(radial(k), [0.0; 3], [0.0; 2], [0.0; 4], false);
+        let focal1 = |f: f64| positive(model, "f", f).map(|f| diag(f, f));
+        let focal2 =
+            |fx: f64, fy: f64| Ok::<_, String>(diag(positive(model, "fx", fx)?, positive(model, "fy", fy)?));
+        let mut tilt = None;
+        let (a, c, distortion, lift) = match info.name {
+            "SIMPLE_PINHOLE" => (focal1(p[0])?, [p[1], p[2]], None, Lift::Perspective),
+            "PINHOLE" => (focal2(p[0], p[1])?, [p[2], p[3]], None, Lift::Perspective),
+            "SIMPLE_RADIAL" | "RADIAL" => (
+                focal1(p[0])?,
+                [p[1], p[2]],
+                Some(plain(&p[3..])),
+                Lift::Perspective,
+            ),
+            "OPENCV" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                Some(Distortion::new(
+                    radial(&p[4..6]),
+                    [0.0; 3],
+                    [p[6], p[7]],
+                    [0.0; 4],
+                    false,
+                )),
+                Lift::Perspective,
+            ),
+            "OPENCV_FISHEYE" | "KANNALA_BRANDT" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                Some(plain(&p[4..8])),
+                Lift::Equidistant,
+            ),
+            "FULL_OPENCV" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                Some(Distortion::new(
+                    radial(&[p[4], p[5], p[8]]),
+                    [p[9], p[10], p[11]],
+                    [p[6], p[7]],
+                    [0.0; 4],
+                    false,
+                )),
+                Lift::Perspective,
+            ),
+            "FOV" => {
+                let omega = p[4];
+                if !(omega > 0.0 && omega < std::f64::consts::PI) {
+                    return Err(format!(
+                        "model FOV: omega must lie in (0, π) radians, got {omega}"
+                    ));
+                }
+                let lift = Lift::Fov {
+                    omega,
+                    c: 2.0 * (0.5 * omega).tan(),
+                };
+                (focal2(p[0], p[1])?, [p[2], p[3]], None, lift)
+            }
+            "SIMPLE_RADIAL_FISHEYE" | "RADIAL_FISHEYE" => (
+                focal1(p[0])?,
+                [p[1], p[2]],
+                Some(plain(&p[3..])),
+                Lift::Equidistant,
+            ),
+            "THIN_PRISM_FISHEYE" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                Some(Distortion::new(
+                    radial(&[p[4], p[5], p[8], p[9]]),
+                    [0.0; 3],
+                    [p[6], p[7]],
+                    [p[10], 0.0, p[11], 0.0],
+                    false,
+                )),
+                Lift::Equidistant,
+            ),
+            "RAD_TAN_THIN_PRISM_FISHEYE" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                // Aria's p0 multiplies (r² + 2x²) (OpenCV's p2), its p1 (r² + 2y²) (OpenCV's p1).
+                Some(Distortion::new(
+                    radial(&p[4..10]),
+                    [0.0; 3],
+                    [p[11], p[10]],
+                    [p[12], p[13], p[14], p[15]],
+                    true,
+                )),
+                Lift::Equidistant,
+            ),
+            "SIMPLE_DIVISION" => (focal1(p[0])?, [p[1], p[2]], None, Lift::Division { k: p[3] }),
+            "DIVISION" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                None,
+                Lift::Division { k: p[4] },
+            ),
+            "SIMPLE_FISHEYE" => (focal1(p[0])?, [p[1], p[2]], None, Lift::Equidistant),
+            "FISHEYE" => (focal2(p[0], p[1])?, [p[2], p[3]], None, Lift::Equidistant),
+            "EUCM" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                None,
+                Lift::Unified {
+                    alpha: within(model, "alpha", p[4], 0.0, 1.0)?,
+                    beta: positive(model, "beta", p[5])?,
+                },
+            ),
+            "EQUIRECTANGULAR" => (
+                solve::I2,
+                [0.0, 0.0],
+                None,
+                Lift::Equirect {
+                    w: positive(model, "w", p[0])?,
+                    h: positive(model, "h", p[1])?,
+                },
+            ),
+            "OPENCV_PINHOLE" => {
+                let k = |i: usize| p.get(i).copied().unwrap_or(0.0);
+                let d = Distortion::new(
+                    radial(&[k(4), k(5), k(8)]),
+                    [k(9), k(10), k(11)],
+                    [k(6), k(7)],
+                    [k(12), k(13), k(14), k(15)],
+                    false,
+                );
+                if p.len() == 18 {
+                    tilt = Some(Tilt::new(p[16], p[17]).ok_or_else(|| {
+                        format!(
+                            "model {model}: the sensor tilt taux {}, tauy {} is degenerate",
+                            p[16], p[17]
+                        )
+                    })?);
+                }
+                (focal2(p[0], p[1])?, [p[2], p[3]], Some(d), Lift::Perspective)
+            }
+            "OPENCV_OMNIDIR" => {
+                let a = [
+                    [positive(model, "fx", p[0])?, p[4]],
+                    [0.0, positive(model, "fy", p[1])?],
+                ];
+                let xi = p[5];
+                if xi < 0.0 {
+                    return Err(format!("model {model}: xi must be ≥ 0, got {xi}"));
+                }
+                let d = Distortion::new(radial(&p[6..8]), [0.0; 3], [p[8], p[9]], [0.0; 4], false);
+                (a, [p[2], p[3]], Some(d), Lift::Mei { xi })
+            }
+            "UCM" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                None,
+                Lift::Unified {
+                    alpha: within(model, "alpha", p[4], 0.0, 1.0)?,
+                    beta: 1.0,
+                },
+            ),
+            "DOUBLE_SPHERE" => (
+                focal2(p[0], p[1])?,
+                [p[2], p[3]],
+                None,
+                Lift::DoubleSphere {
+                    xi: within(model, "xi", p[4], -1.0, 1.0)?,
+                    alpha: within(model, "alpha", p[5], 0.0, 1.0)?,
+                },
+            ),
+            "OCAMCALIB" => {
+                let (xc, yc, cc, dd, ee) = (p[0], p[1], p[2], p[3], p[4]);
+                if polynomial.is_empty() {
+                    return Err(format!(
+                        "model {model} needs polynomial (OCamCalib's pol a0 a1 … aN, ascending, without the count)"
+                    ));
+                }
+                if polynomial[0] >= 0.0 {
+                    return Err(format!(
+                        "model {model}: pol's a0 must be < 0 (OCamCalib's camera looks down its −z axis), got {}",
+                        polynomial[0]
+                    ));
+                }
+                // OCamCalib: row = c·x + d·y + xc, column = e·x + y + yc, with (x, y) its sensor
+                // frame. With m = (y, x) (x right, y down): u = m.x + e·m.y + yc, v = d·m.x + c·m.y + xc.
+                let a = [[1.0, ee], [dd, cc]];
+                let rho_limit = 2.0 * width.hypot(height);
+                let pol = polynomial.to_vec();
+                let rho_max = fold_1d(rho_limit, |r| {
+                    let (pv, dp) = solve::poly(&pol, r);
+                    -pv + r * dp > 0.0 && pv.is_finite()
+                });
+                let lift = Lift::OCam {
+                    pol,
+                    invpol: inverse_polynomial.to_vec(),
+                    rho_max,
+                };
+                (a, [yc, xc], None, lift)
+            }
+            "FTHETA" => {
+                let max_angle = if p.len() >= 3 { p[2] } else { std::f64::consts::PI };
+                if max_angle <= 0.0 {
+                    return Err(format!(
+                        "model {model}: maxAngle must be > 0 radians, got {max_angle}"
+                    ));
+                }
+                let (cc, dd, ee) = if p.len() == 6 {
+                    (p[3], p[4], p[5])
+                } else {
+                    (1.0, 0.0, 0.0)
+                };
+                let a = [[cc, dd], [ee, 1.0]];
+                let (bw, fw) = (
+                    (!polynomial.is_empty()).then(|| polynomial.to_vec()),
+                    (!inverse_polynomial.is_empty()).then(|| inverse_polynomial.to_vec()),
+                );
+                for (poly, what) in [
+                    (&bw, "polynomial (pixel distance → angle)"),
+                    (&fw, "inversePolynomial (angle → pixel distance)"),
+                ] {
+                    if let Some(c) = poly
+                        && c[0].abs() > 1e-6
+                    {
+                        return Err(format!(
+                            "model {model}: {what} must be 0 at 0 (its constant term is {})",
+                            c[0]
+                        ));
+                    }
+                }
+                let theta_limit = max_angle.min(std::f64::consts::PI);
+                let rho_limit = 2.0 * width.hypot(height);
+                let (rho_max, theta_max) = match (&bw, &fw) {
+                    (Some(b), _) => {
+                        let r = fold_1d(rho_limit, |r| {
+                            let (t, dt) = solve::poly(b, r);
+                            dt > 0.0 && t <= theta_limit
+                        });
+                        (r, solve::poly(b, r).0.min(theta_limit))
+                    }
+                    (None, Some(f)) => {
+                        let t = fold_1d(theta_limit, |t| {
+                            let (r, dr) = solve::poly(f, t);
+                            dr > 0.0 && r <= rho_limit
+                        });
+                        (solve::poly(f, t).0, t)
+                    }
+                    (None, None) => {
+                        return Err(format!(
+                            "model {model} needs polynomial (backward: pixel distance → angle) or inversePolynomial (forward: angle → pixel distance)"
+                        ));
+                    }
+                };
+                let lift = Lift::FTheta {
+                    bw,
+                    fw,
+                    rho_max,
+                    theta_max,
+                };
+                (a, [p[0], p[1]], None, lift)
+            }
+            other => unreachable!("model {other} is listed in MODELS but not built"),
+        };
+        let a_inv =
+            inv2(&a).ok_or_else(|| format!("model {model}: the intrinsic matrix {a:?} is singular"))?;
+        if a[0][0] * a[1][1] - a[0][1] * a[1][0] < 0.0 {
+            return Err(format!(
+                "model {model}: the intrinsic matrix {a:?} mirrors the image"
+            ));
+        }
+        let distortion = match distortion {
+            Some(d) if !d.is_identity() => {
+                let mut d = d;
+                d.finish(lift.plane_limit());
+                Some(d)
+            }
+            _ => None,
+        };
+        Ok(CameraModel {
+            info,
+            a,
+            a_inv,
+            c,
+            tilt,
+            distortion,
+            lift,
+        })
+    }
+
+    /// The model's table entry.
+    #[must_use]
+    pub fn info(&self) -> &'static ModelInfo {
+        self.info
+    }
+
+    /// The largest radius of the undistorted plane that is valid (the fold or the plane's end).
+    #[must_use]
+    pub fn max_radius(&self) -> f64 {
+        let plane = self.lift.plane_limit();
+        self.distortion
+            .as_ref()
+            .map_or(plane, |d| d.max_radius.min(plane))
+    }
+
+    /// True for the models whose rays are all pinhole rays through an image plane (`V = (x, y, 1)`).
+    #[must_use]
+    pub fn is_planar(&self) -> bool {
+        self.lift == Lift::Perspective
+    }
+
+    /// True when some valid ray may point at or behind the camera plane (z ≤ 0).
+    #[must_use]
+    pub fn may_leave_front(&self) -> bool {
+        self.lift.may_leave_front(self.max_radius())
+    }
+
+    /// The ray through model pixel `(u, v)` with its derivative, or `None` where the model has no
+    /// ray (beyond a fold, outside a unified model's circle, past a pole, …).
+    #[inline]
+    #[must_use]
+    pub fn pixel_to_ray(&self, px: [f64; 2]) -> Option<PixelRay> {
+        let mt = apply2(&self.a_inv, [px[0] - self.c[0], px[1] - self.c[1]]);
+        let mut jac = self.a_inv;
+        let md = match &self.tilt {
+            Some(t) => {
+                let (md, jt) = t.inverse(mt)?;
+                jac = mul2(&jt, &jac);
+                md
+            }
+            None => mt,
+        };
+        let m = match &self.distortion {
+            Some(d) => {
+                let (m, jd) = d.inverse(md)?;
+                jac = mul2(&jd, &jac);
+                m
+            }
+            None => md,
+        };
+        let (v, jl): ([f64; 3], Mat32) = self.lift.lift(m)?;
+        Some(PixelRay {
+            v,
+            dv: mul32(&jl, &jac),
+        })
+    }
+
+    /// The model pixel where the ray `d` (OpenCV camera space, any length) is seen, or `None` when
+    /// the model does not see it.
+    #[inline]
+    #[must_use]
+    pub fn ray_to_pixel(&self, d: [f64; 3]) -> Option<[f64; 2]> {
+        let m = self.lift.unlift(d)?;
+        let md = match &self.distortion {
+            Some(dist) => {
+                if m[0] * m[0] + m[1] * m[1] > dist.max_radius * dist.max_radius {
+                    return None;
+                }
+                dist.forward(m).0
+            }
+            None => m,
+        };
+        let mt = match &self.tilt {
+            Some(t) => t.forward(md)?.0,
+            None => md,
+        };
+        let p = apply2(&self.a, mt);
+        let px = [p[0] + self.c[0], p[1] + self.c[1]];
+        (px[0].is_finite() && px[1].is_finite()).then_some(px)
+    }
+}
+
+/// The first value in `(0, limit]` where `ok` fails (scanned in 4096 steps, then bisected), or
+/// `limit` when it holds throughout.
+fn fold_1d(limit: f64, ok: impl Fn(f64) -> bool) -> f64 {
+    const STEPS: usize = 4096;
+    let mut prev = 0.0;
+    for i in 1..=STEPS {
+        let x = limit * i as f64 / STEPS as f64;
+        if !ok(x) {
+            let (mut lo, mut hi) = (prev, x);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if ok(mid) {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            return lo;
+        }
+        prev = x;
+    }
+    limit
+}

@@ -1,0 +1,401 @@
+//! `CalibratedCamera`: render exactly through a real camera's calibration.
+//!
+//! # Parameters
+//!
+//! | parameter | meaning |
+//! |---|---|
+//! | `string model` | one of [`MODEL_NAMES`]: COLMAP's names for its ids 0–17, then `OPENCV_PINHOLE`, `OPENCV_OMNIDIR`, `UCM`, `DOUBLE_SPHERE`, `KANNALA_BRANDT`, `OCAMCALIB`, `FTHETA` |
+//! | `float[] params` | the model's scalars in the source library's order and units ([`MODELS`] lists each model's names) |
+//! | `float[] polynomial` | OCAMCALIB's `pol` (a0 … aN, ascending, as `calib_results.txt`'s first polynomial line without its count); FTHETA's backward polynomial (pixel distance → angle, radians) |
+//! | `float[] inversePolynomial` | OCAMCALIB's `invpol`; FTHETA's forward polynomial (angle → pixel distance) |
+//! | `int[2] resolution` | width and height of the calibration image, in pixels |
+//! | `string pixelConvention` | `auto`, `colmap`, `opencv` or `matlab` |
+//!
+//! Parameter lists per model (in order):
+//!
+//! - COLMAP ids 0–17, exactly as COLMAP's `models.h`: `SIMPLE_PINHOLE` f cx cy; `PINHOLE` fx fy cx cy;
+//!   `SIMPLE_RADIAL` f cx cy k; `RADIAL` f cx cy k1 k2; `OPENCV` fx fy cx cy k1 k2 p1 p2;
+//!   `OPENCV_FISHEYE` fx fy cx cy k1 k2 k3 k4; `FULL_OPENCV` fx fy cx cy k1 k2 p1 p2 k3 k4 k5 k6;
+//!   `FOV` fx fy cx cy omega; `SIMPLE_RADIAL_FISHEYE` f cx cy k; `RADIAL_FISHEYE` f cx cy k1 k2;
+//!   `THIN_PRISM_FISHEYE` fx fy cx cy k1 k2 p1 p2 k3 k4 sx1 sy1; `RAD_TAN_THIN_PRISM_FISHEYE` fx fy
+//!   cx cy k0 … k5 p0 p1 s0 … s3; `SIMPLE_DIVISION` f cx cy k; `DIVISION` fx fy cx cy k;
+//!   `SIMPLE_FISHEYE` f cx cy; `FISHEYE` fx fy cx cy; `EUCM` fx fy cx cy alpha beta;
+//!   `EQUIRECTANGULAR` w h.
+//! - `OPENCV_PINHOLE`: fx fy cx cy, then OpenCV's `distCoeffs` in OpenCV's order
+//!   k1 k2 p1 p2 [k3 [k4 k5 k6 [s1 s2 s3 s4 [τx τy]]]] — 4, 5, 8, 12 or 14 coefficients (τ in radians).
+//! - `OPENCV_OMNIDIR` (Mei's unified model as `cv::omnidir`): fx fy cx cy s xi k1 k2 p1 p2, with the
+//!   skew `s` as `K = [[fx, s, cx], [0, fy, cy]]`.
+//! - `UCM` fx fy cx cy alpha — Usenko et al.'s formulation `u = fx·x/(α·d + (1 − α)·z) + cx`,
+//!   `d = |X|`. The classic ξ form (Geyer, Mei: `u = γx·x/(z + ξ·d) + cx`) is the same camera with
+//!   `α = ξ/(1 + ξ)` and `fx = γx/(1 + ξ)` (likewise fy).
+//! - `DOUBLE_SPHERE` fx fy cx cy xi alpha (Usenko et al. 2018). `KANNALA_BRANDT` = `OPENCV_FISHEYE`
+//!   (fx fy cx cy k1 k2 k3 k4) with OpenCV's pixel convention.
+//! - `OCAMCALIB` xc yc c d e, with `polynomial` = `pol` and `inversePolynomial` = `invpol`
+//!   (optional). As in OCamCalib, **xc is the row and yc the column** of the centre, and a sensor
+//!   point (x, y) is seen at row `c·x + d·y + xc`, column `e·x + y + yc`; the ray of a pixel is
+//!   `(x, y, pol(ρ))` in OCamCalib's frame (x along rows, y along columns, looking down −z), i.e.
+//!   `(y, x, −pol(ρ))` in OpenCV's.
+//! - `FTHETA` (NVIDIA) cx cy [maxAngle [c d e]]: principal point, largest ray angle (radians,
+//!   default π) and the linear term `[c d; e 1]` (default identity): a sensor offset `m` is seen at
+//!   `(u, v) = [c d; e 1]·m + (cx, cy)`, at angle θ from the axis with `θ = polynomial(|m|)`. When
+//!   `polynomial` is given it is the reference and `inversePolynomial` only seeds the exact inverse;
+//!   with `inversePolynomial` alone, `|m| = inversePolynomial(θ)` is the reference.
+//!
+//! # Pixel conventions
+//!
+//! `colmap`: the top-left pixel's centre is (0.5, 0.5) (pixel (i, j) spans [i, i+1)), i.e. model
+//! pixel = raster position. `opencv`: the centre is (0, 0), model pixel = raster − 0.5. `matlab`:
+//! the centre is (1, 1), model pixel = raster + 0.5. `auto` picks colmap for COLMAP's ids 0–17, and
+//! opencv for OPENCV_PINHOLE, OPENCV_OMNIDIR, UCM, DOUBLE_SPHERE, KANNALA_BRANDT, FTHETA (NVIDIA counts
+//! pixel indices at pixel centres) and OCAMCALIB: OCamCalib itself is 1-based MATLAB, but its
+//! exported `calib_results.txt` subtracts 1 ("starting from 0 (C convention)"), so values from that
+//! file are opencv; values copied from MATLAB's `ocam_model` struct need `matlab`.
+//!
+//! # Placement
+//!
+//! The calibrated image spans the screen window exactly: the screen point `(sx, sy)` is the
+//! calibration raster position
+//!
+//! ```text
+//! u = (sx − l)/(r − l)·W_cal,    v = (t − sy)/(t − b)·H_cal
+//! ```
+//!
+//! (y down, continuous), then shifted to the model's pixel convention. A render at another
+//! resolution therefore shows the same camera (half size, 4K: same rays at corresponding screen
+//! points). A render whose frame aspect differs from the calibration's shows the calibrated image
+//! **resized** to the render's format, exactly as resizing the photograph would (COLMAP's
+//! `CameraModelRescale` with per-axis factors, OpenCV's `K` scaled by `W/W_cal`, `H/H_cal`): the
+//! mapping stays exact, the picture is stretched. To match pixel for pixel, render at the
+//! calibration's aspect (the CLI's `--calibration` sets the format from the file).
+//!
+//! # Camera space
+//!
+//! OpenCV and COLMAP use +Y **down** (and +Z forward); Obscura uses +Y up. The flip happens in one
+//! place: `project` writes `(X, −Y, Z)` of the model's unit ray, and `unproject` hands the model
+//! `(x, −y, z)` of the camera-space point. A point above the principal point (smaller v) appears at +Y.
+//!
+//! # Exactness
+//!
+//! Everything is evaluated in f64. Iterative inverses (the rad-tan and fisheye distortions,
+//! OCamCalib's and f-theta's polynomials) use Newton with analytic Jacobians, bracketed by bisection
+//! in one dimension and a trust region in two, iterate to the last bits (at most 100 steps) and
+//! accept a solution only when its residual is below 1e-11 in normalised coordinates; otherwise the
+//! sample is culled. Where a forward map folds over (a rational or polynomial distortion past its
+//! monotonic range, a polynomial angle map past its maximum), the region beyond the fold is invalid in
+//! both directions: `project` culls it, `unproject` returns `None`. No field of view is clamped to
+//! 180°: equidistant-type models reach θ = π (or their fold), unified/EUCM/double sphere/Mei reach
+//! their validity bounds, equirectangular covers the sphere.
+//!
+//! # Properties
+//!
+//! - FieldOfView: the angle across the narrower calibrated image side, through the principal point
+//!   (the angle from the principal ray to each edge midpoint's ray, summed; a culled edge point is
+//!   replaced by the last valid point on the way there). It may exceed 180°.
+//! - DicingHint Perspective for the pinhole-plane models (every ray `(x, y, 1)`: pinhole, radial,
+//!   OpenCV, FULL_OPENCV, OPENCV_PINHOLE), else Spherical.
+//! - DeepMetric RayLength when some valid ray may point at or behind the camera plane, else CameraZ.
+//! - Rays start at the origin (`origin_radius` 0); `ray_spread = ½·sqrt(αx·αy)` with αx, αy the
+//!   angle the direction turns per render pixel along x and y, from the analytic Jacobian.
+//! - Clipping: planes (`near/D.z`, `far/D.z`) for the Perspective hint, spheres otherwise.
+
+use std::sync::LazyLock;
+
+use obscura_sdk::{
+    DeepMetric, DicingHint, ParamDecl, ParamList, ParamValue, Params, PluginError, Point2, Projection,
+    ProjectionContext, ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue,
+    RayGeometry, ValueRange, Vec3,
+};
+
+use crate::NAME;
+use crate::models::{CameraModel, MODEL_NAMES, PixelConvention};
+
+/// The default camera: a 90° (horizontal) pinhole on a 640×480 image.
+const DEFAULT_PARAMS: [f32; 4] = [320.0, 320.0, 320.0, 240.0];
+
+static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
+    vec![
+        ParamDecl::string("model", "PINHOLE")
+            .choices(&MODEL_NAMES)
+            .doc("camera model: COLMAP's names (ids 0-17), OPENCV_PINHOLE, OPENCV_OMNIDIR, UCM, DOUBLE_SPHERE, KANNALA_BRANDT, OCAMCALIB, FTHETA"),
+        ParamDecl::float_list("params", &DEFAULT_PARAMS)
+            .doc("the model's parameters in the source library's order and units (e.g. PINHOLE: fx fy cx cy)"),
+        ParamDecl::float_list("polynomial", &[])
+            .doc("OCAMCALIB: pol a0..aN (ascending); FTHETA: backward polynomial, pixel distance -> angle (rad)"),
+        ParamDecl::float_list("inversePolynomial", &[])
+            .doc("OCAMCALIB: invpol (ascending); FTHETA: forward polynomial, angle (rad) -> pixel distance"),
+        ParamDecl::int_array("resolution", &[640, 480])
+            .range(ValueRange::closed(1.0, 1e6))
+            .doc("width and height of the calibration image in pixels (required with model or params)"),
+        ParamDecl::string("pixelConvention", "auto")
+            .choices(&["auto", "colmap", "opencv", "matlab"])
+            .doc("pixel centres: colmap (top-left at 0.5,0.5), opencv (at 0,0), matlab (at 1,1); auto = the model's library"),
+    ]
+});
+
+/// Creates [`CalibratedCamera`] projections.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct CalibratedCameraFactory;
+
+fn invalid(message: String) -> PluginError {
+    PluginError::Invalid {
+        plugin: NAME.to_string(),
+        message,
+    }
+}
+
+impl ProjectionFactory for CalibratedCameraFactory {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn summary(&self) -> &str {
+        "a real camera's calibration (COLMAP, OpenCV, Kalibr, OCamCalib, f-theta models), exact both ways"
+    }
+
+    fn param_table(&self) -> &[ParamDecl] {
+        &TABLE
+    }
+
+    fn create_projection(
+        &self,
+        env: &mut ProjectionEnvironment,
+        params: &ParamList,
+    ) -> Result<Box<dyn Projection>, PluginError> {
+        let p = Params::resolve(NAME, &TABLE, params)?;
+        let model = p.string("model")?;
+        if (p.is_given("model") || p.is_given("params")) && !p.is_given("resolution") {
+            return Err(invalid(format!(
+                "resolution is required with a calibration (model {model}): give \"int[2] resolution\" [width height] of the calibration image"
+            )));
+        }
+        let resolution = match params.get("resolution").map(|e| &e.value) {
+            Some(ParamValue::Ints(v)) if v.len() == 2 => [v[0], v[1]],
+            _ => [640, 480],
+        };
+        let to64 = |v: &[f32]| v.iter().map(|&x| x as f64).collect::<Vec<f64>>();
+        let convention = match p.string("pixelConvention")? {
+            "colmap" => Some(PixelConvention::Colmap),
+            "opencv" => Some(PixelConvention::OpenCv),
+            "matlab" => Some(PixelConvention::Matlab),
+            _ => None,
+        };
+        let camera = CameraModel::new(
+            model,
+            &to64(p.float_list("params")?),
+            &to64(p.float_list("polynomial")?),
+            &to64(p.float_list("inversePolynomial")?),
+            resolution[0] as f64,
+            resolution[1] as f64,
+        )
+        .map_err(invalid)?;
+        let c = CalibratedCamera::new(env, camera, resolution, convention);
+        env.set_deep_metric(c.deep_metric);
+        Ok(Box::new(c))
+    }
+}
+
+/// A projection through a calibrated camera model (see the module documentation).
+#[derive(Debug, Clone)]
+pub struct CalibratedCamera {
+    model: CameraModel,
+    convention: PixelConvention,
+    /// Model pixel `u = su·sx + ou`, `v = sv·sy + ov`.
+    su: f64,
+    ou: f64,
+    sv: f64,
+    ov: f64,
+    /// `sqrt` of the product of the calibration pixels per render pixel along x and y.
+    pixel_scale: f64,
+    planar: bool,
+    near: f32,
+    far: f32,
+    fov: f32,
+    deep_metric: DeepMetric,
+}
+
+impl CalibratedCamera {
+    /// A projection of `model` for a calibration image of `resolution` (width, height), placed on
+    /// `env`'s screen window; `convention` `None` is the model's own (`auto`).
+    #[must_use]
+    pub fn new(
+        env: &ProjectionEnvironment,
+        model: CameraModel,
+        resolution: [i32; 2],
+        convention: Option<PixelConvention>,
+    ) -> Self {
+        let convention = convention.unwrap_or(model.info().convention);
+        let w = env.screen_window();
+        let (wc, hc) = (resolution[0] as f64, resolution[1] as f64);
+        let (l, r, b, t) = (w.left as f64, w.right as f64, w.bottom as f64, w.top as f64);
+        let shift = convention.shift();
+        let su = wc / (r - l);
+        let sv = -hc / (t - b);
+        let planar = model.is_planar();
+        let deep_metric = if model.may_leave_front() {
+            DeepMetric::RayLength
+        } else {
+            DeepMetric::CameraZ
+        };
+        let mut cam = CalibratedCamera {
+            su,
+            ou: -l * su + shift,
+            sv,
+            ov: t * hc / (t - b) + shift,
+            pixel_scale: (wc / env.width() as f64 * hc / env.height() as f64).sqrt(),
+            planar,
+            near: env.clipping_near(),
+            far: env.clipping_far(),
+            fov: 90.0,
+            deep_metric,
+            model,
+            convention,
+        };
+        cam.fov = cam.field_of_view(wc, hc) as f32;
+        cam
+    }
+
+    /// The calibration model.
+    #[must_use]
+    pub fn model(&self) -> &CameraModel {
+        &self.model
+    }
+
+    /// The pixel convention in use (after `auto` is resolved).
+    #[must_use]
+    pub fn convention(&self) -> PixelConvention {
+        self.convention
+    }
+
+    /// The unit ray (OpenCV camera space) at calibration raster position `(u, v)`.
+    fn raster_ray(&self, u: f64, v: f64) -> Option<[f64; 3]> {
+        let s = self.convention.shift();
+        let r = self.model.pixel_to_ray([u + s, v + s])?;
+        let n = (r.v[0] * r.v[0] + r.v[1] * r.v[1] + r.v[2] * r.v[2]).sqrt();
+        (n > 0.0 && n.is_finite()).then(|| [r.v[0] / n, r.v[1] / n, r.v[2] / n])
+    }
+
+    /// The angle across the narrower calibrated side through the principal point, in degrees.
+    fn field_of_view(&self, wc: f64, hc: f64) -> f64 {
+        let s = self.convention.shift();
+        let pp = self
+            .model
+            .ray_to_pixel([0.0, 0.0, 1.0])
+            .map(|p| [p[0] - s, p[1] - s])
+            .filter(|p| self.raster_ray(p[0], p[1]).is_some())
+            .unwrap_or([0.5 * wc, 0.5 * hc]);
+        let Some(axis) = self.raster_ray(pp[0], pp[1]) else {
+            return 90.0;
+        };
+        let ends = if wc <= hc {
+            [[0.0, pp[1]], [wc, pp[1]]]
+        } else {
+            [[pp[0], 0.0], [pp[0], hc]]
+        };
+        let mut total = 0.0;
+        for e in ends {
+            let at = |f: f64| self.raster_ray(pp[0] + f * (e[0] - pp[0]), pp[1] + f * (e[1] - pp[1]));
+            let ray = at(1.0).or_else(|| {
+                let (mut lo, mut hi) = (0.0, 1.0);
+                for _ in 0..50 {
+                    let mid = 0.5 * (lo + hi);
+                    if at(mid).is_some() {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                at(lo)
+            });
+            if let Some(d) = ray {
+                total += angle_between(axis, d);
+            }
+        }
+        let deg = total.to_degrees();
+        if deg.is_finite() && deg > 1e-3 { deg } else { 90.0 }
+    }
+
+    /// The ray through screen point `s`, or the culled ray.
+    #[inline]
+    fn ray(&self, s: Point2) -> RayGeometry {
+        let u = self.su * s.x as f64 + self.ou;
+        let v = self.sv * s.y as f64 + self.ov;
+        let Some(r) = self.model.pixel_to_ray([u, v]) else {
+            return RayGeometry::CULLED;
+        };
+        let [x, y, z] = r.v;
+        let n2 = x * x + y * y + z * z;
+        if !(n2 > 0.0 && n2.is_finite()) {
+            return RayGeometry::CULLED;
+        }
+        let inv = 1.0 / n2.sqrt();
+        let d = [x * inv, y * inv, z * inv];
+        // Squared turn of the unit direction per model pixel, |∂V − D(D·∂V)|²/|V|², along u and v;
+        // spread = ½·sqrt(αx·αy) with αx = turn_u·(pixels per render pixel in x), likewise y.
+        let turn2 = |c: usize| {
+            let dv = [r.dv[0][c], r.dv[1][c], r.dv[2][c]];
+            let k = d[0] * dv[0] + d[1] * dv[1] + d[2] * dv[2];
+            (dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2] - k * k).max(0.0) / n2
+        };
+        let spread = 0.5 * (turn2(0) * turn2(1)).sqrt().sqrt() * self.pixel_scale;
+        let direction = Vec3::new(d[0] as f32, -d[1] as f32, d[2] as f32);
+        let (min_dist, max_dist) = if self.planar {
+            (self.near / direction.z, self.far / direction.z)
+        } else {
+            (self.near, self.far)
+        };
+        RayGeometry {
+            origin: Vec3::ZERO,
+            origin_radius: 0.0,
+            direction,
+            ray_spread: if spread.is_finite() { spread as f32 } else { 0.0 },
+            min_dist,
+            max_dist,
+        }
+    }
+}
+
+fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+        .sqrt()
+        .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+}
+
+impl Projection for CalibratedCamera {
+    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
+        match property {
+            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(if self.planar {
+                DicingHint::Perspective
+            } else {
+                DicingHint::Spherical
+            })),
+            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(self.deep_metric)),
+            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.fov)),
+            _ => None,
+        }
+    }
+
+    fn project(&self, ctx: &mut ProjectionContext<'_>) {
+        let c = ctx.parts_mut();
+        for (ray, s) in c.rays.iter_mut().zip(c.screen) {
+            *ray = self.ray(*s);
+        }
+    }
+
+    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
+        if !point.is_finite() {
+            return None;
+        }
+        let px = self
+            .model
+            .ray_to_pixel([point.x as f64, -(point.y as f64), point.z as f64])?;
+        let sx = (px[0] - self.ou) / self.su;
+        let sy = (px[1] - self.ov) / self.sv;
+        let s = Point2::new(sx as f32, sy as f32);
+        (s.x.is_finite() && s.y.is_finite()).then_some(s)
+    }
+}

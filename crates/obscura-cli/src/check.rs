@@ -1,0 +1,159 @@
+//! `obscura check`: the projection contract checker a plugin author runs before shipping.
+//!
+//! Argument handling and printing only; the checks are `obscura_sdk::contract`.
+
+
+use clap::Args;
+use obscura_host::cli_params::push_param_arg;
+use obscura_host::plugins::{PluginSearch, ensure};
+use obscura_projections::builtin_registry;
+use obscura_sdk::contract::{CheckOptions, check_registered};
+use obscura_sdk::{Format, ParamList, ScreenWindow};
+
+/// `obscura check <name or path> [--param ...] [--json]`.
+#[derive(Args, Debug)]
+pub struct CheckArgs {
+    /// The projection: a registered name (PxrPerspective), a plugin name found along the plugin path,
+    /// or the path of a plugin library.
+    pub projection: String,
+    /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
+    #[arg(long = "param", value_name = "PARAM")]
+    pub params: Vec<String>,
+    /// Print the report as JSON (same content) instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Image size sampled, WIDTHxHEIGHT: every pixel centre plus a margin around the window.
+    #[arg(long, default_value = "96x72", value_parser = parse_format)]
+    pub format: (u32, u32),
+    /// Pixel aspect ratio (pixel width / height).
+    #[arg(long, default_value_t = 1.0)]
+    pub pixel_aspect: f32,
+    /// ScreenWindow left right bottom top (default: from the frame aspect).
+    #[arg(long, num_args = 4, value_names = ["L", "R", "B", "T"], allow_negative_numbers = true)]
+    pub screen_window: Option<Vec<f32>>,
+    /// Clipping near far.
+    #[arg(long, num_args = 2, value_names = ["NEAR", "FAR"])]
+    pub clipping: Option<Vec<f32>>,
+    /// Random lens and time samples per pixel, besides the pixel centre's chief ray.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u32).range(0..=1024))]
+    pub samples: u32,
+    /// Seed of the random samples.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Threads running the same batches at once for the thread-safety check.
+    #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub threads: u64,
+    /// Samples per project call.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=1_048_576))]
+    pub batch: u64,
+}
+
+fn parse_format(s: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("'{s}': expected WIDTHxHEIGHT with positive integers, e.g. 96x72");
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let (w, h) = (
+        w.trim().parse::<u32>().map_err(|_| bad())?,
+        h.trim().parse::<u32>().map_err(|_| bad())?,
+    );
+    if w == 0 || h == 0 || u64::from(w) * u64::from(h) > 16_777_216 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+/// The options the arguments describe, checked.
+fn options(a: &CheckArgs) -> Result<CheckOptions, String> {
+    if !(a.pixel_aspect.is_finite() && a.pixel_aspect > 0.0) {
+        return Err(format!(
+            "--pixel-aspect {}: expected a positive number",
+            a.pixel_aspect
+        ));
+    }
+    let screen_window = match a.screen_window.as_deref() {
+        None => None,
+        Some(&[l, r, b, t]) => {
+            if !([l, r, b, t].iter().all(|v| v.is_finite()) && l < r && b < t) {
+                return Err(format!(
+                    "--screen-window {l} {r} {b} {t}: expected finite L < R and B < T"
+                ));
+            }
+            Some(ScreenWindow::new(l, r, b, t))
+        }
+        Some(other) => return Err(format!("--screen-window: expected 4 numbers, got {other:?}")),
+    };
+    let mut opts = CheckOptions {
+        format: Format {
+            width: a.format.0,
+            height: a.format.1,
+            pixel_aspect: a.pixel_aspect,
+        },
+        screen_window,
+        samples_per_pixel: a.samples,
+        seed: a.seed,
+        threads: a.threads as usize,
+        batch_size: a.batch as usize,
+        ..CheckOptions::default()
+    };
+    if let Some(c) = a.clipping.as_deref() {
+        let (near, far) = (c[0], c[1]);
+        if !(near >= 0.0 && near.is_finite() && far > near) {
+            return Err(format!(
+                "--clipping {near} {far}: expected 0 <= NEAR < FAR (FAR may be inf)"
+            ));
+        }
+        opts.clipping = (near, far);
+    }
+    Ok(opts)
+}
+
+/// Runs `obscura check`: prints the report (text or JSON) on stdout; `Err` when the projection cannot
+/// be found or created, or when any check failed (so the exit code is 0 only when clean).
+pub fn run(a: &CheckArgs, search: &PluginSearch) -> Result<(), String> {
+    let opts = options(a)?;
+    let mut registry = builtin_registry();
+    // A registered name is used as is; a path, or a name found as <Name>.so along --plugin-path and
+    // OBSCURA_PLUGIN_PATH, is loaded into the registry first.
+    let name = ensure(&mut registry, &a.projection, search).map_err(|e| e.to_string())?;
+    let factory = registry.find(&name).map_err(|e| e.to_string())?;
+    let mut params = ParamList::new();
+    for p in &a.params {
+        push_param_arg(&mut params, p, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
+    }
+    // Panics are caught and reported by the checker; the default hook would print each one as well.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let report = check_registered(&mut registry, &name, &params, &opts);
+    std::panic::set_hook(hook);
+    let report = report.map_err(|e| e.to_string())?;
+    if a.json {
+        println!("{}", report.to_json());
+    } else {
+        println!("{report}");
+    }
+    let failed = report.failed();
+    if failed.is_empty() {
+        Ok(())
+    } else {
+        let names: Vec<&str> = failed.iter().map(|k| k.id()).collect();
+        Err(format!(
+            "projection {name} broke the projection contract: {} check{} failed ({})",
+            failed.len(),
+            if failed.len() == 1 { "" } else { "s" },
+            names.join(", ")
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_are_read_and_bad_ones_refused() {
+        assert_eq!(parse_format("96x72"), Ok((96, 72)));
+        assert_eq!(parse_format(" 8 X 6 "), Ok((8, 6)));
+        for bad in ["96", "0x5", "ax5", "100000x100000"] {
+            assert!(parse_format(bad).unwrap_err().contains("WIDTHxHEIGHT"), "{bad}");
+        }
+    }
+}

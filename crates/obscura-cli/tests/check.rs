@@ -1,0 +1,143 @@
+//! End to end: `obscura check` as a plugin author runs it.
+
+use std::process::{Command, Output};
+
+fn obscura(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .output()
+        .expect("the obscura binary runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+#[test]
+fn a_builtin_passes_with_exit_code_zero_and_an_ok_line_per_check() {
+    let run = obscura(&["check", "PxrPerspective", "--format", "48x36"]);
+    let (out, err) = (text(&run.stdout), text(&run.stderr));
+    assert_eq!(run.status.code(), Some(0), "{out}\n{err}");
+    assert!(
+        out.starts_with("obscura check PxrPerspective: 48x36 pixels"),
+        "{out}"
+    );
+    for line in [
+        "ok           finite directions: ",
+        "ok           ray_spread is half the angle between neighbouring pixels: 1728 pixels",
+        "ok           FieldOfView matches the measured extent: 1 property",
+        "ok           unproject inverts project: ",
+        "ok           same outputs on several threads at once: ",
+    ] {
+        assert!(out.contains(line), "missing {line:?} in\n{out}");
+    }
+    assert_eq!(out.lines().filter(|l| l.starts_with("ok ")).count(), 16, "{out}");
+    assert!(out.trim_end().ends_with("clean: no check failed"), "{out}");
+    assert!(err.is_empty(), "{err}");
+}
+
+#[test]
+fn parameters_reach_the_projection() {
+    let run = obscura(&[
+        "check",
+        "PxrPerspective",
+        "--format",
+        "32x24",
+        "--param",
+        "float fov=40",
+        "--param",
+        "fovEnd=20",
+    ]);
+    let out = text(&run.stdout);
+    assert_eq!(run.status.code(), Some(0), "{out}\n{}", text(&run.stderr));
+    assert!(out.contains("k_FieldOfView 20"), "{out}");
+}
+
+#[test]
+fn json_output_parses_and_says_the_same() {
+    let run = obscura(&[
+        "check",
+        "PxrOrthographic",
+        "--json",
+        "--format",
+        "32x24",
+        "--seed",
+        "7",
+    ]);
+    assert_eq!(run.status.code(), Some(0), "{}", text(&run.stderr));
+    let json = text(&run.stdout);
+    // Python's json module is an independent reader; fall back to a structural check without it.
+    let py = Command::new("python3")
+        .args([
+            "-c",
+            "import json, sys\n\
+             d = json.load(sys.stdin)\n\
+             assert d['projection'] == 'PxrOrthographic' and d['clean'] is True, d\n\
+             assert d['format'] == {'width': 32, 'height': 24, 'pixel_aspect': 1}, d['format']\n\
+             assert d['seed'] == 7\n\
+             ids = [c['check'] for c in d['checks']]\n\
+             assert len(ids) == 16 and ids[0] == 'panic' and 'ray_spread' in ids, ids\n\
+             fov = [c for c in d['checks'] if c['check'] == 'field_of_view'][0]\n\
+             assert fov['status'] == 'not_checked' and fov['notes'] == ['FieldOfView not answered'], fov\n\
+             assert all(c['failures'] == 0 and c['worst'] is None for c in d['checks'])\n\
+             print('parsed')",
+        ])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn();
+    match py {
+        Ok(mut child) => {
+            use std::io::Write;
+            child.stdin.take().unwrap().write_all(json.as_bytes()).unwrap();
+            let out = child.wait_with_output().unwrap();
+            assert!(out.status.success(), "{}\n{json}", text(&out.stderr));
+            assert_eq!(text(&out.stdout).trim(), "parsed");
+        }
+        Err(_) => {
+            assert!(
+                json.starts_with("{\"projection\":\"PxrOrthographic\",\"clean\":true,"),
+                "{json}"
+            );
+            assert_eq!(json.trim_end().chars().last(), Some('}'));
+        }
+    }
+}
+
+#[test]
+fn a_bad_param_is_a_clear_error() {
+    let run = obscura(&["check", "PxrPerspective", "--param", "fvo=60"]);
+    let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(run.stdout.is_empty(), "{}", text(&run.stdout));
+    assert!(
+        err.contains("--param 'fvo=60': PxrPerspective has no parameter \"fvo\" (did you mean \"fov\"?)"),
+        "{err}"
+    );
+    let run = obscura(&["check", "PxrPerspective", "--param", "fov=200"]);
+    let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(err.contains("\"fov\"") && err.contains("out of range"), "{err}");
+}
+
+#[test]
+fn an_unknown_projection_is_a_clear_error() {
+    let run = obscura(&["check", "PxrPerspectve"]);
+    let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(err.contains("did you mean \"PxrPerspective\""), "{err}");
+}
+
+#[test]
+fn bad_sampling_options_are_refused() {
+    for args in [
+        &["check", "PxrPerspective", "--format", "0x10"][..],
+        &["check", "PxrPerspective", "--threads", "0"][..],
+        &["check", "PxrPerspective", "--screen-window", "1", "-1", "-1", "1"][..],
+        &["check", "PxrPerspective", "--pixel-aspect", "-2"][..],
+    ] {
+        let run = obscura(args);
+        assert_ne!(run.status.code(), Some(0), "{args:?}");
+        assert!(!text(&run.stderr).is_empty(), "{args:?}");
+    }
+}

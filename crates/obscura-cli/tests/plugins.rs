@@ -1,0 +1,381 @@
+//! End to end: projection plugins loaded from shared libraries by `obscura render`, `obscura rays`
+//! and `obscura plugins`, found through `--plugin-path` and `OBSCURA_PLUGIN_PATH`.
+//!
+//! The Rust example (`TinyPlanet`, crates/obscura-example-tiny-planet) and the deliberately panicking
+//! Rust plugin are built once with cargo into `target/plugin-tests`; the C example
+//! (`CFisheye`, examples/plugins/c-fisheye/fisheye.c) is compiled with the system C compiler (`$CC`,
+//! else `cc`).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::OnceLock;
+
+use exr::prelude::read_all_flat_layers_from_file;
+
+fn workspace() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn lib_name(name: &str) -> String {
+    format!("{name}.{}", std::env::consts::DLL_EXTENSION)
+}
+
+/// Builds the Rust plugins once, in a target directory of their own.
+fn rust_plugins() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let target = Path::new(env!("CARGO_TARGET_TMPDIR"))
+            .parent()
+            .unwrap()
+            .join("plugin-tests");
+        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+        let out = Command::new(cargo)
+            .current_dir(workspace())
+            .args([
+                "build",
+                "--quiet",
+                "--lib",
+                "-p",
+                "obscura-test-panicking-plugin",
+                "-p",
+                "obscura-example-tiny-planet",
+                "--target-dir",
+            ])
+            .arg(&target)
+            .output()
+            .expect("cannot run cargo");
+        assert!(
+            out.status.success(),
+            "building the Rust plugins failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        target.join("debug")
+    })
+}
+
+/// A directory holding `TinyPlanet.so`, `Panicking.so` and `CFisheye.so`.
+fn plugin_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (krate, name) in [
+        ("obscura_example_tiny_planet", "TinyPlanet"),
+        ("obscura_test_panicking_plugin", "Panicking"),
+    ] {
+        let built = rust_plugins().join(format!(
+            "{}{krate}.{}",
+            std::env::consts::DLL_PREFIX,
+            std::env::consts::DLL_EXTENSION
+        ));
+        std::fs::copy(&built, dir.path().join(lib_name(name)))
+            .unwrap_or_else(|e| panic!("{}: {e}", built.display()));
+    }
+    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
+    let out = Command::new(&cc)
+        .args([
+            "-std=c11", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror",
+        ])
+        .arg("-I")
+        .arg(workspace().join("include"))
+        .arg("-o")
+        .arg(dir.path().join(lib_name("CFisheye")))
+        .arg(workspace().join("examples/plugins/c-fisheye/fisheye.c"))
+        .arg("-lm")
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run the C compiler `{cc}` (set CC): {e}"));
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    dir
+}
+
+fn obscura(args: &[&str], dir: &Path, plugin_path_env: Option<&Path>) -> Output {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_obscura"));
+    cmd.args(args).current_dir(dir).env_remove("OBSCURA_PLUGIN_PATH");
+    if let Some(p) = plugin_path_env {
+        cmd.env("OBSCURA_PLUGIN_PATH", p);
+    }
+    cmd.output().expect("the obscura binary runs")
+}
+
+fn channel(image: &exr::prelude::FlatImage, name: &str) -> Vec<f32> {
+    image.layer_data[0]
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name)
+        .map(|c| c.sample_data.values_as_f32().collect())
+        .unwrap_or_else(|| panic!("no channel {name}"))
+}
+
+/// Pixel centre (x, y) of a w×h image in the default screen window.
+fn screen(w: u32, h: u32, x: u32, y: u32) -> (f64, f64) {
+    let a = f64::from(w) / f64::from(h);
+    let (l, r, b, t) = if a >= 1.0 {
+        (-a, a, -1.0, 1.0)
+    } else {
+        (-1.0, 1.0, -1.0 / a, 1.0 / a)
+    };
+    (
+        l + (f64::from(x) + 0.5) / f64::from(w) * (r - l),
+        t - (f64::from(y) + 0.5) / f64::from(h) * (t - b),
+    )
+}
+
+/// Reads the chief-ray directions of `obscura rays`.
+fn directions(path: &Path) -> Vec<[f32; 3]> {
+    let image = read_all_flat_layers_from_file(path).unwrap();
+    let (x, y, z) = (
+        channel(&image, "direction.X"),
+        channel(&image, "direction.Y"),
+        channel(&image, "direction.Z"),
+    );
+    (0..x.len()).map(|i| [x[i], y[i], z[i]]).collect()
+}
+
+#[test]
+fn both_example_plugins_render_through_obscura_render() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    let pp = plugins.path().to_str().unwrap();
+    for (name, format) in [("TinyPlanet", "32x18"), ("CFisheye", "24x24")] {
+        let out = format!("{name}.exr");
+        let r = obscura(
+            &[
+                "render",
+                "--plugin-path",
+                pp,
+                "-p",
+                name,
+                "--format",
+                format,
+                "--spp",
+                "2",
+                "--threads",
+                "2",
+                "-o",
+                &out,
+            ],
+            work.path(),
+            None,
+        );
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert!(r.status.success(), "{name}: {stderr}");
+        assert!(
+            !stderr.contains("broke the projection contract"),
+            "{name}: {stderr}"
+        );
+        let stdout = String::from_utf8_lossy(&r.stdout);
+        assert!(stdout.contains(&format!("through {name}")), "{stdout}");
+        let image = read_all_flat_layers_from_file(work.path().join(&out)).unwrap();
+        let (red, green) = (channel(&image, "R"), channel(&image, "G"));
+        assert!(red.iter().chain(&green).all(|v| v.is_finite()));
+        assert!(red.iter().any(|v| *v > 0.0), "{name} rendered black");
+        if name == "CFisheye" {
+            // The corners lie outside the image circle: every sample culled, the pixel black.
+            for i in [0, 23, 24 * 23, 24 * 24 - 1] {
+                assert_eq!((red[i], channel(&image, "A")[i]), (0.0, 0.0), "corner {i}");
+            }
+            assert!(red[12 * 24 + 12] > 0.0);
+        } else {
+            assert!(
+                stdout.contains(" 0 culled"),
+                "the stereographic sphere has no edge: {stdout}"
+            );
+        }
+    }
+}
+
+#[test]
+fn tiny_planet_rays_match_the_stereographic_formula() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    let r = obscura(
+        &[
+            "rays",
+            "-p",
+            "TinyPlanet",
+            "--format",
+            "40x30",
+            "--param",
+            "fov=200",
+            "-o",
+            "planet.exr",
+        ],
+        work.path(),
+        Some(plugins.path()),
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let d = directions(&work.path().join("planet.exr"));
+    let k = (200f64.to_radians() / 4.0).tan();
+    for y in 0..30 {
+        for x in 0..40 {
+            let (sx, sy) = screen(40, 30, x, y);
+            let theta = 2.0 * (sx.hypot(sy) * k).atan();
+            let psi = sy.atan2(sx);
+            // Straight down at the centre; screen x is camera +X, screen y camera +Z.
+            let want = [theta.sin() * psi.cos(), -theta.cos(), theta.sin() * psi.sin()];
+            let got = d[(y * 40 + x) as usize];
+            for c in 0..3 {
+                assert!(
+                    (f64::from(got[c]) - want[c]).abs() < 1e-5,
+                    "({x}, {y}): {got:?} vs {want:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_c_fisheye_gives_the_builtin_fisheyes_rays() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    let pp = plugins.path().to_str().unwrap();
+    let common = ["--format", "33x33", "--param", "fov=190"];
+    let r = obscura(
+        &[
+            &["rays", "--plugin-path", pp, "-p", "CFisheye", "-o", "c.exr"][..],
+            &common[..],
+        ]
+        .concat(),
+        work.path(),
+        None,
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let r = obscura(
+        &[
+            &[
+                "rays",
+                "-p",
+                "Fisheye",
+                "--param",
+                "mapping=equidistant",
+                "-o",
+                "builtin.exr",
+            ][..],
+            &common[..],
+        ]
+        .concat(),
+        work.path(),
+        None,
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let (c, b) = (
+        directions(&work.path().join("c.exr")),
+        directions(&work.path().join("builtin.exr")),
+    );
+    let mut inside = 0;
+    for y in 0..33 {
+        for x in 0..33 {
+            let i = (y * 33 + x) as usize;
+            let (sx, sy) = screen(33, 33, x, y);
+            let r = sx.hypot(sy);
+            if r > 1.0 {
+                assert_eq!(c[i], [0.0; 3], "({x}, {y}) is outside the circle");
+                assert_eq!(b[i], [0.0; 3]);
+                continue;
+            }
+            inside += 1;
+            let phi = r * 95f64.to_radians();
+            let psi = sy.atan2(sx);
+            let want = [phi.sin() * psi.cos(), phi.sin() * psi.sin(), phi.cos()];
+            for k in 0..3 {
+                assert!(
+                    (f64::from(c[i][k]) - want[k]).abs() < 2e-6,
+                    "({x}, {y}): {:?} vs {want:?}",
+                    c[i]
+                );
+                assert!(
+                    (c[i][k] - b[i][k]).abs() < 2e-6,
+                    "({x}, {y}): {:?} vs built-in {:?}",
+                    c[i],
+                    b[i]
+                );
+            }
+        }
+    }
+    assert!(inside > 800);
+}
+
+#[test]
+fn a_scene_naming_a_plugin_finds_it_on_the_plugin_path() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    std::fs::write(
+        work.path().join("fish.rib"),
+        "Format 16 16 1\nHider \"raytrace\" \"int maxsamples\" [1]\nDisplay \"fish.exr\" \"openexr\" \"rgba\"\n\
+         Projection \"CFisheye\" \"float fov\" [180]\nTranslate 0 0 3\nWorldBegin\n\
+         Light \"PxrDomeLight\" \"dome\" \"float intensity\" [1]\n\
+         Polygon \"P\" [-1 -1 0  1 -1 0  1 1 0  -1 1 0]\nWorldEnd\n",
+    )
+    .unwrap();
+    let r = obscura(
+        &["render", "fish.rib", "--quiet"],
+        work.path(),
+        Some(plugins.path()),
+    );
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(work.path().join("fish.exr").exists());
+    // Without the plugin path the scene's projection is unknown, and the error says where it looked.
+    let r = obscura(&["render", "fish.rib", "--quiet"], work.path(), None);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(err.contains("unknown projection \"CFisheye\""), "{err}");
+    assert!(
+        err.contains("set OBSCURA_PLUGIN_PATH or pass --plugin-path"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_panicking_plugin_loses_batches_and_the_render_goes_on() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    let r = obscura(
+        &[
+            "render",
+            "-p",
+            "Panicking",
+            "--param",
+            "panicAbove=0.9",
+            "--format",
+            "32x18",
+            "--spp",
+            "1",
+            "-o",
+            "p.exr",
+        ],
+        work.path(),
+        Some(plugins.path()),
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    assert!(
+        err.contains("warning: projection Panicking broke the projection contract on"),
+        "{err}"
+    );
+    assert!(err.contains("samples lost to a panic in project"), "{err}");
+    assert!(err.contains("panicked: deliberate panic at screen x"), "{err}");
+    assert!(work.path().join("p.exr").exists());
+}
+
+#[test]
+fn plugins_lists_a_loaded_plugins_table_and_refuses_unknown_names_clearly() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    let pp = plugins.path().to_str().unwrap();
+    let r = obscura(&["plugins", "--plugin-path", pp, "TinyPlanet"], work.path(), None);
+    let out = String::from_utf8_lossy(&r.stdout);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    assert!(
+        out.contains("TinyPlanet") && out.contains("fov") && out.contains("axis"),
+        "{out}"
+    );
+    // A path works as well as a name.
+    let path = plugins.path().join(lib_name("CFisheye"));
+    let r = obscura(&["plugins", path.to_str().unwrap()], work.path(), None);
+    assert!(String::from_utf8_lossy(&r.stdout).contains("CFisheye"));
+    let r = obscura(&["plugins", "--plugin-path", pp, "TinyPlant"], work.path(), None);
+    assert!(!r.status.success());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.contains("no TinyPlant.") && err.contains(&format!("looked in {pp}")),
+        "{err}"
+    );
+}

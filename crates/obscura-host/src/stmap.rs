@@ -1,0 +1,870 @@
+//! ST-maps between two projections (`obscura stmap --from A --to B`).
+//!
+//! An ST-map is an image the size of the **output** B whose red and green channels say, for every
+//! pixel of B, where in the **source** image A to look up the colour — Nuke's `STMap` node reads it so.
+//! Feeding a plate shot through projection A into the STMap node's `src` input and this map into its
+//! `stmap` input gives the plate as projection B would have seen it: how a compositor applies or
+//! removes a lens, or turns a fisheye into a latlong.
+//!
+//! # Convention (Nuke's)
+//!
+//! Nuke's STMap documentation: the U and V values are the absolute position of the source pixel,
+//! normalised to `[0, 1]`, where `(0, 0)` is the **bottom-left corner** of the input image and
+//! `(1, 1)` its top-right corner. Corners, not pixel centres: pixel column `i` of A spans
+//! `[i/W, (i+1)/W]` and its centre is at `(i + ½)/W` (the well-known half-pixel shift of maps built
+//! as `x/width` in an Expression node comes from forgetting this). With A's continuous raster
+//! position `(x_A, y_A)` (conventions.md: origin at the top-left corner, y down, pixel centres at
+//! `+½`):
+//!
+//! ```text
+//! s = x_A / W_A          t = 1 − y_A / H_A
+//! ```
+//!
+//! # How a pixel of B is mapped
+//!
+//! 1. B's chief ray of the pixel: through the pixel centre, from the lens centre (aperture (0, 0)),
+//!    at shutter open (time 0) — the same ray as the main layer of `obscura rays`.
+//! 2. The point `P = origin + distance·direction` on it.
+//! 3. A's exact inverse, `unproject(P, 0)`, gives the screen position of A whose ray passes through
+//!    `P`; A's screen window and format turn it into `(x_A, y_A)` and then `(s, t)`.
+//! 4. A's own ray at that position is traced and checked to pass through `P` (to 1/20 of A's pixel
+//!    footprint), so a projection whose inverse disagrees with its `project` is reported rather than
+//!    trusted silently.
+//!
+//! ST-maps relate *directions*: for cameras whose rays all leave one point (pinholes, fisheyes,
+//! spheres) the map does not depend on `distance` at all. Where a projection's ray origins are spread
+//! out (omnidirectional stereo, orthographic) the map is exact only for scene points at that distance;
+//! the default 10⁴ scene units treats everything as far away. Depth of field plays no part: chief rays
+//! leave the lens centre.
+//!
+//! # Channels
+//!
+//! | case | R | G | B | A |
+//! |---|---|---|---|---|
+//! | A sees the direction inside its frame | s | t | 0 | 1 |
+//! | A sees it outside its frame, or A culls its own ray there | s | t | 0 | 0 |
+//! | B culls the pixel, or A cannot see the direction (`unproject` is `None`) | 0 | 0 | 0 | 0 |
+//!
+//! Keeping `(s, t)` where the position exists but lies outside A's image lets overscan workflows use
+//! it; the alpha says whether A's image holds the colour.
+
+use std::path::{Path, PathBuf};
+
+use exr::prelude::{
+    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, IntegerBounds, Layer,
+    LayerAttributes, Text, WritableImage,
+};
+use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Registry, Vec3};
+use rayon::prelude::*;
+
+use crate::camera::CameraDesc;
+use crate::driver::{Batch, CameraStage, ContractReport, HostError};
+use crate::raymap::temporary_sibling;
+
+/// The default distance along B's rays of the point handed to A's inverse: far enough that scene
+/// content reads as "at infinity" for stereo and other offset-origin cameras.
+pub const DEFAULT_DISTANCE: f32 = 1.0e4;
+
+/// A's ray at the looked-up position must pass this close to the point, in A's pixels (the footprint
+/// cone, `origin_radius + ray_spread·t`, is half a pixel).
+pub const CONSISTENCY_PX: f64 = 0.05;
+
+/// Pixel centres probed (per axis) to decide whether A offers an inverse at all.
+const PROBE_GRID: u32 = 9;
+
+/// An ST-map: for each pixel of B (row by row from the top), where in A the same direction is seen.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StMap {
+    /// B's format: the size of the map.
+    pub format: Format,
+    /// A's format: the image the map looks up.
+    pub from_format: Format,
+    /// Nuke's s (red): `x_A / W_A`.
+    pub s: Vec<f32>,
+    /// Nuke's t (green): `1 − y_A / H_A`.
+    pub t: Vec<f32>,
+    /// 1 where A's image holds the direction, else 0 (see the module's channel table).
+    pub alpha: Vec<f32>,
+    /// What happened to the pixels.
+    pub stats: StMapStats,
+}
+
+/// Pixel counts of an ST-map, by outcome.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StMapStats {
+    /// Pixels of B.
+    pub pixels: u64,
+    /// Pixels with alpha 1.
+    pub mapped: u64,
+    /// Pixels whose ray B culls.
+    pub culled_by_b: u64,
+    /// Pixels whose direction A cannot see (`unproject` returned `None`).
+    pub unseen_by_a: u64,
+    /// Pixels whose position in A lies outside A's frame.
+    pub outside_a: u64,
+    /// Pixels whose position in A is inside the frame but where A culls its own ray.
+    pub culled_by_a: u64,
+    /// Pixels where A's ray at the looked-up position misses the point by more than
+    /// [`CONSISTENCY_PX`] of A's pixels: A's `unproject` disagrees with its `project`.
+    pub inconsistent: u64,
+    /// The largest such miss, in A's pixels, and the pixel of B (column, row) where it happened.
+    pub worst_miss: Option<(f64, (u32, u32))>,
+    /// Contract breaches of B's rays (culled and counted by the driver).
+    pub b_report: ContractReport,
+    /// Contract breaches of A's rays traced for the consistency check.
+    pub a_report: ContractReport,
+}
+
+impl StMapStats {
+    fn merge(&mut self, o: &StMapStats) {
+        self.pixels += o.pixels;
+        self.mapped += o.mapped;
+        self.culled_by_b += o.culled_by_b;
+        self.unseen_by_a += o.unseen_by_a;
+        self.outside_a += o.outside_a;
+        self.culled_by_a += o.culled_by_a;
+        self.inconsistent += o.inconsistent;
+        if let Some((m, at)) = o.worst_miss
+            && self.worst_miss.is_none_or(|(w, _)| m > w)
+        {
+            self.worst_miss = Some((m, at));
+        }
+        self.b_report.merge(&o.b_report);
+        self.a_report.merge(&o.a_report);
+    }
+
+    /// One warning line when A's inverse disagreed with its rays, else `None`.
+    #[must_use]
+    pub fn consistency_warning(&self, from: &str) -> Option<String> {
+        let (miss, (x, y)) = self.worst_miss?;
+        (self.inconsistent > 0).then(|| {
+            format!(
+                "warning: {from}: at {} pixel{} the ray of the position its unproject returned misses the \
+                 point by more than {CONSISTENCY_PX} pixel (worst {miss:.3} pixel, at output pixel {x},{y}); \
+                 its inverse disagrees with its project",
+                self.inconsistent,
+                if self.inconsistent == 1 { "" } else { "s" }
+            )
+        })
+    }
+}
+
+/// An ST-map could not be made or written.
+#[derive(Debug, thiserror::Error)]
+pub enum StMapError {
+    /// The distance is not a positive finite number.
+    #[error(
+        "--distance {0}: expected a positive finite distance in scene units (default {DEFAULT_DISTANCE})"
+    )]
+    Distance(f32),
+    /// A's camera stage could not be set up.
+    #[error("--from {name}: {source}")]
+    From {
+        /// The projection.
+        name: String,
+        /// Why.
+        source: Box<HostError>,
+    },
+    /// B's camera stage could not be set up.
+    #[error("--to {name}: {source}")]
+    To {
+        /// The projection.
+        name: String,
+        /// Why.
+        source: Box<HostError>,
+    },
+    /// A has no inverse.
+    #[error(
+        "--from {projection}: {projection} offers no inverse (its unproject finds none of its own rays); \
+         ST-maps need one. Swap --from and --to for the opposite map if the other projection has one"
+    )]
+    NoInverse {
+        /// The projection.
+        projection: String,
+    },
+    /// Writing failed.
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// The target file.
+        path: PathBuf,
+        /// Why.
+        source: exr::error::Error,
+    },
+    /// Renaming the finished file into place failed.
+    #[error("cannot move the finished file into place at {path}: {source}")]
+    Rename {
+        /// The target file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+}
+
+/// The two stages of an ST-map made from a registry: `(A, B)`. Each camera uses RenderMan's defaults
+/// for its format (default screen window, no crop).
+///
+/// # Errors
+/// [`StMapError::From`] or [`StMapError::To`] naming the projection (unknown name, bad parameter).
+pub fn stages(
+    registry: &mut Registry,
+    from: (&str, &ParamList, Format),
+    to: (&str, &ParamList, Format),
+) -> Result<(CameraStage, CameraStage), StMapError> {
+    let a = CameraStage::new(registry, from.0, from.1, &CameraDesc::new(from.2)).map_err(|e| {
+        StMapError::From {
+            name: from.0.to_string(),
+            source: Box::new(e),
+        }
+    })?;
+    let b = CameraStage::new(registry, to.0, to.1, &CameraDesc::new(to.2)).map_err(|e| StMapError::To {
+        name: to.0.to_string(),
+        source: Box::new(e),
+    })?;
+    Ok((a, b))
+}
+
+/// Computes the ST-map that turns images of `from` (A) into images of `to` (B), over B's whole format.
+///
+/// # Errors
+/// [`StMapError::Distance`] for a distance that is not positive and finite; [`StMapError::NoInverse`]
+/// when A's `unproject` finds none of A's own rays.
+pub fn compute_stmap(from: &CameraStage, to: &CameraStage, distance: f32) -> Result<StMap, StMapError> {
+    if !(distance.is_finite() && distance > 0.0) {
+        return Err(StMapError::Distance(distance));
+    }
+    check_inverse(from, distance)?;
+    let format = to.camera().format;
+    let from_format = from.camera().format;
+    let rows: Vec<(Vec<[f32; 3]>, StMapStats)> = (0..format.height)
+        .into_par_iter()
+        .map(|y| map_row(from, to, distance, y))
+        .collect();
+    let n = format.width as usize * format.height as usize;
+    let mut map = StMap {
+        format,
+        from_format,
+        s: Vec::with_capacity(n),
+        t: Vec::with_capacity(n),
+        alpha: Vec::with_capacity(n),
+        stats: StMapStats::default(),
+    };
+    for (row, stats) in rows {
+        for [s, t, a] in row {
+            map.s.push(s);
+            map.t.push(t);
+            map.alpha.push(a);
+        }
+        map.stats.merge(&stats);
+    }
+    Ok(map)
+}
+
+/// Chief rays (lens centre, time 0) of `stage` at `screen` positions.
+fn chief_rays(stage: &CameraStage, screen: &[Point2]) -> (Vec<RayGeometry>, ContractReport) {
+    let mut b = Batch::with_capacity(screen.len());
+    for p in screen {
+        b.push(*p, Point2::new(0.5, 0.5), 0.0);
+        b.aperture.push(Point2::ZERO);
+    }
+    let report = stage.run_prepared(&mut b);
+    (b.rays, report)
+}
+
+/// A projection that offers an inverse finds its own rays: probe a grid of A's pixel centres.
+fn check_inverse(from: &CameraStage, distance: f32) -> Result<(), StMapError> {
+    let cam = from.camera();
+    let f = cam.format;
+    let screen: Vec<Point2> = (0..PROBE_GRID)
+        .flat_map(|j| (0..PROBE_GRID).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let x = (f.width as f64 * (i as f64 + 0.5) / PROBE_GRID as f64).floor() + 0.5;
+            let y = (f.height as f64 * (j as f64 + 0.5) / PROBE_GRID as f64).floor() + 0.5;
+            cam.raster_to_screen(x, y)
+        })
+        .collect();
+    let (rays, _) = chief_rays(from, &screen);
+    let live: Vec<&RayGeometry> = rays.iter().filter(|r| r.direction != Vec3::ZERO).collect();
+    if live.is_empty()
+        || live.iter().any(|r| {
+            from.projection()
+                .unproject(r.origin + r.direction * distance, 0.0)
+                .is_some()
+        })
+    {
+        Ok(())
+    } else {
+        Err(StMapError::NoInverse {
+            projection: from.name().to_string(),
+        })
+    }
+}
+
+/// How far (in A's pixels) `p` lies from A's ray `r`: the perpendicular distance over the footprint's
+/// diameter at that depth. Infinite when the point is behind the ray's origin.
+fn miss_in_pixels(r: &RayGeometry, p: Vec3) -> f64 {
+    let d = [r.direction.x as f64, r.direction.y as f64, r.direction.z as f64];
+    let v = [
+        p.x as f64 - r.origin.x as f64,
+        p.y as f64 - r.origin.y as f64,
+        p.z as f64 - r.origin.z as f64,
+    ];
+    let along = v[0] * d[0] + v[1] * d[1] + v[2] * d[2];
+    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    if along <= 0.0 {
+        return f64::INFINITY;
+    }
+    let perp = [v[0] - d[0] * along, v[1] - d[1] * along, v[2] - d[2] * along];
+    let perp = (perp[0] * perp[0] + perp[1] * perp[1] + perp[2] * perp[2]).sqrt();
+    let footprint = 2.0 * (r.origin_radius as f64 + r.ray_spread as f64 * along);
+    if footprint > 0.0 {
+        perp / footprint
+    } else if perp <= 1e-5 * len.max(1.0) {
+        // A projection that reports no footprint: only round-off may separate point and ray.
+        0.0
+    } else {
+        f64::INFINITY
+    }
+}
+
+fn map_row(from: &CameraStage, to: &CameraStage, distance: f32, y: u32) -> (Vec<[f32; 3]>, StMapStats) {
+    let bcam = to.camera();
+    let acam = from.camera();
+    let (af, aw) = (acam.format, acam.screen_window());
+    let width = bcam.format.width;
+    let screen: Vec<Point2> = (0..width)
+        .map(|x| bcam.raster_to_screen(x as f64 + 0.5, y as f64 + 0.5))
+        .collect();
+    let (b_rays, b_report) = chief_rays(to, &screen);
+    let mut stats = StMapStats {
+        pixels: width as u64,
+        b_report,
+        ..StMapStats::default()
+    };
+    let mut out = vec![[0.0f32; 3]; width as usize];
+    // Pixels with a position in A: (column, point P, A's screen position, s, t).
+    let mut found: Vec<(usize, Vec3, Point2, f32, f32)> = Vec::with_capacity(width as usize);
+    for (x, r) in b_rays.iter().enumerate() {
+        if r.direction == Vec3::ZERO {
+            stats.culled_by_b += 1;
+            continue;
+        }
+        let p = r.origin + r.direction * distance;
+        let Some(sa) = from.projection().unproject(p, 0.0) else {
+            stats.unseen_by_a += 1;
+            continue;
+        };
+        let (xa, ya) = aw.screen_to_raster(af, sa);
+        let s = xa / af.width as f64;
+        let t = 1.0 - ya / af.height as f64;
+        if !(s.is_finite() && t.is_finite() && sa.x.is_finite() && sa.y.is_finite()) {
+            stats.unseen_by_a += 1;
+            continue;
+        }
+        let inside = (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t);
+        out[x] = [s as f32, t as f32, 0.0];
+        if inside {
+            found.push((x, p, sa, s as f32, t as f32));
+        } else {
+            stats.outside_a += 1;
+        }
+    }
+    let a_screen: Vec<Point2> = found.iter().map(|f| f.2).collect();
+    let (a_rays, a_report) = chief_rays(from, &a_screen);
+    stats.a_report = a_report;
+    for ((x, p, _, _, _), r) in found.iter().zip(&a_rays) {
+        if r.direction == Vec3::ZERO {
+            stats.culled_by_a += 1;
+            continue;
+        }
+        out[*x][2] = 1.0;
+        stats.mapped += 1;
+        let miss = miss_in_pixels(r, *p);
+        if miss > CONSISTENCY_PX {
+            stats.inconsistent += 1;
+            if stats.worst_miss.is_none_or(|(w, _)| miss > w) {
+                stats.worst_miss = Some((miss, (*x as u32, y)));
+            }
+        }
+    }
+    (out, stats)
+}
+
+/// Writes `map` as a 32-bit float OpenEXR (ZIP compressed) with channels R = s, G = t, B = 0, A = alpha,
+/// atomically (a temporary file beside the target, then a rename). The display and data windows are
+/// B's format; `attributes` are stored as header strings (the projections and their parameters).
+///
+/// # Errors
+/// [`StMapError::Write`] or [`StMapError::Rename`] naming the file.
+pub fn write_stmap_exr(map: &StMap, attributes: &[(&str, String)], path: &Path) -> Result<(), StMapError> {
+    let n = map.s.len();
+    let channels: Vec<AnyChannel<FlatSamples>> = vec![
+        AnyChannel::new("R", FlatSamples::F32(map.s.clone())),
+        AnyChannel::new("G", FlatSamples::F32(map.t.clone())),
+        AnyChannel::new("B", FlatSamples::F32(vec![0.0; n])),
+        AnyChannel::new("A", FlatSamples::F32(map.alpha.clone())),
+    ];
+    let size = (map.format.width as usize, map.format.height as usize);
+    let mut layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels.into()),
+    );
+    for (k, v) in attributes {
+        layer
+            .attributes
+            .other
+            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
+    }
+    let mut image = Image::from_layer(layer);
+    image.attributes.display_window = IntegerBounds::new((0, 0), size);
+    image.attributes.pixel_aspect = map.format.pixel_aspect;
+
+    let tmp = temporary_sibling(path);
+    if let Err(source) = image.write().to_file(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(StMapError::Write {
+            path: path.to_path_buf(),
+            source,
+        });
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        StMapError::Rename {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obscura_projections::builtin_registry;
+    use obscura_sdk::{
+        DeepMetric, DicingHint, Projection, ProjectionContext, ProjectionProperty, PropertyValue,
+        ScreenWindow,
+    };
+
+    fn params(list: &[(&str, &str)]) -> ParamList {
+        let mut l = ParamList::new();
+        for (d, v) in list {
+            l.push_text(d, &[v], None).unwrap();
+        }
+        l
+    }
+
+    fn builtin(name: &str, p: &[(&str, &str)], f: Format) -> CameraStage {
+        CameraStage::new(&mut builtin_registry(), name, &params(p), &CameraDesc::new(f)).unwrap()
+    }
+
+    /// An equidistant fisheye written here, independent of the library's: screen radius 1 ↔ `fov/2`
+    /// from the axis, culled outside the unit circle. With `fov` above 180° it sees behind the camera.
+    struct TestFisheye {
+        half_fov: f32,
+        inverse: bool,
+    }
+
+    impl Projection for TestFisheye {
+        fn property(&self, p: ProjectionProperty) -> Option<PropertyValue> {
+            match p {
+                ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
+                ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
+                _ => None,
+            }
+        }
+        fn project(&self, ctx: &mut ProjectionContext<'_>) {
+            let parts = ctx.parts_mut();
+            for (s, r) in parts.screen.iter().zip(parts.rays.iter_mut()) {
+                let rho = (s.x * s.x + s.y * s.y).sqrt();
+                if rho > 1.0 {
+                    *r = RayGeometry::CULLED;
+                    continue;
+                }
+                let theta = rho * self.half_fov;
+                let (c, sn) = if rho > 0.0 {
+                    (s.x / rho, s.y / rho)
+                } else {
+                    (1.0, 0.0)
+                };
+                r.origin = Vec3::ZERO;
+                r.origin_radius = 0.0;
+                r.direction = Vec3::new(theta.sin() * c, theta.sin() * sn, theta.cos());
+                r.ray_spread = 0.01;
+            }
+        }
+        fn unproject(&self, p: Vec3, _time: f32) -> Option<Point2> {
+            if !self.inverse {
+                return None;
+            }
+            let len = p.length();
+            let theta = (p.z / len).clamp(-1.0, 1.0).acos();
+            let rho = theta / self.half_fov;
+            let q = (p.x * p.x + p.y * p.y).sqrt();
+            if rho > 1.0 || len == 0.0 {
+                return None;
+            }
+            Some(if q > 0.0 {
+                Point2::new(rho * p.x / q, rho * p.y / q)
+            } else {
+                Point2::ZERO
+            })
+        }
+    }
+
+    fn fisheye(fov_deg: f32, inverse: bool, f: Format) -> CameraStage {
+        let cam = CameraDesc::new(f);
+        CameraStage::with_projection(
+            "TestFisheye",
+            Box::new(TestFisheye {
+                half_fov: fov_deg.to_radians() / 2.0,
+                inverse,
+            }),
+            cam.environment(),
+            &cam,
+        )
+        .unwrap()
+    }
+
+    fn screen_of(f: Format, x: f64, y: f64) -> (f64, f64) {
+        let w = ScreenWindow::default_for(f);
+        let p = w.raster_to_screen(f, x, y);
+        (p.x as f64, p.y as f64)
+    }
+
+    #[test]
+    fn identity_map_is_every_pixel_centre() {
+        for f in [Format::new(64, 36), Format::new(30, 50)] {
+            let a = builtin("PxrPerspective", &[("float fov", "50")], f);
+            let b = builtin("PxrPerspective", &[("float fov", "50")], f);
+            let map = compute_stmap(&a, &b, DEFAULT_DISTANCE).unwrap();
+            assert_eq!(map.stats.mapped, map.stats.pixels);
+            assert_eq!(map.stats.inconsistent, 0);
+            for (k, ((s, t), al)) in map.s.iter().zip(&map.t).zip(&map.alpha).enumerate() {
+                let (i, j) = (k as u32 % f.width, k as u32 / f.width);
+                let es = (i as f64 + 0.5) / f.width as f64;
+                let et = 1.0 - (j as f64 + 0.5) / f.height as f64;
+                assert!(
+                    (*s as f64 - es).abs() * (f.width as f64) < 1e-3,
+                    "s at {i},{j}: {s} vs {es}"
+                );
+                assert!(
+                    (*t as f64 - et).abs() * (f.height as f64) < 1e-3,
+                    "t at {i},{j}: {t} vs {et}"
+                );
+                assert_eq!(*al, 1.0);
+            }
+        }
+    }
+
+    #[test]
+    fn perspective_to_perspective_is_the_tangent_ratio() {
+        // A: fov 60 at 80x60, B: fov 90 at 64x48. A screen point is B's scaled by tan 45° / tan 30°.
+        let (fa, fb) = (Format::new(80, 60), Format::new(64, 48));
+        let a = builtin("PxrPerspective", &[("float fov", "60")], fa);
+        let b = builtin("PxrPerspective", &[("float fov", "90")], fb);
+        let map = compute_stmap(&a, &b, DEFAULT_DISTANCE).unwrap();
+        let k = 45f64.to_radians().tan() / 30f64.to_radians().tan();
+        let aa = fa.width as f64 / fa.height as f64;
+        let mut inside = 0;
+        for (n, (s, t)) in map.s.iter().zip(&map.t).enumerate() {
+            let (i, j) = (n as u32 % fb.width, n as u32 / fb.width);
+            let (sx, sy) = screen_of(fb, i as f64 + 0.5, j as f64 + 0.5);
+            let (ax, ay) = (sx * k, sy * k);
+            let es = (ax + aa) / (2.0 * aa);
+            let et = (ay + 1.0) / 2.0;
+            assert!((*s as f64 - es).abs() < 2e-6 * k, "s at {i},{j}: {s} vs {es}");
+            assert!((*t as f64 - et).abs() < 2e-6 * k, "t at {i},{j}: {t} vs {et}");
+            let want = (0.0..=1.0).contains(&es) && (0.0..=1.0).contains(&et);
+            assert_eq!(map.alpha[n], if want { 1.0 } else { 0.0 }, "alpha at {i},{j}");
+            inside += want as u32;
+        }
+        assert!(inside > 0 && (inside as u64) < map.stats.pixels);
+        assert_eq!(map.stats.outside_a + map.stats.mapped, map.stats.pixels);
+    }
+
+    #[test]
+    fn culled_and_unseen_pixels_are_transparent_black() {
+        // B: a 240° fisheye (corners culled, the rim looks backwards); A: a 100° perspective.
+        let f = Format::new(48, 32);
+        let a = builtin("PxrPerspective", &[("float fov", "100")], f);
+        let b = fisheye(240.0, true, f);
+        let map = compute_stmap(&a, &b, DEFAULT_DISTANCE).unwrap();
+        let st = &map.stats;
+        assert!(
+            st.culled_by_b > 0 && st.unseen_by_a > 0 && st.outside_a > 0 && st.mapped > 0,
+            "{st:?}"
+        );
+        assert_eq!(
+            st.culled_by_b + st.unseen_by_a + st.outside_a + st.mapped,
+            st.pixels
+        );
+        for n in 0..map.s.len() {
+            let (i, j) = (n as u32 % f.width, n as u32 / f.width);
+            let (sx, sy) = screen_of(f, i as f64 + 0.5, j as f64 + 0.5);
+            let rho = (sx * sx + sy * sy).sqrt();
+            let theta = rho * 120f64.to_radians();
+            if rho > 1.0 || theta >= std::f64::consts::FRAC_PI_2 {
+                assert_eq!((map.s[n], map.t[n], map.alpha[n]), (0.0, 0.0, 0.0), "at {i},{j}");
+            } else {
+                // Closed form: A's screen position is tan θ·(direction in the image plane)·d_A.
+                let d = 1.0 / 50f64.to_radians().tan();
+                let (ax, ay) = (theta.tan() * sx / rho * d, theta.tan() * sy / rho * d);
+                let a_aspect = 1.5;
+                let (es, et) = ((ax + a_aspect) / (2.0 * a_aspect), (ay + 1.0) / 2.0);
+                assert!((map.s[n] as f64 - es).abs() < 1e-4 * (1.0 + es.abs()), "{i},{j}");
+                assert!((map.t[n] as f64 - et).abs() < 1e-4 * (1.0 + et.abs()), "{i},{j}");
+                let inside = (0.0..=1.0).contains(&es) && (0.0..=1.0).contains(&et);
+                assert_eq!(map.alpha[n], if inside { 1.0 } else { 0.0 }, "{i},{j}");
+            }
+        }
+    }
+
+    #[test]
+    fn orthographic_source_holds_only_what_its_window_covers() {
+        // A orthographic (screen = camera x, y); B a 90° pinhole. At distance D a ray (sx, sy, 1)/l
+        // reaches A's screen at D·(sx, sy)/l: inside A's window (±1.5, ±1) only near the axis.
+        let f = Format::new(48, 32);
+        let dist = 3.0f32;
+        let a = builtin("PxrOrthographic", &[], f);
+        let b = builtin("PxrPerspective", &[("float fov", "90")], f);
+        let map = compute_stmap(&a, &b, dist).unwrap();
+        assert!(map.stats.mapped > 0 && map.stats.outside_a > 0, "{:?}", map.stats);
+        for n in 0..map.s.len() {
+            let (i, j) = (n as u32 % f.width, n as u32 / f.width);
+            let (sx, sy) = screen_of(f, i as f64 + 0.5, j as f64 + 0.5);
+            let l = (sx * sx + sy * sy + 1.0).sqrt();
+            let (ax, ay) = (dist as f64 * sx / l, dist as f64 * sy / l);
+            let (es, et) = ((ax + 1.5) / 3.0, (ay + 1.0) / 2.0);
+            assert!((map.s[n] as f64 - es).abs() < 1e-5 && (map.t[n] as f64 - et).abs() < 1e-5);
+            let inside = (0.0..=1.0).contains(&es) && (0.0..=1.0).contains(&et);
+            assert_eq!(map.alpha[n], if inside { 1.0 } else { 0.0 }, "{i},{j}");
+        }
+    }
+
+    /// Nuke's STMap lookup: bilinear between pixel centres at ((i + ½)/W, 1 − (j + ½)/H).
+    fn bilinear(img: &[[f64; 3]], f: Format, s: f64, t: f64) -> [f64; 3] {
+        let x = s * f.width as f64 - 0.5;
+        let y = (1.0 - t) * f.height as f64 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let at = |i: f64, j: f64| {
+            let i = i.clamp(0.0, f.width as f64 - 1.0) as usize;
+            let j = j.clamp(0.0, f.height as f64 - 1.0) as usize;
+            img[j * f.width as usize + i]
+        };
+        let (a, b, c, d) = (
+            at(x0, y0),
+            at(x0 + 1.0, y0),
+            at(x0, y0 + 1.0),
+            at(x0 + 1.0, y0 + 1.0),
+        );
+        std::array::from_fn(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+        })
+    }
+
+    #[test]
+    fn applying_the_map_to_an_image_of_a_gives_the_rays_of_b() {
+        // The "image" of A is its own ray directions; looking it up through the map must give B's
+        // directions, up to the bilinear interpolation error (second order in A's pixel angle).
+        let cases: Vec<(CameraStage, CameraStage)> = vec![
+            (
+                fisheye(180.0, true, Format::new(200, 200)),
+                builtin("PxrPerspective", &[("float fov", "70")], Format::new(64, 40)),
+            ),
+            (
+                builtin("PxrPerspective", &[("float fov", "100")], Format::new(160, 120)),
+                fisheye(150.0, true, Format::new(50, 50)),
+            ),
+        ];
+        for (a, b) in cases {
+            let fa = a.camera().format;
+            let screen: Vec<Point2> = (0..fa.height)
+                .flat_map(|y| (0..fa.width).map(move |x| (x, y)))
+                .map(|(x, y)| a.camera().raster_to_screen(x as f64 + 0.5, y as f64 + 0.5))
+                .collect();
+            let (a_rays, _) = chief_rays(&a, &screen);
+            let img: Vec<[f64; 3]> = a_rays
+                .iter()
+                .map(|r| [r.direction.x as f64, r.direction.y as f64, r.direction.z as f64])
+                .collect();
+            let fb = b.camera().format;
+            let map = compute_stmap(&a, &b, DEFAULT_DISTANCE).unwrap();
+            assert_eq!(map.stats.inconsistent, 0);
+            let b_screen: Vec<Point2> = (0..fb.height)
+                .flat_map(|y| (0..fb.width).map(move |x| (x, y)))
+                .map(|(x, y)| b.camera().raster_to_screen(x as f64 + 0.5, y as f64 + 0.5))
+                .collect();
+            let (b_rays, _) = chief_rays(&b, &b_screen);
+            let mut checked = 0;
+            for (n, b_ray) in b_rays.iter().enumerate() {
+                let (s, t) = (map.s[n] as f64, map.t[n] as f64);
+                // Away from A's border (clamped lookups) and from its culled region.
+                let (xa, ya) = (s * fa.width as f64, (1.0 - t) * fa.height as f64);
+                let margin = 1.5;
+                if map.alpha[n] == 0.0
+                    || xa < margin
+                    || ya < margin
+                    || xa > fa.width as f64 - margin
+                    || ya > fa.height as f64 - margin
+                {
+                    continue;
+                }
+                let v = bilinear(&img, fa, s, t);
+                if v.iter().all(|c| *c == 0.0) {
+                    continue;
+                }
+                // atan2(|v × d|, v · d): acos of a dot product near 1 has no precision.
+                let d = b_ray.direction;
+                let d = [d.x as f64, d.y as f64, d.z as f64];
+                let cross = [
+                    v[1] * d[2] - v[2] * d[1],
+                    v[2] * d[0] - v[0] * d[2],
+                    v[0] * d[1] - v[1] * d[0],
+                ];
+                let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+                let angle = sin.atan2(v[0] * d[0] + v[1] * d[1] + v[2] * d[2]);
+                // Looking up between neighbours of a cull boundary mixes in zeros: skip those too.
+                let neighbours_live = {
+                    // The four pixels the lookup blends (margin keeps them inside the image).
+                    let (i, j) = ((xa - 0.5).floor() as usize, (ya - 0.5).floor() as usize);
+                    [(0, 0), (1, 0), (0, 1), (1, 1)]
+                        .iter()
+                        .all(|(di, dj)| img[(j + dj) * fa.width as usize + i + di] != [0.0; 3])
+                };
+                if !neighbours_live {
+                    continue;
+                }
+                assert!(angle < 1e-4, "pixel {n}: looked-up direction off by {angle} rad");
+                checked += 1;
+            }
+            assert!(checked as u64 > map.stats.pixels / 4, "{checked}");
+        }
+    }
+
+    #[test]
+    fn a_projection_without_inverse_is_refused() {
+        let f = Format::new(16, 16);
+        let a = fisheye(180.0, false, f);
+        let b = builtin("PxrPerspective", &[], f);
+        let e = compute_stmap(&a, &b, DEFAULT_DISTANCE).unwrap_err().to_string();
+        assert!(
+            e.contains("TestFisheye offers no inverse") && e.contains("ST-maps need one"),
+            "{e}"
+        );
+        // The other way round works: B needs no inverse.
+        assert!(compute_stmap(&b, &a, DEFAULT_DISTANCE).is_ok());
+    }
+
+    #[test]
+    fn bad_distances_and_names_are_clear_errors() {
+        let f = Format::new(8, 8);
+        let a = builtin("PxrPerspective", &[], f);
+        for d in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            let e = compute_stmap(&a, &a, d).unwrap_err().to_string();
+            assert!(e.starts_with("--distance"), "{e}");
+        }
+        let empty = ParamList::new();
+        let e = stages(
+            &mut builtin_registry(),
+            ("PxrPerspectve", &empty, f),
+            ("PxrPerspective", &empty, f),
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(
+            e.starts_with("--from PxrPerspectve: unknown projection") && e.contains("did you mean"),
+            "{e}"
+        );
+        let bad = params(&[("float fov", "500")]);
+        let e = stages(
+            &mut builtin_registry(),
+            ("PxrPerspective", &empty, f),
+            ("PxrPerspective", &bad, f),
+        )
+        .err()
+        .unwrap()
+        .to_string();
+        assert!(e.starts_with("--to PxrPerspective:") && e.contains("fov"), "{e}");
+    }
+
+    /// A map from any registered projection to itself is the identity wherever the projection sees
+    /// (every projection added to the library is checked here without being named).
+    #[test]
+    fn every_registered_projection_maps_to_itself() {
+        let f = Format::new(40, 24);
+        let reg = builtin_registry();
+        let mut checked = Vec::new();
+        for name in reg.names() {
+            let a = builtin(&name, &[], f);
+            let b = builtin(&name, &[], f);
+            let map = match compute_stmap(&a, &b, DEFAULT_DISTANCE) {
+                Ok(m) => m,
+                Err(StMapError::NoInverse { .. }) => {
+                    eprintln!("{name}: no inverse, no identity map to check");
+                    continue;
+                }
+                Err(e) => panic!("{name}: {e}"),
+            };
+            assert!(map.stats.mapped > 0, "{name}: nothing mapped: {:?}", map.stats);
+            assert_eq!(
+                map.stats.inconsistent,
+                0,
+                "{name}: {:?}",
+                map.stats.consistency_warning(&name)
+            );
+            for n in 0..map.s.len() {
+                assert!(map.s[n].is_finite() && map.t[n].is_finite(), "{name}: NaN at {n}");
+                if map.alpha[n] == 1.0 {
+                    let (i, j) = (n as u32 % f.width, n as u32 / f.width);
+                    let es = (i as f64 + 0.5) / f.width as f64;
+                    let et = 1.0 - (j as f64 + 0.5) / f.height as f64;
+                    assert!(
+                        (map.s[n] as f64 - es).abs() * (f.width as f64) < 1e-3
+                            && (map.t[n] as f64 - et).abs() * (f.height as f64) < 1e-3,
+                        "{name}: pixel {i},{j} maps to ({}, {}), not its own centre ({es}, {et})",
+                        map.s[n],
+                        map.t[n]
+                    );
+                }
+            }
+            checked.push(name);
+        }
+        eprintln!("identity maps checked: {}", checked.join(", "));
+        assert!(checked.len() >= 2, "{checked:?}");
+    }
+
+    #[test]
+    fn written_file_reads_back_and_failures_name_the_path() {
+        let f = Format::new(12, 6);
+        let a = builtin("PxrPerspective", &[("float fov", "60")], f);
+        let b = builtin("PxrPerspective", &[("float fov", "90")], f);
+        let map = compute_stmap(&a, &b, DEFAULT_DISTANCE).unwrap();
+        let dir = std::env::temp_dir().join(format!("obscura-stmap-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("map.exr");
+        write_stmap_exr(&map, &[("obscura:from", "PxrPerspective".into())], &path).unwrap();
+        let img = exr::prelude::read_all_flat_layers_from_file(&path).unwrap();
+        let layer = &img.layer_data[0];
+        assert_eq!((layer.size.0, layer.size.1), (12, 6));
+        for (name, want) in [("R", &map.s), ("G", &map.t), ("A", &map.alpha)] {
+            let ch = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name.to_string() == name)
+                .unwrap();
+            match &ch.sample_data {
+                FlatSamples::F32(v) => assert_eq!(v, want, "{name}"),
+                other => panic!("{name}: {other:?}"),
+            }
+        }
+        assert!(!temporary_sibling(&path).exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+        let bad = Path::new("/nonexistent-dir/map.exr");
+        let e = write_stmap_exr(&map, &[], bad).unwrap_err().to_string();
+        assert!(e.contains("/nonexistent-dir/map.exr"), "{e}");
+    }
+}

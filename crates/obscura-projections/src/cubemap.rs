@@ -1,0 +1,489 @@
+//! `EquiangularCubemapFace`: one face of Google's equi-angular cube map (EAC), one face per camera.
+//!
+//! # Mapping
+//!
+//! With `u = (2·sx − l − r)/(r − l)` and `v = (2·sy − b − t)/(t − b)`, both in `[−1, 1]` over the
+//! screen window (conventions.md), the face coordinates are equi-angular, not equi-distant:
+//!
+//! ```text
+//! a = tan(u·π/4),   b = tan(v·π/4),   D = normalize(F + a·R + b·U)
+//! ```
+//!
+//! so equal steps of `u` are equal angles seen from the cube's centre, and the face's four edges
+//! `u = ±1`, `v = ±1` are 45° off its axis `F`. Each face is the picture a camera turned toward it
+//! would take, upright and unmirrored (yawed for the side faces, pitched for the top and bottom):
+//!
+//! | `face` | axis `F` | right `R` (screen +x) | up `U` (screen +y) |
+//! |---|---|---|---|
+//! | `+Z` | +Z | +X | +Y |
+//! | `+X` | +X | −Z | +Y |
+//! | `-Z` | −Z | −X | +Y |
+//! | `-X` | −X | +Z | +Y |
+//! | `+Y` | +Y | +X | −Z |
+//! | `-Y` | −Y | +X | +Z |
+//!
+//! Every basis is a rotation of `+Z`'s (`R × U = F` in components), so neighbouring faces share
+//! their edges: the `+Z` face's right edge is the `+X` face's left edge, point for point, and the top
+//! edge of each side face meets the `+Y` face. Samples the pixel filter takes just outside the window
+//! continue the same formula (onto the neighbouring faces' directions) while `|u|, |v| < 2`, where
+//! `a` and `b` stay finite; beyond, the direction is zero (culled).
+//!
+//! # Footprint
+//!
+//! With `N = F + a·R + b·U` (`|N|² = 1 + a² + b²`) and `da/du = (π/4)(1 + a²)`, the direction turns by
+//! `|∂D/∂u| = (π/4)(1 + a²)·sqrt(1 + b²)/(1 + a² + b²)` per unit of `u`, and by
+//! `|∂D/∂v| = (π/4)(1 + b²)·sqrt(1 + a²)/(1 + a² + b²)` per unit of `v`. One pixel is
+//! `Δu = 2Δx/(r − l)`, `Δv = 2Δy/(t − b)`, so `αx = Δu·|∂D/∂u|`, `αy = Δv·|∂D/∂v|` and
+//! `ray_spread = ½·sqrt(αx·αy)`; `origin_radius = 0`; clipping is spherical: `min_dist = near`,
+//! `max_dist = far`.
+//!
+//! # Inverse
+//!
+//! A camera-space point `P` with `P·F > 0` is seen at `u = (4/π)·atan((P·R)/(P·F))`,
+//! `v = (4/π)·atan((P·U)/(P·F))`, mapped back through the window; a point with `P·F ≤ 0` (behind the
+//! face's hemisphere) gives `None`.
+//!
+//! # Properties
+//!
+//! DicingHint Spherical (the pixels are equal angles, not equal steps on a plane); FieldOfView 90;
+//! DeepMetric RayLength for every face, including `+Z` whose rays never leave +Z: the six faces of one
+//! cube must measure depth alike or their depth maps would not meet at the seams.
+
+use std::f32::consts::FRAC_PI_4;
+use std::sync::LazyLock;
+
+use obscura_sdk::{
+    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
+};
+
+use crate::simd;
+
+/// The name scenes use.
+pub const NAME: &str = "EquiangularCubemapFace";
+
+static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
+    vec![ParamDecl::string("face", "+Z").choices(&Face::NAMES).doc(
+        "the cube face this camera renders: +X, -X, +Y, -Y, +Z or -Z (each upright, as if turned to it)",
+    )]
+});
+
+/// One face of the cube.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Face {
+    /// Looking along +X.
+    PosX,
+    /// Looking along −X.
+    NegX,
+    /// Looking up, along +Y.
+    PosY,
+    /// Looking down, along −Y.
+    NegY,
+    /// Looking ahead, along +Z.
+    #[default]
+    PosZ,
+    /// Looking back, along −Z.
+    NegZ,
+}
+
+impl Face {
+    /// The spellings of the `face` parameter.
+    pub const NAMES: [&'static str; 6] = ["+X", "-X", "+Y", "-Y", "+Z", "-Z"];
+
+    /// Reads a `face` value.
+    #[must_use]
+    pub fn parse(s: &str) -> Option<Face> {
+        Some(match s {
+            "+X" => Face::PosX,
+            "-X" => Face::NegX,
+            "+Y" => Face::PosY,
+            "-Y" => Face::NegY,
+            "+Z" => Face::PosZ,
+            "-Z" => Face::NegZ,
+            _ => return None,
+        })
+    }
+
+    /// The face's axis `F`, right `R` and up `U` (see the module documentation's table).
+    #[must_use]
+    pub fn basis(self) -> [Vec3; 3] {
+        let (x, y, z) = (Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::Z);
+        match self {
+            Face::PosZ => [z, x, y],
+            Face::PosX => [x, -z, y],
+            Face::NegZ => [-z, -x, y],
+            Face::NegX => [-x, z, y],
+            Face::PosY => [y, x, -z],
+            Face::NegY => [-y, x, z],
+        }
+    }
+}
+
+/// Creates [`CubemapFace`] projections.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct CubemapFaceFactory;
+
+impl ProjectionFactory for CubemapFaceFactory {
+    fn name(&self) -> &str {
+        NAME
+    }
+
+    fn summary(&self) -> &str {
+        "one face of Google's equi-angular cube map: D = normalize(F + tan(u pi/4) R + tan(v pi/4) U)"
+    }
+
+    fn param_table(&self) -> &[ParamDecl] {
+        &TABLE
+    }
+
+    fn create_projection(
+        &self,
+        env: &mut ProjectionEnvironment,
+        params: &ParamList,
+    ) -> Result<Box<dyn Projection>, PluginError> {
+        let p = Params::resolve(NAME, &TABLE, params)?;
+        let face = Face::parse(p.string("face")?).ok_or_else(|| PluginError::Invalid {
+            plugin: NAME.into(),
+            message: "parameter \"face\": expected one of +X, -X, +Y, -Y, +Z, -Z".into(),
+        })?;
+        env.set_deep_metric(DeepMetric::RayLength);
+        Ok(Box::new(CubemapFace::new(env, face)))
+    }
+}
+
+/// One equi-angular cube-map face (see the module documentation for its mapping).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CubemapFace {
+    face: Face,
+    basis: [Vec3; 3],
+    /// Window centre and half extents: `u = (sx − cx)/hx`, `v = (sy − cy)/hy`.
+    centre: (f32, f32),
+    half: (f32, f32),
+    /// `½·sqrt(Δu·Δv)·π/4`.
+    spread_scale: f32,
+    near: f32,
+    far: f32,
+}
+
+impl CubemapFace {
+    /// The face `face` for `env`.
+    #[must_use]
+    pub fn new(env: &ProjectionEnvironment, face: Face) -> Self {
+        let w = env.screen_window();
+        let (dx, dy) = env.pixel_size();
+        let (du, dv) = (2.0 * dx / w.width(), 2.0 * dy / w.height());
+        CubemapFace {
+            face,
+            basis: face.basis(),
+            centre: (0.5 * (w.left + w.right), 0.5 * (w.bottom + w.top)),
+            half: (0.5 * w.width(), 0.5 * w.height()),
+            spread_scale: 0.5 * (du * dv).sqrt() * FRAC_PI_4,
+            near: env.clipping_near(),
+            far: env.clipping_far(),
+        }
+    }
+
+    /// The face this camera renders.
+    #[must_use]
+    pub fn face(&self) -> Face {
+        self.face
+    }
+
+    #[inline(always)]
+    fn ray(&self, s: Point2) -> RayGeometry {
+        let u = (s.x - self.centre.0) / self.half.0;
+        let v = (s.y - self.centre.1) / self.half.1;
+        if !(u.abs() < 2.0 && v.abs() < 2.0) {
+            return RayGeometry::CULLED;
+        }
+        let a = tan_quarter_turn(u);
+        let b = tan_quarter_turn(v);
+        let (a2, b2) = (a * a, b * b);
+        let n2 = 1.0 + a2 + b2;
+        let inv = 1.0 / n2.sqrt();
+        let [f, r, up] = self.basis;
+        let d = (f + r * a + up * b) * inv;
+        // αx·αy ∝ (1 + a²)(1 + b²)·sqrt((1 + a²)(1 + b²))/|N|⁴
+        let q = (1.0 + a2) * (1.0 + b2);
+        RayGeometry {
+            origin: Vec3::ZERO,
+            origin_radius: 0.0,
+            direction: d,
+            ray_spread: self.spread_scale * (q * q.sqrt()).sqrt() / n2,
+            min_dist: self.near,
+            max_dist: self.far,
+        }
+    }
+}
+
+/// `tan(t·π/4)` for `|t| < 2`, to within a few `f32` ulps and several times faster than the library
+/// `tan`: the odd polynomial of Cephes' `tanf` on `|x| ≤ π/4`, and `tan x = 1/tan(π/2 − x)` beyond.
+#[inline(always)]
+fn tan_quarter_turn(t: f32) -> f32 {
+    let at = t.abs();
+    let far = at > 1.0;
+    let x = if far { 2.0 - at } else { at } * FRAC_PI_4;
+    let z = x * x;
+    let poly = ((((9.385_402e-3 * z + 3.119_922_3e-3) * z + 2.443_013_5e-2) * z + 5.341_128e-2) * z
+        + 1.333_88e-1)
+        * z
+        + 3.333_315_7e-1;
+    let tan = x + x * z * poly;
+    (if far { 1.0 / tan } else { tan }).copysign(t)
+}
+
+impl Projection for CubemapFace {
+    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
+        match property {
+            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
+            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
+            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(90.0)),
+            _ => None,
+        }
+    }
+
+    fn project(&self, ctx: &mut ProjectionContext<'_>) {
+        let c = ctx.parts_mut();
+        let (rays, screen) = (c.rays, c.screen);
+        simd::run(|| {
+            for (r, s) in rays.iter_mut().zip(screen) {
+                *r = self.ray(*s);
+            }
+        });
+    }
+
+    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
+        if !point.is_finite() {
+            return None;
+        }
+        let dot = |v: Vec3| {
+            f64::from(point.x) * f64::from(v.x)
+                + f64::from(point.y) * f64::from(v.y)
+                + f64::from(point.z) * f64::from(v.z)
+        };
+        let [f, r, up] = self.basis;
+        let pf = dot(f);
+        if pf.is_nan() || pf <= 0.0 {
+            return None;
+        }
+        let to_screen = std::f64::consts::FRAC_1_PI * 4.0;
+        let u = to_screen * (dot(r) / pf).atan();
+        let v = to_screen * (dot(up) / pf).atan();
+        Some(Point2::new(
+            (f64::from(self.centre.0) + u * f64::from(self.half.0)) as f32,
+            (f64::from(self.centre.1) + v * f64::from(self.half.1)) as f32,
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::testing::{ContractTest, assert_contract, project_points};
+    use obscura_sdk::Format;
+    use proptest::prelude::*;
+
+    fn make(face: &str, format: Format) -> Box<dyn Projection> {
+        let mut list = ParamList::new();
+        list.push_text("string face", &[face], None).unwrap();
+        CubemapFaceFactory
+            .create_projection(&mut ProjectionEnvironment::for_format(format), &list)
+            .unwrap()
+    }
+
+    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
+        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+    }
+
+    fn angle(a: Vec3, b: Vec3) -> f64 {
+        let (a, b) = (
+            [f64::from(a.x), f64::from(a.y), f64::from(a.z)],
+            [f64::from(b.x), f64::from(b.y), f64::from(b.z)],
+        );
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+            .sqrt()
+            .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+    }
+
+    #[test]
+    fn every_face_keeps_the_contract() {
+        for format in [Format::new(32, 32), Format::new(48, 32)] {
+            for face in Face::NAMES {
+                let stats = assert_contract(make(face, format).as_ref(), &ContractTest::new(format));
+                assert_eq!(stats.valid, stats.samples, "{face}: {stats:?}");
+                match face {
+                    "+Z" => assert_eq!(stats.backward, 0),
+                    "-Z" => assert_eq!(stats.backward, stats.valid),
+                    _ => assert!(
+                        stats.backward > 0 && stats.backward < stats.valid,
+                        "{face}: {stats:?}"
+                    ),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_face_edges_are_at_45_degrees_and_equal_steps_are_equal_angles() {
+        let format = Format::new(64, 64);
+        for face in Face::NAMES {
+            let p = make(face, format);
+            let axis = Face::parse(face).unwrap().basis()[0];
+            for s in [
+                Point2::new(1.0, 0.0),
+                Point2::new(-1.0, 0.0),
+                Point2::new(0.0, 1.0),
+                Point2::new(0.0, -1.0),
+            ] {
+                let d = ray_at(p.as_ref(), s).direction;
+                assert!(
+                    (angle(d, axis) - std::f64::consts::FRAC_PI_4).abs() < 1e-6,
+                    "{face} {s:?}: {d:?}"
+                );
+            }
+            // Along the horizontal midline, u = 0.25, 0.5, 0.75, 1 are 11.25°, 22.5°, 33.75°, 45° off axis.
+            for k in 1..=4 {
+                let d = ray_at(p.as_ref(), Point2::new(0.25 * k as f32, 0.0)).direction;
+                assert!((angle(d, axis) - f64::from(k) * std::f64::consts::PI / 16.0).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn neighbouring_faces_share_their_edges() {
+        let format = Format::new(64, 64);
+        let faces: Vec<(&str, Box<dyn Projection>)> =
+            Face::NAMES.iter().map(|f| (*f, make(f, format))).collect();
+        let edge = |t: f32| {
+            [
+                Point2::new(1.0, t),
+                Point2::new(-1.0, t),
+                Point2::new(t, 1.0),
+                Point2::new(t, -1.0),
+            ]
+        };
+        // Every edge point of every face is an edge point of exactly one other face.
+        for (name, p) in &faces {
+            for i in 0..=20 {
+                let t = -1.0 + 0.1 * i as f32;
+                for s in edge(t) {
+                    let d = ray_at(p.as_ref(), s).direction;
+                    let mut shared = 0;
+                    for (other, q) in &faces {
+                        if other == name {
+                            continue;
+                        }
+                        if let Some(back) = q.unproject(d, 0.0)
+                            && back.x.abs() <= 1.0 + 1e-5
+                            && back.y.abs() <= 1.0 + 1e-5
+                        {
+                            assert!(
+                                (back.x.abs() - 1.0).abs() < 1e-5 || (back.y.abs() - 1.0).abs() < 1e-5,
+                                "{name} {s:?} lands inside {other} at {back:?}"
+                            );
+                            let e = ray_at(q.as_ref(), back).direction;
+                            assert!(angle(d, e) < 1e-6, "{name} {s:?} vs {other} {back:?}");
+                            shared += 1;
+                        }
+                    }
+                    // Corners belong to three faces, other edge points to two.
+                    let corner = t.abs() > 0.999;
+                    assert_eq!(shared, if corner { 2 } else { 1 }, "{name} at {s:?}");
+                }
+            }
+        }
+        // The +Z face's right edge is the +X face's left edge.
+        let (pz, px) = (&faces[4].1, &faces[0].1);
+        let d = ray_at(pz.as_ref(), Point2::new(1.0, 0.3)).direction;
+        let back = px.unproject(d, 0.0).unwrap();
+        assert!(
+            (back.x + 1.0).abs() < 1e-6 && (back.y - 0.3).abs() < 1e-6,
+            "{back:?}"
+        );
+    }
+
+    proptest! {
+        #[test]
+        fn directions_match_the_closed_form(sx in -1.5f32..1.5, sy in -1.0f32..1.0, face in 0usize..6) {
+            let name = Face::NAMES[face];
+            let p = make(name, Format::new(48, 32));
+            let d = ray_at(p.as_ref(), Point2::new(sx, sy)).direction;
+            let (u, v) = (f64::from(sx) / 1.5, f64::from(sy));
+            let (a, b) = ((u * std::f64::consts::FRAC_PI_4).tan(), (v * std::f64::consts::FRAC_PI_4).tan());
+            let [f, r, up] = Face::parse(name).unwrap().basis();
+            let n = |k: fn(Vec3) -> f32| f64::from(k(f)) + a * f64::from(k(r)) + b * f64::from(k(up));
+            let len = (1.0 + a * a + b * b).sqrt();
+            prop_assert!((f64::from(d.x) - n(|v| v.x) / len).abs() < 1e-6);
+            prop_assert!((f64::from(d.y) - n(|v| v.y) / len).abs() < 1e-6);
+            prop_assert!((f64::from(d.z) - n(|v| v.z) / len).abs() < 1e-6);
+        }
+
+        #[test]
+        fn unproject_inverts_project(sx in -1.777f32..1.777, sy in -1.0f32..1.0, depth in 0.01f32..1000.0, face in 0usize..6) {
+            let format = Format::new(640, 360);
+            let p = make(Face::NAMES[face], format);
+            let ray = ray_at(p.as_ref(), Point2::new(sx, sy));
+            let back = p.unproject(ray.direction * depth, 0.0).unwrap();
+            let px = 2.0 / 360.0;
+            prop_assert!(((back.x - sx) / px).abs() < 1e-4 && ((back.y - sy) / px).abs() < 1e-4, "{:?}", back);
+        }
+    }
+
+    #[test]
+    fn far_outside_the_window_is_culled_and_behind_the_face_is_not_seen() {
+        let p = make("+Z", Format::new(32, 32));
+        assert!(ray_at(p.as_ref(), Point2::new(2.0, 0.0)).is_culled());
+        assert!(ray_at(p.as_ref(), Point2::new(0.0, -2.5)).is_culled());
+        assert!(!ray_at(p.as_ref(), Point2::new(1.9, 1.9)).is_culled());
+        assert_eq!(p.unproject(Vec3::new(1.0, 0.0, 0.0), 0.0), None);
+        assert_eq!(p.unproject(Vec3::new(0.0, 0.0, -1.0), 0.0), None);
+    }
+
+    #[test]
+    fn the_fast_tangent_agrees_with_the_library() {
+        let mut worst = 0.0f64;
+        for i in -19_999..=19_999 {
+            let t = i as f32 / 10_000.0;
+            let exact = (f64::from(t) * std::f64::consts::FRAC_PI_4).tan();
+            worst = worst.max((f64::from(tan_quarter_turn(t)) / exact - 1.0).abs());
+        }
+        assert!(worst < 3e-7, "relative error {worst}");
+        assert_eq!(tan_quarter_turn(1.0), 1.0);
+        assert_eq!(tan_quarter_turn(0.0), 0.0);
+    }
+
+    #[test]
+    fn properties_are_honest() {
+        for face in Face::NAMES {
+            let p = make(face, Format::new(8, 8));
+            assert_eq!(
+                p.property(ProjectionProperty::DicingHint),
+                Some(PropertyValue::DicingHint(DicingHint::Spherical))
+            );
+            assert_eq!(
+                p.property(ProjectionProperty::DeepMetric),
+                Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
+            );
+            assert_eq!(
+                p.property(ProjectionProperty::FieldOfView),
+                Some(PropertyValue::Float(90.0))
+            );
+        }
+        let mut list = ParamList::new();
+        list.push_text("string face", &["front"], None).unwrap();
+        let err = CubemapFaceFactory
+            .create_projection(&mut ProjectionEnvironment::for_format(Format::new(8, 8)), &list)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(
+            err.starts_with("EquiangularCubemapFace: parameter \"face\""),
+            "{err}"
+        );
+    }
+}
