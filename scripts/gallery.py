@@ -90,7 +90,7 @@ TILES: dict[str, list[Tile]] = {
     ],
 }
 
-DECL = re.compile(r'^\s+"(?P<type>[a-z]+(?:\[\d+\])?) (?P<name>\w+)"\s+(?P<default>\[[^\]]*\])\s+(?P<rest>.*)$')
+DECL = re.compile(r'^\s+"(?P<type>[a-z]+(?:\[\d*\])?) (?P<name>\w+)"\s+(?P<default>\[[^\]]*\])\s+(?P<rest>.*)$')
 
 
 def run(cmd: list[str], **kw) -> subprocess.CompletedProcess:

@@ -1,5 +1,8 @@
 //! `project` throughput of `CalibratedCamera` for each model family: one batch of 4096 screen
 //! samples spread over the calibration image (valid and culled samples alike).
+//!
+//! `OBSCURA_BENCH_CASES=OPENCV,FOV cargo bench -p obscura-calibration --bench models` runs only the
+//! listed cases.
 
 use obscura_calibration::CalibratedCameraFactory;
 use obscura_sdk::{
@@ -136,7 +139,19 @@ fn list(model: &str, params: &[f32], pol: &[f32], inv: &[f32]) -> ParamList {
     l
 }
 
-#[divan::bench(args = CASES.iter().map(|c| c.0))]
+/// The case labels to run: all, or those listed (comma-separated) in `OBSCURA_BENCH_CASES` (for
+/// profiling one model at a time).
+fn labels() -> Vec<&'static str> {
+    let only = std::env::var("OBSCURA_BENCH_CASES").unwrap_or_default();
+    let only: Vec<&str> = only.split(',').map(str::trim).filter(|s| !s.is_empty()).collect();
+    CASES
+        .iter()
+        .map(|c| c.0)
+        .filter(|l| only.is_empty() || only.contains(l))
+        .collect()
+}
+
+#[divan::bench(args = labels())]
 fn project(bencher: divan::Bencher, label: &str) {
     let (_, model, params, pol, inv) = *CASES.iter().find(|c| c.0 == label).unwrap();
     let format = Format::new(640, 480);

@@ -17,7 +17,7 @@
 //! purely radial maps (the map is monotone up to the fold, so it always converges), and a
 //! two-dimensional Newton with the analytic Jacobian started from the radial inverse otherwise.
 
-use crate::solve::{self, Mat2, apply2, det2, inv2, mul2};
+use crate::solve::{self, InverseTable, Mat2, apply2, det2, inv2, mul2};
 
 /// A polynomial (rational) radial, tangential and thin-prism distortion.
 #[derive(Debug, Clone, PartialEq)]
@@ -32,6 +32,8 @@ pub(crate) struct Distortion {
     pub s: [f64; 4],
     /// Tangential and prism terms act on the radially distorted point (Aria), not the undistorted one.
     pub tangential_after_radial: bool,
+    /// Numerator terms up to the last non-zero one (the rest are skipped).
+    num_len: usize,
     /// Largest undistorted radius where the map is still one-to-one (the fold), or where the model's
     /// plane ends; computed by [`Distortion::finish`].
     pub max_radius: f64,
@@ -39,6 +41,9 @@ pub(crate) struct Distortion {
     radial_max: f64,
     /// `f(radial_max)`: no distorted radius beyond it has a preimage (∞ without a fold).
     radial_fold_image: f64,
+    /// The radial inverse `r(r_d)` sampled over the image ([`Distortion::tabulate`]), seeding the
+    /// exact solve.
+    radial_table: Option<InverseTable>,
 }
 
 impl Distortion {
@@ -50,9 +55,11 @@ impl Distortion {
             p,
             s,
             tangential_after_radial: after_radial,
+            num_len: num.iter().rposition(|&k| k != 0.0).map_or(0, |i| i + 1),
             max_radius: f64::INFINITY,
             radial_max: f64::INFINITY,
             radial_fold_image: f64::INFINITY,
+            radial_table: None,
         }
     }
 
@@ -66,7 +73,8 @@ impl Distortion {
             .all(|&c| c == 0.0)
     }
 
-    fn is_radial(&self) -> bool {
+    /// True when the map has no tangential or prism terms (its inverse is one-dimensional).
+    pub fn is_radial(&self) -> bool {
         self.p == [0.0; 2] && self.s == [0.0; 4]
     }
 
@@ -74,7 +82,7 @@ impl Distortion {
     #[inline]
     fn radial(&self, q: f64) -> (f64, f64) {
         let (mut n, mut dn) = (0.0, 0.0);
-        for &k in self.num.iter().rev() {
+        for &k in self.num[..self.num_len].iter().rev() {
             dn = dn * q + n;
             n = n * q + k;
         }
@@ -137,28 +145,44 @@ impl Distortion {
         (d, mul2(&jt, &jr))
     }
 
-    /// Inverts the radial part alone: the point `m` with `R(|m|²)·m = md`, within the radial fold.
+    /// Inverts the radial part alone: the point `m` with `R(|m|²)·m = md`, within the radial fold,
+    /// and the Jacobian of the radial map there.
     ///
-    /// Newton on the radius from `r = r_d`, kept inside the bracket `[0, r_fold]` (where the radius
-    /// map is increasing) by bisection; stops when a step is below 1e-12 of the radius (the error is
-    /// then of the order of its square).
+    /// Newton on the radius from the table's seed (else `r = r_d`), kept inside the bracket
+    /// `[0, r_fold]` (where the radius map is increasing) by bisection; stops when a step is below
+    /// 1e-12 of the radius (the error is then of the order of its square). The Jacobian is the one
+    /// at the last iterate before that step.
     #[inline]
-    fn invert_radial(&self, md: [f64; 2]) -> Option<[f64; 2]> {
+    fn invert_radial(&self, md: [f64; 2]) -> Option<([f64; 2], Mat2)> {
         let rd = (md[0] * md[0] + md[1] * md[1]).sqrt();
         if rd == 0.0 {
-            return Some([0.0, 0.0]);
+            return Some(([0.0, 0.0], solve::I2));
         }
         if rd >= self.radial_fold_image || rd.is_nan() {
             return None;
         }
         let (mut lo, mut hi) = (0.0, self.radial_max);
-        let mut r = rd.min(0.5 * hi);
+        let mut r = match self.radial_table.as_ref().and_then(|t| t.seed(rd)) {
+            Some(seed) if seed < hi => seed,
+            _ => rd.min(0.5 * hi),
+        };
+        let done = |r: f64, rr: f64, drr: f64| {
+            let k = r / rd;
+            let m = [md[0] * k, md[1] * k];
+            let cross = 2.0 * m[0] * m[1] * drr;
+            let j = [
+                [rr + 2.0 * m[0] * m[0] * drr, cross],
+                [cross, rr + 2.0 * m[1] * m[1] * drr],
+            ];
+            Some((m, j))
+        };
         for _ in 0..solve::MAX_ITERATIONS {
-            let (f, df) = self.radial_radius(r);
+            let q = r * r;
+            let (rr, drr) = self.radial(q);
+            let (f, df) = (r * rr, rr + 2.0 * q * drr);
             let e = f - rd;
             if e == 0.0 {
-                let k = r / rd;
-                return Some([md[0] * k, md[1] * k]);
+                return done(r, rr, drr);
             }
             if e < 0.0 {
                 lo = r;
@@ -174,8 +198,7 @@ impl Distortion {
                 2.0 * r.max(1.0)
             };
             if (next - r).abs() <= 1e-12 * next {
-                let k = next / rd;
-                return Some([md[0] * k, md[1] * k]);
+                return done(next, rr, drr);
             }
             r = next;
         }
@@ -225,20 +248,16 @@ impl Distortion {
     #[inline]
     pub fn inverse(&self, md: [f64; 2]) -> Option<([f64; 2], Mat2)> {
         let (m, j) = if self.is_radial() {
-            let m = self.invert_radial(md)?;
-            (m, self.forward(m).1)
+            self.invert_radial(md)?
+        } else if let Some(solved) = self.seed(md).and_then(|seed| self.inverse_from(md, seed)) {
+            return Some(solved);
         } else if self.tangential_after_radial {
             let t = |x: [f64; 2]| self.tangential(x[0], x[1], 1.0, 0.0);
             let (r, jt) = Self::newton(t, md, md, f64::INFINITY)?;
-            let m = self.invert_radial(r)?;
-            let (rr, drr) = self.radial(m[0] * m[0] + m[1] * m[1]);
-            let jr = [
-                [rr + 2.0 * m[0] * m[0] * drr, 2.0 * m[0] * m[1] * drr],
-                [2.0 * m[0] * m[1] * drr, rr + 2.0 * m[1] * m[1] * drr],
-            ];
+            let (m, jr) = self.invert_radial(r)?;
             (m, mul2(&jt, &jr))
         } else {
-            let guess = self.invert_radial(md).unwrap_or_else(|| {
+            let guess = self.invert_radial(md).map(|(m, _)| m).unwrap_or_else(|| {
                 let rd = (md[0] * md[0] + md[1] * md[1]).sqrt().max(1e-300);
                 let k = (0.9 * self.max_radius).min(rd) / rd;
                 [md[0] * k, md[1] * k]
@@ -249,6 +268,92 @@ impl Distortion {
             return None;
         }
         Some((m, inv2(&j)?))
+    }
+
+    /// The undistorted point of `md` and `∂m/∂m_d`, by plain Newton steps from `seed`, a point
+    /// already close to the solution (from a table of the inverse): `None` when four steps do not
+    /// converge, a step leaves the region where the map is one-to-one, or the result lies beyond
+    /// the fold. The caller then takes the safeguarded path.
+    ///
+    /// A step `s_k = J(m_k)⁻¹·(f(m_k) − m_d)` is, to first order, the error of `m_k`; `m_k − s_k` is
+    /// accepted once `|s_k|₁ ≤ 1e-9` (and the residual is below 1e-9·(1 + |m_d|₁)): the error of
+    /// `m_k` is then below 1e-9, and that of `m_k − s_k`, by Newton's quadratic convergence, of the
+    /// order of `|s_k|²` (1e-18). The Jacobian returned is the inverse of
+    /// `J(m_k)`, which differs from the one at the solution by `O(|s_k|)`.
+    #[inline]
+    pub fn inverse_from(&self, md: [f64; 2], seed: [f64; 2]) -> Option<([f64; 2], Mat2)> {
+        let scale = 1.0 + md[0].abs() + md[1].abs();
+        let mut m = seed;
+        for _ in 0..SEEDED_ITERATIONS {
+            let (v, j) = self.forward(m);
+            let r = [v[0] - md[0], v[1] - md[1]];
+            let det = det2(&j);
+            // Inside the fold the determinant is positive; NaN (a seed next to an invalid table
+            // node) fails here too.
+            if !(det > 0.0 && det.is_finite()) {
+                return None;
+            }
+            let k = 1.0 / det;
+            let ji = [[j[1][1] * k, -j[0][1] * k], [-j[1][0] * k, j[0][0] * k]];
+            let step = apply2(&ji, r);
+            m = [m[0] - step[0], m[1] - step[1]];
+            if step[0].abs() + step[1].abs() <= SEEDED_TOLERANCE
+                && r[0].abs() + r[1].abs() <= SEEDED_TOLERANCE * scale
+            {
+                let inside = m[0] * m[0] + m[1] * m[1] <= self.max_radius * self.max_radius;
+                return inside.then_some((m, ji));
+            }
+        }
+        None
+    }
+
+    /// The radial inverse from the table alone (Hermite interpolation, ~1e-13 from the root), or
+    /// `None` beyond the table.
+    #[inline(always)]
+    fn radial_seed(&self, md: [f64; 2]) -> Option<[f64; 2]> {
+        let rd = (md[0] * md[0] + md[1] * md[1]).sqrt();
+        if rd == 0.0 {
+            return Some([0.0, 0.0]);
+        }
+        let k = self.radial_table.as_ref()?.seed(rd)? / rd;
+        Some([md[0] * k, md[1] * k])
+    }
+
+    /// A starting point for the two-dimensional inverse, a few 1e-6 from the root for real
+    /// calibrations: the tabulated radial inverse of `md` with the tangential and prism
+    /// displacement `δ` taken out once. OpenCV order (`md = R·m + δ(m)`):
+    /// `m₀ = R⁻¹(md)`, seed `R⁻¹(md − δ(m₀))`; Aria order (`md = x + δ(x)`, `x = R·m`): seed
+    /// `R⁻¹(md − δ(md))`. The error is of the order of `|∂δ|·|δ|`.
+    #[inline(always)]
+    fn seed(&self, md: [f64; 2]) -> Option<[f64; 2]> {
+        let at = if self.tangential_after_radial {
+            md
+        } else {
+            self.radial_seed(md)?
+        };
+        // δ(x): the tangential and prism terms alone (radial factor 1).
+        let (t, _) = self.tangential(at[0], at[1], 1.0, 0.0);
+        let d = [t[0] - at[0], t[1] - at[1]];
+        self.radial_seed([md[0] - d[0], md[1] - d[1]])
+    }
+
+    /// Tabulates the radial inverse over distorted radii `[0, rd_max]` (the image's extent), to seed
+    /// [`Distortion::invert_radial`] within ~1e-13 of the root, where one Newton step confirms it.
+    /// Call after [`Distortion::finish`].
+    pub fn tabulate(&mut self, rd_max: f64) {
+        const SAMPLES: usize = 512;
+        let end = rd_max.min(self.radial_fold_image);
+        self.radial_table = None;
+        if !(end > 0.0 && end.is_finite()) {
+            return;
+        }
+        let table = InverseTable::new(
+            end,
+            SAMPLES,
+            |r| self.radial_radius(r),
+            |rd, _| self.invert_radial([rd, 0.0]).map(|(m, _)| m[0]),
+        );
+        self.radial_table = Some(table);
     }
 
     /// Finds the fold: the smallest radius (≤ `limit`, the end of the model's plane) where the
@@ -285,6 +390,14 @@ impl Distortion {
         };
     }
 }
+
+/// Newton steps [`Distortion::inverse_from`] takes from a seed before giving up (two suffice from
+/// [`Distortion::seed`] for real calibrations).
+const SEEDED_ITERATIONS: usize = 4;
+
+/// Step (and residual) size, in normalised coordinates, after which [`Distortion::inverse_from`]
+/// takes one last step and stops.
+const SEEDED_TOLERANCE: f64 = 1e-9;
 
 /// Iterations of the two-dimensional Newton: from the radial inverse it converges in a few; a point
 /// beyond the fold's image never does, and is given up after this many.

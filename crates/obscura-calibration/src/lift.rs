@@ -4,7 +4,7 @@
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
-use crate::solve::{self, Mat32};
+use crate::solve::{self, InverseTable, Mat32};
 
 /// How an undistorted point becomes a ray.
 #[derive(Debug, Clone, PartialEq)]
@@ -70,7 +70,7 @@ pub(crate) enum Lift {
         /// Pixel distance → angle (the reference when given).
         bw: Option<Vec<f64>>,
         /// Angle → pixel distance (the reference when `bw` is absent, else a seed).
-        fw: Option<Vec<f64>>,
+        fw: Option<Forward>,
         /// Largest pixel distance in the valid set.
         rho_max: f64,
         /// Largest angle in the valid set.
@@ -109,10 +109,10 @@ fn radial_jacobian(m: [f64; 2], s: f64, ds: f64, dvz: f64) -> Mat32 {
     ]
 }
 
-/// `V = (sin θ·m/ρ, cos θ)` for `θ = θ(ρ)` with `θ'(ρ)`: value and derivative.
+/// `V = (sin θ·m/ρ, cos θ)` for `θ = θ(ρ)` (given as its sine and cosine) with `θ'(ρ)`: value and
+/// derivative.
 #[inline]
-fn angle_lift(m: [f64; 2], rho: f64, theta: f64, dtheta: f64) -> Lifted {
-    let (sin, cos) = theta.sin_cos();
+fn angle_lift(m: [f64; 2], rho: f64, sin: f64, cos: f64, dtheta: f64) -> Lifted {
     if rho < 1e-12 {
         return (
             [m[0] * dtheta, m[1] * dtheta, cos],
@@ -160,136 +160,22 @@ impl Lift {
     /// The ray of `m` and `∂V/∂m`, or `None` outside the valid set.
     #[inline]
     pub fn lift(&self, m: [f64; 2]) -> Option<Lifted> {
-        let q = m[0] * m[0] + m[1] * m[1];
         match self {
-            Lift::Perspective => Some(([m[0], m[1], 1.0], [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])),
-            Lift::Equidistant => {
-                let t = q.sqrt();
-                if t > PI {
-                    return None;
-                }
-                let (sin, cos) = t.sin_cos();
-                let (s, ds) = if t < 1e-3 {
-                    // sin t / t and its derivative by q = t², by series.
-                    (1.0 - q / 6.0 + q * q / 120.0, -1.0 / 6.0 + q / 60.0)
-                } else {
-                    (sin / t, (t * cos - sin) / (2.0 * t * q))
-                };
-                // d cos t / dq = −sin t/(2t) = −s/2.
-                Some(([s * m[0], s * m[1], cos], radial_jacobian(m, s, ds, -0.5 * s)))
-            }
-            Lift::Unified { alpha, beta } => {
-                let (mz, dmz) = unified_mz(*alpha, alpha * alpha * beta, (2.0 * alpha - 1.0) * beta, q)?;
-                Some(([m[0], m[1], mz], radial_jacobian(m, 1.0, 0.0, dmz)))
-            }
-            Lift::Mei { xi } => {
-                let rad = 1.0 + (1.0 - xi * xi) * q;
-                if rad <= 0.0 {
-                    return None;
-                }
-                let sq = rad.sqrt();
-                let lam = (xi + sq) / (1.0 + q);
-                let dlam = ((1.0 - xi * xi) / (2.0 * sq) - lam) / (1.0 + q);
-                Some((
-                    [lam * m[0], lam * m[1], lam - xi],
-                    radial_jacobian(m, lam, dlam, dlam),
-                ))
-            }
-            Lift::DoubleSphere { xi, alpha } => {
-                let (mz, dmz) = unified_mz(*alpha, alpha * alpha, 2.0 * alpha - 1.0, q)?;
-                let srad = mz * mz + (1.0 - xi * xi) * q;
-                if srad < 0.0 {
-                    return None;
-                }
-                let s = srad.sqrt();
-                let ds = (2.0 * mz * dmz + 1.0 - xi * xi) / (2.0 * s);
-                let (p, dp) = (mz * xi + s, dmz * xi + ds);
-                let (qq, dqq) = (mz * mz + q, 2.0 * mz * dmz + 1.0);
-                let k = p / qq;
-                let dk = (dp * qq - p * dqq) / (qq * qq);
-                Some((
-                    [k * m[0], k * m[1], k * mz - xi],
-                    radial_jacobian(m, k, dk, dk * mz + k * dmz),
-                ))
-            }
-            Lift::Division { k } => {
-                if *k > 0.0 && k * q >= 1.0 {
-                    return None;
-                }
-                Some(([m[0], m[1], 1.0 + k * q], radial_jacobian(m, 1.0, 0.0, *k)))
-            }
-            Lift::Fov { omega, c } => {
-                let r = q.sqrt();
-                let phi = omega * r;
-                if phi >= FRAC_PI_2 {
-                    return None;
-                }
-                let (sin, cos) = phi.sin_cos();
-                // g(r) = sin(ωr)/r and g'(r)/r, by series near 0.
-                let (g, dg_over_r) = if phi < 1e-3 {
-                    let w2 = omega * omega;
-                    (
-                        omega * (1.0 - w2 * q / 6.0),
-                        omega * w2 * (-1.0 / 3.0 + w2 * q / 30.0),
-                    )
-                } else {
-                    (sin / r, (phi * cos - sin) / (r * q))
-                };
-                // V = (g·m, c·cos(ωr)); ∂/∂q: ds = g'/(2r), dvz = −c·ω·sin(ωr)/(2r) = −c·ω·g/2.
-                Some((
-                    [g * m[0], g * m[1], c * cos],
-                    radial_jacobian(m, g, 0.5 * dg_over_r, -0.5 * c * omega * g),
-                ))
-            }
-            Lift::Equirect { w, h } => {
-                let (u, v) = (m[0], m[1]);
-                if !(0.0..=*h).contains(&v) {
-                    return None;
-                }
-                let theta = TAU * (u / w - 0.5);
-                let phi = PI * (0.5 - v / h);
-                let (st, ct) = theta.sin_cos();
-                let (sp, cp) = phi.sin_cos();
-                let (a, b) = (TAU / w, PI / h);
-                Some((
-                    [cp * st, -sp, cp * ct],
-                    [
-                        [a * cp * ct, b * sp * st],
-                        [0.0, b * cp],
-                        [-a * cp * st, b * sp * ct],
-                    ],
-                ))
-            }
-            Lift::OCam { pol, rho_max, .. } => {
-                let rho = q.sqrt();
-                if rho > *rho_max {
-                    return None;
-                }
-                let (p, dp) = solve::poly(pol, rho);
-                let g = if rho > 0.0 { -dp / rho } else { 0.0 };
-                Some(([m[0], m[1], -p], [[1.0, 0.0], [0.0, 1.0], [g * m[0], g * m[1]]]))
-            }
+            Lift::Perspective => perspective(m),
+            Lift::Equidistant => equidistant(m),
+            Lift::Unified { alpha, beta } => unified(*alpha, *beta, m),
+            Lift::Mei { xi } => mei(*xi, m),
+            Lift::DoubleSphere { xi, alpha } => double_sphere(*xi, *alpha, m),
+            Lift::Division { k } => division(*k, m),
+            Lift::Fov { omega, c } => fov(*omega, *c, m),
+            Lift::Equirect { w, h } => equirect(*w, *h, m),
+            Lift::OCam { pol, rho_max, .. } => ocam(pol, *rho_max, m),
             Lift::FTheta {
                 bw,
                 fw,
                 rho_max,
                 theta_max,
-            } => {
-                let rho = q.sqrt();
-                if rho > *rho_max {
-                    return None;
-                }
-                let (theta, dtheta) = match (bw, fw) {
-                    (Some(bw), _) => solve::poly(bw, rho),
-                    (None, Some(fw)) => {
-                        let guess = rho / solve::poly(fw, 0.0).1.max(1e-300);
-                        let t = solve::solve_increasing(|t| solve::poly(fw, t), rho, 0.0, *theta_max, guess)?;
-                        (t, 1.0 / solve::poly(fw, t).1)
-                    }
-                    (None, None) => return None,
-                };
-                Some(angle_lift(m, rho, theta, dtheta))
-            }
+            } => ftheta(bw.as_deref(), fw.as_ref(), *rho_max, *theta_max, m),
         }
     }
 
@@ -384,18 +270,233 @@ impl Lift {
                 let r = match (bw, fw) {
                     (Some(bw), fw) => {
                         let guess = match fw {
-                            Some(fw) => solve::poly(fw, theta).0,
+                            Some(fw) => solve::poly(&fw.coefficients, theta).0,
                             None => theta / solve::poly(bw, 0.0).1.max(1e-300),
                         };
                         solve::solve_increasing(|r| solve::poly(bw, r), theta, 0.0, *rho_max, guess)?
                     }
-                    (None, Some(fw)) => solve::poly(fw, theta).0,
+                    (None, Some(fw)) => solve::poly(&fw.coefficients, theta).0,
                     (None, None) => return None,
                 };
                 if r > *rho_max {
                     return None;
                 }
                 along(r)
+            }
+        }
+    }
+}
+
+/// [`Lift::Perspective`].
+#[inline(always)]
+pub(crate) fn perspective(m: [f64; 2]) -> Option<Lifted> {
+    Some(([m[0], m[1], 1.0], [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]))
+}
+
+/// [`Lift::Equidistant`].
+#[inline(always)]
+pub(crate) fn equidistant(m: [f64; 2]) -> Option<Lifted> {
+    let q = m[0] * m[0] + m[1] * m[1];
+    let t = q.sqrt();
+    if t > PI {
+        return None;
+    }
+    let (sin, cos) = solve::sin_cos(t);
+    let (s, ds) = if t < 1e-3 {
+        // sin t / t and its derivative by q = t², by series.
+        (1.0 - q / 6.0 + q * q / 120.0, -1.0 / 6.0 + q / 60.0)
+    } else {
+        (sin / t, (t * cos - sin) / (2.0 * t * q))
+    };
+    // d cos t / dq = −sin t/(2t) = −s/2.
+    Some(([s * m[0], s * m[1], cos], radial_jacobian(m, s, ds, -0.5 * s)))
+}
+
+/// [`Lift::Unified`].
+#[inline(always)]
+pub(crate) fn unified(alpha: f64, beta: f64, m: [f64; 2]) -> Option<Lifted> {
+    let q = m[0] * m[0] + m[1] * m[1];
+    let (mz, dmz) = unified_mz(alpha, alpha * alpha * beta, (2.0 * alpha - 1.0) * beta, q)?;
+    Some(([m[0], m[1], mz], radial_jacobian(m, 1.0, 0.0, dmz)))
+}
+
+/// [`Lift::Mei`].
+#[inline(always)]
+pub(crate) fn mei(xi: f64, m: [f64; 2]) -> Option<Lifted> {
+    let q = m[0] * m[0] + m[1] * m[1];
+    let rad = 1.0 + (1.0 - xi * xi) * q;
+    if rad <= 0.0 {
+        return None;
+    }
+    let sq = rad.sqrt();
+    let lam = (xi + sq) / (1.0 + q);
+    let dlam = ((1.0 - xi * xi) / (2.0 * sq) - lam) / (1.0 + q);
+    Some((
+        [lam * m[0], lam * m[1], lam - xi],
+        radial_jacobian(m, lam, dlam, dlam),
+    ))
+}
+
+/// [`Lift::DoubleSphere`].
+#[inline(always)]
+pub(crate) fn double_sphere(xi: f64, alpha: f64, m: [f64; 2]) -> Option<Lifted> {
+    let q = m[0] * m[0] + m[1] * m[1];
+    let (mz, dmz) = unified_mz(alpha, alpha * alpha, 2.0 * alpha - 1.0, q)?;
+    let srad = mz * mz + (1.0 - xi * xi) * q;
+    if srad < 0.0 {
+        return None;
+    }
+    let s = srad.sqrt();
+    let ds = (2.0 * mz * dmz + 1.0 - xi * xi) / (2.0 * s);
+    let (p, dp) = (mz * xi + s, dmz * xi + ds);
+    let (qq, dqq) = (mz * mz + q, 2.0 * mz * dmz + 1.0);
+    let k = p / qq;
+    let dk = (dp * qq - p * dqq) / (qq * qq);
+    Some((
+        [k * m[0], k * m[1], k * mz - xi],
+        radial_jacobian(m, k, dk, dk * mz + k * dmz),
+    ))
+}
+
+/// [`Lift::Division`].
+#[inline(always)]
+pub(crate) fn division(k: f64, m: [f64; 2]) -> Option<Lifted> {
+    let q = m[0] * m[0] + m[1] * m[1];
+    if k > 0.0 && k * q >= 1.0 {
+        return None;
+    }
+    Some(([m[0], m[1], 1.0 + k * q], radial_jacobian(m, 1.0, 0.0, k)))
+}
+
+/// [`Lift::Fov`].
+#[inline(always)]
+pub(crate) fn fov(omega: f64, c: f64, m: [f64; 2]) -> Option<Lifted> {
+    let q = m[0] * m[0] + m[1] * m[1];
+    let r = q.sqrt();
+    let phi = omega * r;
+    if phi >= FRAC_PI_2 {
+        return None;
+    }
+    let (sin, cos) = solve::sin_cos(phi);
+    // g(r) = sin(ωr)/r and g'(r)/r, by series near 0.
+    let (g, dg_over_r) = if phi < 1e-3 {
+        let w2 = omega * omega;
+        (
+            omega * (1.0 - w2 * q / 6.0),
+            omega * w2 * (-1.0 / 3.0 + w2 * q / 30.0),
+        )
+    } else {
+        (sin / r, (phi * cos - sin) / (r * q))
+    };
+    // V = (g·m, c·cos(ωr)); ∂/∂q: ds = g'/(2r), dvz = −c·ω·sin(ωr)/(2r) = −c·ω·g/2.
+    Some((
+        [g * m[0], g * m[1], c * cos],
+        radial_jacobian(m, g, 0.5 * dg_over_r, -0.5 * c * omega * g),
+    ))
+}
+
+/// [`Lift::Equirect`].
+#[inline(always)]
+pub(crate) fn equirect(w: f64, h: f64, m: [f64; 2]) -> Option<Lifted> {
+    let (u, v) = (m[0], m[1]);
+    if !(0.0..=h).contains(&v) {
+        return None;
+    }
+    let theta = TAU * (u / w - 0.5);
+    let phi = PI * (0.5 - v / h);
+    let (st, ct) = solve::sin_cos(theta);
+    let (sp, cp) = solve::sin_cos(phi);
+    let (a, b) = (TAU / w, PI / h);
+    Some((
+        [cp * st, -sp, cp * ct],
+        [
+            [a * cp * ct, b * sp * st],
+            [0.0, b * cp],
+            [-a * cp * st, b * sp * ct],
+        ],
+    ))
+}
+
+/// [`Lift::OCam`].
+#[inline(always)]
+pub(crate) fn ocam(pol: &[f64], rho_max: f64, m: [f64; 2]) -> Option<Lifted> {
+    let rho = (m[0] * m[0] + m[1] * m[1]).sqrt();
+    if rho > rho_max {
+        return None;
+    }
+    let (p, dp) = solve::poly(pol, rho);
+    let g = if rho > 0.0 { -dp / rho } else { 0.0 };
+    Some(([m[0], m[1], -p], [[1.0, 0.0], [0.0, 1.0], [g * m[0], g * m[1]]]))
+}
+
+/// [`Lift::FTheta`].
+#[inline(always)]
+pub(crate) fn ftheta(
+    bw: Option<&[f64]>,
+    fw: Option<&Forward>,
+    rho_max: f64,
+    theta_max: f64,
+    m: [f64; 2],
+) -> Option<Lifted> {
+    let rho = (m[0] * m[0] + m[1] * m[1]).sqrt();
+    if rho > rho_max {
+        return None;
+    }
+    let (theta, dtheta) = match (bw, fw) {
+        (Some(bw), _) => solve::poly(bw, rho),
+        (None, Some(fw)) => {
+            let t = fw.invert(rho, theta_max)?;
+            (t, 1.0 / solve::poly(&fw.coefficients, t).1)
+        }
+        (None, None) => return None,
+    };
+    let (sin, cos) = solve::sin_cos(theta);
+    Some(angle_lift(m, rho, sin, cos, dtheta))
+}
+
+/// f-theta's forward polynomial (angle → pixel distance) with a table of its inverse, which seeds
+/// the exact Newton solve of the backward direction.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct Forward {
+    /// The polynomial, ascending.
+    pub coefficients: Vec<f64>,
+    table: Option<InverseTable>,
+}
+
+impl Forward {
+    /// Samples in the seed table: the (Hermite) seed is then within ~1e-13 rad of the root.
+    const SAMPLES: usize = 512;
+
+    /// The polynomial alone; [`Forward::tabulate`] adds the seed table once its range is known.
+    pub fn new(coefficients: Vec<f64>) -> Self {
+        Forward {
+            coefficients,
+            table: None,
+        }
+    }
+
+    /// Tabulates the inverse over `ρ ∈ [0, ρ(θ_max)]`, with the polynomial increasing on
+    /// `[0, θ_max]`.
+    pub fn tabulate(&mut self, theta_max: f64) {
+        let c = &self.coefficients;
+        let rho_max = solve::poly(c, theta_max).0;
+        if rho_max > 0.0 && rho_max.is_finite() {
+            let f = |t| solve::poly(c, t);
+            self.table = Some(InverseTable::new(rho_max, Self::SAMPLES, f, |r, g| {
+                solve::solve_increasing(f, r, 0.0, theta_max, g)
+            }));
+        }
+    }
+
+    /// The angle of pixel distance `rho` (within `[0, θ_max]`), to the last bits.
+    #[inline]
+    pub fn invert(&self, rho: f64, theta_max: f64) -> Option<f64> {
+        let f = |t| solve::poly(&self.coefficients, t);
+        match self.table.as_ref().and_then(|t| t.seed(rho)) {
+            Some(seed) => Some(solve::solve_bracketed(f, rho, 0.0, theta_max, seed)),
+            None => {
+                let guess = rho / f(0.0).1.max(1e-300);
+                solve::solve_increasing(f, rho, 0.0, theta_max, guess)
             }
         }
     }
@@ -454,7 +555,7 @@ mod tests {
             },
             Lift::FTheta {
                 bw: None,
-                fw: Some(vec![0.0, 1.0, -0.04, 0.002]),
+                fw: Some(Forward::new(vec![0.0, 1.0, -0.04, 0.002])),
                 rho_max: 2.5,
                 theta_max: 2.5,
             },

@@ -22,7 +22,7 @@
 //! converts from raster space.
 
 use crate::distortion::{Distortion, Tilt};
-use crate::lift::Lift;
+use crate::lift::{self, Forward, Lift, Lifted};
 use crate::solve::{self, Mat2, Mat32, apply2, inv2, mul2, mul32};
 
 /// Where a library puts pixel centres, relative to raster space (top-left image corner at (0, 0)).
@@ -505,6 +505,13 @@ impl CameraModel {
                         ));
                     }
                 };
+                let fw = fw.map(|c| {
+                    let mut f = Forward::new(c);
+                    if bw.is_none() {
+                        f.tabulate(theta_max);
+                    }
+                    f
+                });
                 let lift = Lift::FTheta {
                     bw,
                     fw,
@@ -530,15 +537,56 @@ impl CameraModel {
             }
             _ => None,
         };
-        Ok(CameraModel {
+        let mut model = CameraModel {
             info,
             a,
             a_inv,
             c,
             tilt,
-            distortion,
+            distortion: None,
             lift,
-        })
+        };
+        if let Some(mut d) = distortion {
+            d.tabulate(model.image_extent(width, height));
+            model.distortion = Some(d);
+        }
+        Ok(model)
+    }
+
+    /// The largest `|m_d|` (distorted normalised radius) over the calibration image with a pixel of
+    /// margin, from its border (the map from pixels is affine, or projective with a tilt, so the
+    /// largest radius is on the border).
+    fn image_extent(&self, width: f64, height: f64) -> f64 {
+        const STEPS: usize = 64;
+        let mut extent: f64 = 0.0;
+        for i in 0..=STEPS {
+            let f = i as f64 / STEPS as f64;
+            let (x, y) = (-1.0 + f * (width + 2.0), -1.0 + f * (height + 2.0));
+            for px in [[x, -1.0], [x, height + 1.0], [-1.0, y], [width + 1.0, y]] {
+                if let Some(md) = self.distorted_point(px) {
+                    extent = extent.max(md[0].hypot(md[1]));
+                }
+            }
+        }
+        extent
+    }
+
+    /// The distorted normalised point `m_d` of model pixel `px` (before undistortion), with
+    /// `∂m_d/∂px`.
+    #[inline(always)]
+    fn distorted_point_jacobian(&self, px: [f64; 2]) -> Option<([f64; 2], Mat2)> {
+        let mt = apply2(&self.a_inv, [px[0] - self.c[0], px[1] - self.c[1]]);
+        match &self.tilt {
+            Some(t) => {
+                let (md, jt) = t.inverse(mt)?;
+                Some((md, mul2(&jt, &self.a_inv)))
+            }
+            None => Some((mt, self.a_inv)),
+        }
+    }
+
+    fn distorted_point(&self, px: [f64; 2]) -> Option<[f64; 2]> {
+        self.distorted_point_jacobian(px).map(|(md, _)| md)
     }
 
     /// The model's table entry.
@@ -573,16 +621,13 @@ impl CameraModel {
     #[inline]
     #[must_use]
     pub fn pixel_to_ray(&self, px: [f64; 2]) -> Option<PixelRay> {
-        let mt = apply2(&self.a_inv, [px[0] - self.c[0], px[1] - self.c[1]]);
-        let mut jac = self.a_inv;
-        let md = match &self.tilt {
-            Some(t) => {
-                let (md, jt) = t.inverse(mt)?;
-                jac = mul2(&jt, &jac);
-                md
-            }
-            None => mt,
-        };
+        self.pixel_to_ray_with(px, |m| self.lift.lift(m))
+    }
+
+    /// [`CameraModel::pixel_to_ray`] with the lift given (so a batch loop can inline it).
+    #[inline(always)]
+    fn pixel_to_ray_with(&self, px: [f64; 2], lift: impl Fn([f64; 2]) -> Option<Lifted>) -> Option<PixelRay> {
+        let (md, mut jac) = self.distorted_point_jacobian(px)?;
         let m = match &self.distortion {
             Some(d) => {
                 let (m, jd) = d.inverse(md)?;
@@ -591,11 +636,49 @@ impl CameraModel {
             }
             None => md,
         };
-        let (v, jl): ([f64; 3], Mat32) = self.lift.lift(m)?;
+        let (v, jl): ([f64; 3], Mat32) = lift(m)?;
         Some(PixelRay {
             v,
             dv: mul32(&jl, &jac),
         })
+    }
+
+    /// Hands `visitor` this model's pixel → ray function, specialised: one closure type per model
+    /// family, so the visitor's loop over a batch is compiled once per family with the lift inlined
+    /// and no per-ray dispatch. Every kernel computes exactly what [`CameraModel::pixel_to_ray`]
+    /// does.
+    #[inline]
+    pub(crate) fn with_kernel<V: RayKernel>(&self, visitor: V) {
+        if self.tilt.is_some() || self.distortion.is_some() {
+            match &self.lift {
+                Lift::Perspective => visitor.visit(|px| self.pixel_to_ray_with(px, lift::perspective)),
+                Lift::Equidistant => visitor.visit(|px| self.pixel_to_ray_with(px, lift::equidistant)),
+                _ => visitor.visit(|px| self.pixel_to_ray_with(px, |m| self.lift.lift(m))),
+            }
+            return;
+        }
+        let (ai, c) = (self.a_inv, self.c);
+        match &self.lift {
+            Lift::Perspective => visitor.visit(closed_form(ai, c, lift::perspective)),
+            Lift::Equidistant => visitor.visit(closed_form(ai, c, lift::equidistant)),
+            &Lift::Unified { alpha, beta } => {
+                visitor.visit(closed_form(ai, c, move |m| lift::unified(alpha, beta, m)));
+            }
+            &Lift::Mei { xi } => visitor.visit(closed_form(ai, c, move |m| lift::mei(xi, m))),
+            &Lift::DoubleSphere { xi, alpha } => {
+                visitor.visit(closed_form(ai, c, move |m| lift::double_sphere(xi, alpha, m)));
+            }
+            &Lift::Division { k } => visitor.visit(closed_form(ai, c, move |m| lift::division(k, m))),
+            &Lift::Fov { omega, c: cc } => {
+                visitor.visit(closed_form(ai, c, move |m| lift::fov(omega, cc, m)));
+            }
+            &Lift::Equirect { w, h } => visitor.visit(closed_form(ai, c, move |m| lift::equirect(w, h, m))),
+            Lift::OCam { pol, rho_max, .. } => {
+                let rho_max = *rho_max;
+                visitor.visit(closed_form(ai, c, move |m| lift::ocam(pol, rho_max, m)));
+            }
+            Lift::FTheta { .. } => visitor.visit(closed_form(ai, c, |m| self.lift.lift(m))),
+        }
     }
 
     /// The model pixel where the ray `d` (OpenCV camera space, any length) is seen, or `None` when
@@ -621,6 +704,31 @@ impl CameraModel {
         let px = [p[0] + self.c[0], p[1] + self.c[1]];
         (px[0].is_finite() && px[1].is_finite()).then_some(px)
     }
+}
+
+/// The pixel → ray map of a model without distortion or tilt: the intrinsic affine map, then the
+/// lift.
+#[inline(always)]
+fn closed_form(
+    a_inv: Mat2,
+    c: [f64; 2],
+    lift: impl Fn([f64; 2]) -> Option<Lifted>,
+) -> impl Fn([f64; 2]) -> Option<PixelRay> {
+    move |px| {
+        let m = apply2(&a_inv, [px[0] - c[0], px[1] - c[1]]);
+        let (v, jl) = lift(m)?;
+        Some(PixelRay {
+            v,
+            dv: mul32(&jl, &a_inv),
+        })
+    }
+}
+
+/// Something run with a model's pixel → ray function ([`CameraModel::with_kernel`]): a generic
+/// method, so each model family gets its own compiled copy.
+pub(crate) trait RayKernel {
+    /// Runs with `kernel`, the model pixel → ray map.
+    fn visit(self, kernel: impl Fn([f64; 2]) -> Option<PixelRay>);
 }
 
 /// The first value in `(0, limit]` where `ok` fails (scanned in 4096 steps, then bisected), or

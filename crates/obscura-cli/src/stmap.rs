@@ -55,8 +55,8 @@ fn read_params(registry: &Registry, flag: &str, name: &str, args: &[String]) -> 
 /// A message naming the option at fault, the projection or the file.
 pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Result<(), String> {
     // Either side may be a plugin on the plugin path, or a path to one.
-    let from_name = ensure(registry, &a.from, search).map_err(|e| format!("--from: {e}"))?;
-    let to_name = ensure(registry, &a.to, search).map_err(|e| format!("--to: {e}"))?;
+    let from_name = ensure(registry, &a.from, search).map_err(|e| format!("--from {}: {e}", a.from))?;
+    let to_name = ensure(registry, &a.to, search).map_err(|e| format!("--to {}: {e}", a.to))?;
     let from_params = read_params(registry, "--from", &from_name, &a.from_params)?;
     let to_params = read_params(registry, "--to", &to_name, &a.to_params)?;
     let to_format = Format::new(a.format.0, a.format.1);

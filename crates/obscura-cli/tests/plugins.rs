@@ -6,82 +6,22 @@
 //! (`CFisheye`, examples/plugins/c-fisheye/fisheye.c) is compiled with the system C compiler (`$CC`,
 //! else `cc`).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
-use std::sync::OnceLock;
 
 use exr::prelude::read_all_flat_layers_from_file;
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+#[path = "../../obscura-host/tests/support/plugin_build.rs"]
+mod plugin_build;
 
-fn lib_name(name: &str) -> String {
-    format!("{name}.{}", std::env::consts::DLL_EXTENSION)
-}
-
-/// Builds the Rust plugins once, in a target directory of their own.
-fn rust_plugins() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let target = Path::new(env!("CARGO_TARGET_TMPDIR"))
-            .parent()
-            .unwrap()
-            .join("plugin-tests");
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let out = Command::new(cargo)
-            .current_dir(workspace())
-            .args([
-                "build",
-                "--quiet",
-                "--lib",
-                "-p",
-                "obscura-test-panicking-plugin",
-                "-p",
-                "obscura-example-tiny-planet",
-                "--target-dir",
-            ])
-            .arg(&target)
-            .output()
-            .expect("cannot run cargo");
-        assert!(
-            out.status.success(),
-            "building the Rust plugins failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        target.join("debug")
-    })
-}
+use plugin_build::{compile_c_fisheye, copy_rust_plugin, lib_name};
 
 /// A directory holding `TinyPlanet.so`, `Panicking.so` and `CFisheye.so`.
 fn plugin_dir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
-    for (krate, name) in [
-        ("obscura_example_tiny_planet", "TinyPlanet"),
-        ("obscura_test_panicking_plugin", "Panicking"),
-    ] {
-        let built = rust_plugins().join(format!(
-            "{}{krate}.{}",
-            std::env::consts::DLL_PREFIX,
-            std::env::consts::DLL_EXTENSION
-        ));
-        std::fs::copy(&built, dir.path().join(lib_name(name)))
-            .unwrap_or_else(|e| panic!("{}: {e}", built.display()));
-    }
-    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".into());
-    let out = Command::new(&cc)
-        .args([
-            "-std=c11", "-O2", "-fPIC", "-shared", "-Wall", "-Wextra", "-Werror",
-        ])
-        .arg("-I")
-        .arg(workspace().join("include"))
-        .arg("-o")
-        .arg(dir.path().join(lib_name("CFisheye")))
-        .arg(workspace().join("examples/plugins/c-fisheye/fisheye.c"))
-        .arg("-lm")
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run the C compiler `{cc}` (set CC): {e}"));
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    copy_rust_plugin("obscura_example_tiny_planet", dir.path(), "TinyPlanet");
+    copy_rust_plugin("obscura_test_panicking_plugin", dir.path(), "Panicking");
+    compile_c_fisheye(dir.path());
     dir
 }
 

@@ -1,7 +1,7 @@
 //! # obscura-host
 //!
 //! The host side of the projection contract, shared by every Obscura job that makes camera rays
-//! (`obscura rays` now, the renderer later):
+//! (`obscura rays`, `obscura stmap`, `obscura check`, the renderer):
 //!
 //! - [`camera`]: a camera description (format, screen and crop windows, shutter, clipping, camera
 //!   motion, aperture and shutter-opening descriptions) and the raster → screen mapping;
@@ -11,6 +11,9 @@
 //! - [`driver`]: the camera stage — fills a batch, pre-fills the renderer's default rays, calls
 //!   `project`, validates every ray and culls what breaks the contract, counting it;
 //! - [`raymap`]: the per-pixel ray map written by `obscura rays`;
+//! - [`stmap`]: the ST-map between two projections written by `obscura stmap` (Nuke's convention);
+//! - [`plugins`]: finding and loading projection plugins from shared libraries (the C ABI of
+//!   `include/obscura/projection.h`) into a [`obscura_sdk::Registry`];
 //! - [`listing`]: the text of `obscura plugins`;
 //! - [`cli_params`]: reading `--param` arguments against a projection's table.
 

@@ -52,6 +52,14 @@ pub enum RayMapError {
     /// Too many samples.
     #[error("--samples {0}: at most {MAX_SAMPLES} samples per pixel are supported")]
     TooManySamples(u32),
+    /// Writing the file failed.
+    #[error(transparent)]
+    Output(#[from] ExrWriteError),
+}
+
+/// An OpenEXR file could not be written into place (ray maps, ST-maps).
+#[derive(Debug, thiserror::Error)]
+pub enum ExrWriteError {
     /// Writing failed.
     #[error("cannot write {path}: {source}")]
     Write {
@@ -68,6 +76,42 @@ pub enum RayMapError {
         /// Why.
         source: std::io::Error,
     },
+}
+
+/// One OpenEXR layer of float channels, as the map writers build them.
+pub type FloatExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
+
+/// Stores `attributes` as header strings of `layer` (the projection's name and parameters, for the
+/// record).
+pub fn add_text_attributes(layer: &mut LayerAttributes, attributes: &[(&str, String)]) {
+    for (k, v) in attributes {
+        layer
+            .other
+            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
+    }
+}
+
+/// Writes `image` to [`temporary_sibling`]`(path)` and renames it into place, so a reader never sees
+/// half a file; on failure the temporary file is removed.
+///
+/// # Errors
+/// [`ExrWriteError::Write`] or [`ExrWriteError::Rename`] naming `path`.
+pub fn write_exr_atomically(image: &FloatExrImage, path: &Path) -> Result<(), ExrWriteError> {
+    let tmp = temporary_sibling(path);
+    if let Err(source) = image.write().to_file(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(ExrWriteError::Write {
+            path: path.to_path_buf(),
+            source,
+        });
+    }
+    std::fs::rename(&tmp, path).map_err(|source| {
+        let _ = std::fs::remove_file(&tmp);
+        ExrWriteError::Rename {
+            path: path.to_path_buf(),
+            source,
+        }
+    })
 }
 
 /// Computes the chief-ray layer and `samples` sample layers over the stage's crop window.
@@ -142,7 +186,7 @@ pub fn trace_ray_map(
 /// header strings (the projection's name and parameters, for the record).
 ///
 /// # Errors
-/// [`RayMapError::Write`] or [`RayMapError::Rename`] naming the file.
+/// [`RayMapError::Output`] naming the file.
 pub fn write_exr(
     map: &RayMap,
     format: obscura_sdk::Format,
@@ -202,33 +246,12 @@ pub fn write_exr(
         0.5 * (screen_window.left + screen_window.right),
         0.5 * (screen_window.bottom + screen_window.top),
     );
-    for (k, v) in attributes {
-        layer
-            .attributes
-            .other
-            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
-    }
+    add_text_attributes(&mut layer.attributes, attributes);
     let mut image = Image::from_layer(layer);
     image.attributes.display_window =
         IntegerBounds::new((0, 0), (format.width as usize, format.height as usize));
     image.attributes.pixel_aspect = format.pixel_aspect;
-
-    let tmp = temporary_sibling(path);
-    let written = image.write().to_file(&tmp);
-    if let Err(source) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(RayMapError::Write {
-            path: path.to_path_buf(),
-            source,
-        });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        RayMapError::Rename {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
+    Ok(write_exr_atomically(&image, path)?)
 }
 
 /// `dir/.name.tmp-PID`: same directory (so the rename is atomic), hidden, unique per process.

@@ -48,18 +48,17 @@
 //! Keeping `(s, t)` where the position exists but lies outside A's image lets overscan workflows use
 //! it; the alpha says whether A's image holds the colour.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use exr::prelude::{
-    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, IntegerBounds, Layer,
-    LayerAttributes, Text, WritableImage,
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, IntegerBounds, Layer, LayerAttributes,
 };
 use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Registry, Vec3};
 use rayon::prelude::*;
 
 use crate::camera::CameraDesc;
 use crate::driver::{Batch, CameraStage, ContractReport, HostError};
-use crate::raymap::temporary_sibling;
+use crate::raymap::{ExrWriteError, add_text_attributes, write_exr_atomically};
 
 /// The default distance along B's rays of the point handed to A's inverse: far enough that scene
 /// content reads as "at infinity" for stereo and other offset-origin cameras.
@@ -182,22 +181,9 @@ pub enum StMapError {
         /// The projection.
         projection: String,
     },
-    /// Writing failed.
-    #[error("cannot write {path}: {source}")]
-    Write {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: exr::error::Error,
-    },
-    /// Renaming the finished file into place failed.
-    #[error("cannot move the finished file into place at {path}: {source}")]
-    Rename {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// Writing the file failed.
+    #[error(transparent)]
+    Output(#[from] ExrWriteError),
 }
 
 /// The two stages of an ST-map made from a registry: `(A, B)`. Each camera uses RenderMan's defaults
@@ -394,7 +380,7 @@ fn map_row(from: &CameraStage, to: &CameraStage, distance: f32, y: u32) -> (Vec<
 /// B's format; `attributes` are stored as header strings (the projections and their parameters).
 ///
 /// # Errors
-/// [`StMapError::Write`] or [`StMapError::Rename`] naming the file.
+/// [`StMapError::Output`] naming the file.
 pub fn write_stmap_exr(map: &StMap, attributes: &[(&str, String)], path: &Path) -> Result<(), StMapError> {
     let n = map.s.len();
     let channels: Vec<AnyChannel<FlatSamples>> = vec![
@@ -410,36 +396,17 @@ pub fn write_stmap_exr(map: &StMap, attributes: &[(&str, String)], path: &Path) 
         Encoding::SMALL_LOSSLESS,
         AnyChannels::sort(channels.into()),
     );
-    for (k, v) in attributes {
-        layer
-            .attributes
-            .other
-            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
-    }
+    add_text_attributes(&mut layer.attributes, attributes);
     let mut image = Image::from_layer(layer);
     image.attributes.display_window = IntegerBounds::new((0, 0), size);
     image.attributes.pixel_aspect = map.format.pixel_aspect;
-
-    let tmp = temporary_sibling(path);
-    if let Err(source) = image.write().to_file(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(StMapError::Write {
-            path: path.to_path_buf(),
-            source,
-        });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        StMapError::Rename {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
+    Ok(write_exr_atomically(&image, path)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raymap::temporary_sibling;
     use obscura_projections::builtin_registry;
     use obscura_sdk::{
         DeepMetric, DicingHint, Projection, ProjectionContext, ProjectionProperty, PropertyValue,

@@ -8,7 +8,6 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::OnceLock;
 
 use obscura_host::plugins::{PluginLoadError, PluginSearch, ensure, library_file_name, load_file};
 use obscura_host::{Batch, CameraDesc, CameraStage, Violation};
@@ -20,45 +19,10 @@ use obscura_sdk::{
     RayGeometry, Registry, SyncMessage, Vec3,
 };
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
+#[path = "support/plugin_build.rs"]
+mod plugin_build;
 
-fn c_compiler() -> String {
-    std::env::var("CC").unwrap_or_else(|_| "cc".into())
-}
-
-/// Compiles `src` into `<dir>/<name>.so` with the given defines; panics with the compiler's output
-/// when it fails (the tests need a C compiler: CI has gcc).
-fn compile_c(src: &Path, defines: &[&str], dir: &Path, name: &str, strict: bool) -> PathBuf {
-    let out = dir.join(library_file_name(name));
-    let mut cmd = Command::new(c_compiler());
-    cmd.args(["-std=c11", "-O1", "-fPIC", "-shared"])
-        .arg("-I")
-        .arg(workspace().join("include"));
-    if strict {
-        cmd.args(["-Wall", "-Wextra", "-Werror", "-pedantic"]);
-    } else {
-        cmd.arg("-w");
-    }
-    if cfg!(target_os = "macos") {
-        cmd.arg("-undefined").arg("dynamic_lookup");
-    }
-    for d in defines {
-        cmd.arg(format!("-D{d}"));
-    }
-    cmd.arg("-o").arg(&out).arg(src).arg("-lm");
-    let output = cmd
-        .output()
-        .unwrap_or_else(|e| panic!("cannot run the C compiler `{}` (set CC): {e}", c_compiler()));
-    assert!(
-        output.status.success(),
-        "compiling {} {defines:?} failed:\n{}",
-        src.display(),
-        String::from_utf8_lossy(&output.stderr)
-    );
-    out
-}
+use plugin_build::{c_compiler, compile_c, compile_c_fisheye, copy_rust_plugin, workspace};
 
 /// The broken plugin with one defect, in its own directory as `Broken.so`.
 fn broken(defect: &str) -> (tempfile::TempDir, PathBuf) {
@@ -71,55 +35,14 @@ fn broken(defect: &str) -> (tempfile::TempDir, PathBuf) {
 /// The C fisheye example, as `CFisheye.so` in its own directory.
 fn c_fisheye() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
-    let src = workspace().join("examples/plugins/c-fisheye/fisheye.c");
-    let p = compile_c(&src, &[], dir.path(), "CFisheye", true);
+    let p = compile_c_fisheye(dir.path());
     (dir, p)
-}
-
-/// Builds the Rust test plugins once per test binary, into a target directory of their own (so the
-/// outer cargo's lock is not needed), and returns that directory's `debug`.
-fn rust_plugins() -> &'static Path {
-    static DIR: OnceLock<PathBuf> = OnceLock::new();
-    DIR.get_or_init(|| {
-        let target = Path::new(env!("CARGO_TARGET_TMPDIR"))
-            .parent()
-            .unwrap()
-            .join("plugin-tests");
-        let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-        let out = Command::new(cargo)
-            .current_dir(workspace())
-            .args([
-                "build",
-                "--quiet",
-                "--lib",
-                "-p",
-                "obscura-test-panicking-plugin",
-                "-p",
-                "obscura-example-tiny-planet",
-                "--target-dir",
-            ])
-            .arg(&target)
-            .output()
-            .expect("cannot run cargo");
-        assert!(
-            out.status.success(),
-            "building the Rust test plugins failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        target.join("debug")
-    })
 }
 
 /// A Rust cdylib copied to `<dir>/<name>.so`.
 fn rust_plugin(crate_name: &str, name: &str) -> (tempfile::TempDir, PathBuf) {
-    let built = rust_plugins().join(format!(
-        "{}{crate_name}.{}",
-        std::env::consts::DLL_PREFIX,
-        std::env::consts::DLL_EXTENSION
-    ));
     let dir = tempfile::tempdir().unwrap();
-    let p = dir.path().join(library_file_name(name));
-    std::fs::copy(&built, &p).unwrap_or_else(|e| panic!("{}: {e}", built.display()));
+    let p = copy_rust_plugin(crate_name, dir.path(), name);
     (dir, p)
 }
 

@@ -53,11 +53,12 @@ use std::f32::consts::FRAC_PI_4;
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
 };
 
 use crate::simd;
+use crate::sphere::{SphericalClip, spherical_property};
 
 /// The name scenes use.
 pub const NAME: &str = "EquiangularCubemapFace";
@@ -161,8 +162,7 @@ pub struct CubemapFace {
     half: (f32, f32),
     /// `½·sqrt(Δu·Δv)·π/4`.
     spread_scale: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
 }
 
 impl CubemapFace {
@@ -178,8 +178,7 @@ impl CubemapFace {
             centre: (0.5 * (w.left + w.right), 0.5 * (w.bottom + w.top)),
             half: (0.5 * w.width(), 0.5 * w.height()),
             spread_scale: 0.5 * (du * dv).sqrt() * FRAC_PI_4,
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
         }
     }
 
@@ -205,14 +204,8 @@ impl CubemapFace {
         let d = (f + r * a + up * b) * inv;
         // αx·αy ∝ (1 + a²)(1 + b²)·sqrt((1 + a²)(1 + b²))/|N|⁴
         let q = (1.0 + a2) * (1.0 + b2);
-        RayGeometry {
-            origin: Vec3::ZERO,
-            origin_radius: 0.0,
-            direction: d,
-            ray_spread: self.spread_scale * (q * q.sqrt()).sqrt() / n2,
-            min_dist: self.near,
-            max_dist: self.far,
-        }
+        self.clip
+            .centred_ray(d, self.spread_scale * (q * q.sqrt()).sqrt() / n2)
     }
 }
 
@@ -234,22 +227,12 @@ fn tan_quarter_turn(t: f32) -> f32 {
 
 impl Projection for CubemapFace {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(90.0)),
-            _ => None,
-        }
+        spherical_property(property, 90.0)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        let (rays, screen) = (c.rays, c.screen);
-        simd::run(|| {
-            for (r, s) in rays.iter_mut().zip(screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -279,35 +262,12 @@ impl Projection for CubemapFace {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{self, ContractTest, angle, assert_contract, assert_spherical_ray_length, ray_at};
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(face: &str, format: Format) -> Box<dyn Projection> {
-        let mut list = ParamList::new();
-        list.push_text("string face", &[face], None).unwrap();
-        CubemapFaceFactory
-            .create_projection(&mut ProjectionEnvironment::for_format(format), &list)
-            .unwrap()
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
-    }
-
-    fn angle(a: Vec3, b: Vec3) -> f64 {
-        let (a, b) = (
-            [f64::from(a.x), f64::from(a.y), f64::from(a.z)],
-            [f64::from(b.x), f64::from(b.y), f64::from(b.z)],
-        );
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-            .sqrt()
-            .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+        testing::make(&CubemapFaceFactory, &[("string face", face)], format)
     }
 
     #[test]
@@ -461,26 +421,16 @@ mod tests {
     fn properties_are_honest() {
         for face in Face::NAMES {
             let p = make(face, Format::new(8, 8));
-            assert_eq!(
-                p.property(ProjectionProperty::DicingHint),
-                Some(PropertyValue::DicingHint(DicingHint::Spherical))
-            );
-            assert_eq!(
-                p.property(ProjectionProperty::DeepMetric),
-                Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-            );
-            assert_eq!(
-                p.property(ProjectionProperty::FieldOfView),
-                Some(PropertyValue::Float(90.0))
-            );
+            assert_spherical_ray_length(p.as_ref(), None, Some(90.0));
         }
-        let mut list = ParamList::new();
-        list.push_text("string face", &["front"], None).unwrap();
-        let err = CubemapFaceFactory
-            .create_projection(&mut ProjectionEnvironment::for_format(Format::new(8, 8)), &list)
-            .err()
-            .unwrap()
-            .to_string();
+        let err = testing::try_make(
+            &CubemapFaceFactory,
+            &[("string face", "front")],
+            Format::new(8, 8),
+        )
+        .err()
+        .unwrap()
+        .to_string();
         assert!(
             err.starts_with("EquiangularCubemapFace: parameter \"face\""),
             "{err}"

@@ -31,13 +31,16 @@
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
     Vec3,
 };
 
 use crate::simd;
-use crate::sphere::{SweepWindow, degenerate_window, radians_toward_zero, sin_cos, spherical_field_of_view};
+use crate::sphere::{
+    SphericalClip, SweepWindow, degenerate_window, radians_toward_zero, sin_cos, spherical_field_of_view,
+    spherical_property,
+};
 
 /// The name scenes use.
 pub const NAME: &str = "PxrCylinderCamera";
@@ -98,8 +101,7 @@ pub struct CylinderCamera {
     tan_v: f32,
     /// `½·sqrt(αx·αy)` at the horizon.
     spread: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
     fov: f32,
 }
 
@@ -108,10 +110,7 @@ impl CylinderCamera {
     /// window; `None` when the window has no area.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, hsweep: f32, vsweep: f32) -> Option<Self> {
-        let window = SweepWindow::new(env.screen_window());
-        if !window.is_usable() {
-            return None;
-        }
+        let window = SweepWindow::usable(env.screen_window())?;
         let (w, h) = (env.width() as f64, env.height() as f64);
         let hs = (hsweep as f64).to_radians();
         let tan_v = (0.5 * (vsweep as f64).to_radians()).tan();
@@ -121,8 +120,7 @@ impl CylinderCamera {
             half_h: radians_toward_zero(0.5 * hsweep as f64),
             tan_v: tan_v as f32,
             spread: (hs * tan_v / (2.0 * w * h)).sqrt() as f32,
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
             fov: spherical_field_of_view(env, pixels_per_radian.to_radians()),
         })
     }
@@ -138,34 +136,21 @@ impl CylinderCamera {
         let (sp, cp) = sin_cos(u * self.half_h);
         let y = v * self.tan_v;
         let inv_l = 1.0 / (1.0 + y * y).sqrt();
-        RayGeometry {
-            origin: Vec3::ZERO,
-            origin_radius: 0.0,
-            direction: Vec3::new(sp * inv_l, y * inv_l, cp * inv_l),
-            ray_spread: self.spread * inv_l * inv_l.sqrt(),
-            min_dist: self.near,
-            max_dist: self.far,
-        }
+        self.clip.centred_ray(
+            Vec3::new(sp * inv_l, y * inv_l, cp * inv_l),
+            self.spread * inv_l * inv_l.sqrt(),
+        )
     }
 }
 
 impl Projection for CylinderCamera {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.fov)),
-            _ => None,
-        }
+        spherical_property(property, self.fov)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        simd::run(|| {
-            for (r, s) in c.rays.iter_mut().zip(c.screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -185,22 +170,14 @@ impl Projection for CylinderCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{
+        self, assert_refused, assert_spherical_ray_length, check_centred_roundtrip, keeps_contract, ray_at,
+    };
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
-        let mut list = ParamList::new();
-        for (decl, v) in params {
-            list.push_text(decl, &[v], None).unwrap();
-        }
-        let mut env = ProjectionEnvironment::for_format(format);
-        let p = CylinderCameraFactory.create_projection(&mut env, &list).unwrap();
-        (p, env)
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+        testing::make_env(&CylinderCameraFactory, params, format)
     }
 
     proptest! {
@@ -227,12 +204,7 @@ mod tests {
         ) {
             let format = Format::new(300, 200);
             let (p, env) = make(&[("float hsweep", &hsweep.to_string()), ("float vsweep", &vsweep.to_string())], format);
-            let w = env.screen_window();
-            let s = Point2::new(u * w.right, v * w.top);
-            let r = ray_at(p.as_ref(), s);
-            let back = p.unproject(r.direction * depth, 0.0).unwrap();
-            let (px, py) = env.pixel_size();
-            prop_assert!(((back.x - s.x) / px).abs() < 1e-4 && ((back.y - s.y) / py).abs() < 1e-4, "{s:?} -> {back:?}");
+            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
         }
     }
 
@@ -251,7 +223,10 @@ mod tests {
         // A screen column is one azimuth: every ray of it lies in one vertical plane.
         for sy in [-1.0f32, -0.2, 0.7, 1.0] {
             let d = ray_at(p.as_ref(), Point2::new(0.6, sy)).direction;
-            assert!((d.x.atan2(d.z) - 0.15 * std::f32::consts::PI).abs() < 1e-6, "{d:?}");
+            assert!(
+                (d.x.atan2(d.z) - 0.15 * std::f32::consts::PI).abs() < 1e-6,
+                "{d:?}"
+            );
         }
         // Screen y is linear in tan(elevation): halfway up is at half the top's tangent.
         let mid = ray_at(p.as_ref(), Point2::new(0.0, 0.5)).direction;
@@ -260,7 +235,7 @@ mod tests {
 
     #[test]
     fn keeps_the_contract() {
-        for (format, params) in [
+        let cases = [
             (Format::new(48, 24), vec![]),
             (
                 Format::new(40, 30),
@@ -270,29 +245,16 @@ mod tests {
                 Format::new(30, 40),
                 vec![("float hsweep", "360"), ("float vsweep", "20")],
             ),
-        ] {
-            let (p, _) = make(&params, format);
-            let stats = assert_contract(p.as_ref(), &ContractTest::new(format));
-            assert_eq!(stats.valid, stats.samples, "nothing is culled");
-            assert!(
-                stats.roundtrips > 1000 && stats.spread_checked > 1000,
-                "{stats:?}"
-            );
+        ];
+        for (_, stats) in keeps_contract(&CylinderCameraFactory, &cases) {
+            stats.assert_complete(1000);
         }
     }
 
     #[test]
     fn properties_are_honest() {
         let (p, env) = make(&[], Format::new(1024, 256));
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Spherical))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-        );
-        assert_eq!(env.deep_metric(), DeepMetric::RayLength);
+        assert_spherical_ray_length(p.as_ref(), Some(&env), None);
         // Host rate 2s/fov (s = 128 px per screen unit) equals the finer of 1024/2π and 256/(2·tan 45°).
         let Some(PropertyValue::Float(fov)) = p.property(ProjectionProperty::FieldOfView) else {
             panic!()
@@ -304,21 +266,16 @@ mod tests {
 
     #[test]
     fn bad_parameters_name_the_plugin_and_parameter() {
-        for (decl, val) in [
-            ("float hsweep", "-5"),
-            ("float vsweep", "180"),
-            ("float vsweep", "0"),
-        ] {
-            let mut list = ParamList::new();
-            list.push_text(decl, &[val], None).unwrap();
-            let mut env = ProjectionEnvironment::for_format(Format::new(8, 8));
-            let err = CylinderCameraFactory
-                .create_projection(&mut env, &list)
-                .err()
-                .unwrap()
-                .to_string();
-            assert!(err.starts_with("PxrCylinderCamera: "), "{err}");
-            assert!(err.contains(&decl[6..]), "{err}");
-        }
+        let cases = [
+            ("float hsweep", "-5", "hsweep"),
+            ("float vsweep", "180", "vsweep"),
+            ("float vsweep", "0", "vsweep"),
+        ];
+        assert_refused(
+            &CylinderCameraFactory,
+            "PxrCylinderCamera",
+            Format::new(8, 8),
+            &cases,
+        );
     }
 }

@@ -74,12 +74,13 @@
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
     Vec3,
 };
 
 use crate::simd;
+use crate::sphere::{SphericalClip, spherical_property};
 
 /// The name scenes use.
 pub const NAME: &str = "Fisheye";
@@ -249,8 +250,7 @@ pub struct Fisheye {
     /// `r_hi²`, or the float just below it when the rim is left out.
     r_hi2: f32,
     half_pixel: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
 }
 
 impl Fisheye {
@@ -346,8 +346,7 @@ impl Fisheye {
             r_lo2: (r_lo * r_lo) as f32,
             r_hi2: (r_hi * r_hi) as f32,
             half_pixel: 0.5 * (dx * dy).sqrt(),
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
         };
         if fisheye.theta_of(r_hi) >= std::f64::consts::PI - 1e-9 {
             fisheye.r_hi2 = fisheye.r_hi2.next_down();
@@ -442,14 +441,10 @@ impl Fisheye {
         } else {
             (a2, a2)
         };
-        RayGeometry {
-            origin: Vec3::ZERO,
-            origin_radius: 0.0,
-            direction: Vec3::new(b * s.x, b * s.y, cos_theta),
-            ray_spread: self.half_pixel * (ax2 * ay2).sqrt().sqrt(),
-            min_dist: self.near,
-            max_dist: self.far,
-        }
+        self.clip.centred_ray(
+            Vec3::new(b * s.x, b * s.y, cos_theta),
+            self.half_pixel * (ax2 * ay2).sqrt().sqrt(),
+        )
     }
 
     #[inline(always)]
@@ -528,43 +523,22 @@ impl Fisheye {
 
 impl Projection for Fisheye {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.field_of_view)),
-            _ => None,
-        }
+        spherical_property(property, self.field_of_view)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
         let (rays, screen) = (c.rays, c.screen);
         match self.law {
-            Law::Equidistant { h } => simd::run(|| {
-                for (r, s) in rays.iter_mut().zip(screen) {
-                    *r = self.equidistant(*s, h);
-                }
-            }),
-            Law::Stereographic { k } => simd::run(|| {
-                for (r, s) in rays.iter_mut().zip(screen) {
-                    *r = self.stereographic(*s, k);
-                }
-            }),
-            Law::Orthographic { m, cos_floor } => simd::run(|| {
-                for (r, s) in rays.iter_mut().zip(screen) {
-                    *r = self.orthographic(*s, m, cos_floor);
-                }
-            }),
-            Law::Equisolid { q, cos_floor } => simd::run(|| {
-                for (r, s) in rays.iter_mut().zip(screen) {
-                    *r = self.equisolid(*s, q, cos_floor);
-                }
-            }),
-            Law::Polynomial { p, dp } => simd::run(|| {
-                for (r, s) in rays.iter_mut().zip(screen) {
-                    *r = self.polynomial(*s, &p, &dp);
-                }
-            }),
+            Law::Equidistant { h } => simd::map_screen(rays, screen, |s| self.equidistant(s, h)),
+            Law::Stereographic { k } => simd::map_screen(rays, screen, |s| self.stereographic(s, k)),
+            Law::Orthographic { m, cos_floor } => {
+                simd::map_screen(rays, screen, |s| self.orthographic(s, m, cos_floor))
+            }
+            Law::Equisolid { q, cos_floor } => {
+                simd::map_screen(rays, screen, |s| self.equisolid(s, q, cos_floor))
+            }
+            Law::Polynomial { p, dp } => simd::map_screen(rays, screen, |s| self.polynomial(s, &p, &dp)),
         }
     }
 
@@ -718,24 +692,18 @@ fn sign_change_roots(c: &[f64], a: f64, b: f64) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{
+        self, ContractTest, assert_contract, assert_spherical_ray_length, project_points, ray_at,
+    };
     use obscura_sdk::{Format, ScreenWindow};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &[&str])], format: Format) -> Result<Box<dyn Projection>, PluginError> {
-        let mut list = ParamList::new();
-        for (decl, vals) in params {
-            list.push_text(decl, vals, None).unwrap();
-        }
-        FisheyeFactory.create_projection(&mut ProjectionEnvironment::for_format(format), &list)
+        testing::try_create(&FisheyeFactory, &testing::param_list(params), format).0
     }
 
     fn lens(mapping: &str, fov: &str, format: Format) -> Box<dyn Projection> {
         make(&[("string mapping", &[mapping]), ("float fov", &[fov])], format).unwrap()
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
     }
 
     fn angle_from_z(d: Vec3) -> f64 {
@@ -1184,18 +1152,7 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let p = lens("equidistant", "220", Format::new(48, 32));
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Spherical))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(220.0))
-        );
+        assert_spherical_ray_length(p.as_ref(), None, Some(220.0));
         assert_eq!(p.property(ProjectionProperty::FStop), None);
         // Equisolid on a 3:2 window: the shorter side is 24 mm, 12 mm each way: 2·2·asin(12/21).
         let e = lens("equisolid", "180", Format::new(48, 32));

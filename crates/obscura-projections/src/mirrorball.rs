@@ -43,11 +43,12 @@
 //! DicingHint Spherical; DeepMetric RayLength (the ball sees every direction); FieldOfView 360.
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
 };
 
 use crate::simd;
+use crate::sphere::{SphericalClip, spherical_property};
 
 /// The name scenes use.
 pub const NAME: &str = "MirrorBall";
@@ -86,8 +87,7 @@ pub struct MirrorBall {
     half_pixel: f32,
     /// The least `c` used for the radial derivative: its value a hundredth of a pixel inside the rim.
     c_floor: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
 }
 
 impl MirrorBall {
@@ -99,8 +99,7 @@ impl MirrorBall {
         MirrorBall {
             half_pixel: 0.5 * (dx * dy).sqrt(),
             c_floor: (eps * (2.0 - eps)).max(0.0).sqrt() as f32,
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
         }
     }
 
@@ -122,35 +121,21 @@ impl MirrorBall {
         } else {
             (a2, a2)
         };
-        RayGeometry {
-            origin: Vec3::ZERO,
-            origin_radius: 0.0,
-            direction: Vec3::new(b * s.x, b * s.y, 1.0 - 2.0 * c2),
-            ray_spread: self.half_pixel * (ax2 * ay2).sqrt().sqrt(),
-            min_dist: self.near,
-            max_dist: self.far,
-        }
+        self.clip.centred_ray(
+            Vec3::new(b * s.x, b * s.y, 1.0 - 2.0 * c2),
+            self.half_pixel * (ax2 * ay2).sqrt().sqrt(),
+        )
     }
 }
 
 impl Projection for MirrorBall {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(360.0)),
-            _ => None,
-        }
+        spherical_property(property, 360.0)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        let (rays, screen) = (c.rays, c.screen);
-        simd::run(|| {
-            for (r, s) in rays.iter_mut().zip(screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -177,18 +162,12 @@ impl Projection for MirrorBall {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{self, ContractTest, assert_contract, assert_spherical_ray_length, ray_at};
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(format: Format) -> Box<dyn Projection> {
-        MirrorBallFactory
-            .create_projection(&mut ProjectionEnvironment::for_format(format), &ParamList::new())
-            .unwrap()
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+        testing::make(&MirrorBallFactory, &[], format)
     }
 
     #[test]
@@ -264,22 +243,8 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let p = make(Format::new(8, 8));
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Spherical))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(360.0))
-        );
-        let mut list = ParamList::new();
-        list.push_text("float fov", &["90"], None).unwrap();
-        let err = MirrorBallFactory
-            .create_projection(&mut ProjectionEnvironment::for_format(Format::new(8, 8)), &list)
+        assert_spherical_ray_length(p.as_ref(), None, Some(360.0));
+        let err = testing::try_make(&MirrorBallFactory, &[("float fov", "90")], Format::new(8, 8))
             .err()
             .unwrap()
             .to_string();

@@ -57,11 +57,12 @@
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
 };
 
 use crate::simd;
+use crate::sphere::{SphericalClip, spherical_property};
 
 /// The name scenes use.
 pub const NAME: &str = "Octahedral";
@@ -102,8 +103,7 @@ pub struct Octahedral {
     half: (f32, f32),
     /// `½·sqrt(Δu·Δv)`.
     half_pixel_uv: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
 }
 
 /// `π²/4`.
@@ -120,8 +120,7 @@ impl Octahedral {
             centre: (0.5 * (w.left + w.right), 0.5 * (w.bottom + w.top)),
             half: (0.5 * w.width(), 0.5 * w.height()),
             half_pixel_uv: 0.5 * (du * dv).sqrt(),
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
         }
     }
 
@@ -176,35 +175,19 @@ impl Octahedral {
             return RayGeometry::CULLED;
         }
         let (dir, gu2, gv2) = Self::square_to_sphere(u, v);
-        RayGeometry {
-            origin: Vec3::ZERO,
-            origin_radius: 0.0,
-            direction: dir,
-            ray_spread: self.half_pixel_uv * (gu2 * gv2).sqrt().sqrt(),
-            min_dist: self.near,
-            max_dist: self.far,
-        }
+        self.clip
+            .centred_ray(dir, self.half_pixel_uv * (gu2 * gv2).sqrt().sqrt())
     }
 }
 
 impl Projection for Octahedral {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(360.0)),
-            _ => None,
-        }
+        spherical_property(property, 360.0)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        let (rays, screen) = (c.rays, c.screen);
-        simd::run(|| {
-            for (r, s) in rays.iter_mut().zip(screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -236,33 +219,18 @@ impl Projection for Octahedral {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{
+        self, ContractTest, angle, assert_contract, assert_spherical_ray_length, project_points, ray_at,
+    };
     use obscura_sdk::{Format, ScreenWindow};
     use proptest::prelude::*;
 
     fn make(format: Format) -> Box<dyn Projection> {
-        OctahedralFactory
-            .create_projection(&mut ProjectionEnvironment::for_format(format), &ParamList::new())
-            .unwrap()
+        testing::make(&OctahedralFactory, &[], format)
     }
 
     fn dir(p: &dyn Projection, s: Point2) -> Vec3 {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0].direction
-    }
-
-    fn angle(a: Vec3, b: Vec3) -> f64 {
-        let (a, b) = (
-            [f64::from(a.x), f64::from(a.y), f64::from(a.z)],
-            [f64::from(b.x), f64::from(b.y), f64::from(b.z)],
-        );
-        let c = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-            .sqrt()
-            .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+        ray_at(p, s).direction
     }
 
     /// The contract, but for two checks that cannot hold on this map's seams, each made below
@@ -511,18 +479,7 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let p = make(Format::new(8, 8));
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Spherical))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(360.0))
-        );
+        assert_spherical_ray_length(p.as_ref(), None, Some(360.0));
         assert_eq!(p.unproject(Vec3::ZERO, 0.0), None);
     }
 }

@@ -54,13 +54,16 @@
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
+    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
     Vec3,
 };
 
 use crate::simd;
-use crate::sphere::{SweepWindow, degenerate_window, radians_toward_zero, sin_cos, spherical_field_of_view};
+use crate::sphere::{
+    SphericalClip, SweepWindow, degenerate_window, radians_toward_zero, sin_cos, spherical_field_of_view,
+    spherical_property,
+};
 
 /// The name scenes use.
 pub const NAME: &str = "OmnidirectionalStereo";
@@ -228,8 +231,7 @@ pub struct OmnidirectionalStereo {
     /// Radians per pixel along x and y.
     dphi: f32,
     dtheta: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
     fov: f32,
 }
 
@@ -237,10 +239,7 @@ impl OmnidirectionalStereo {
     /// One eye's panorama over `env`'s screen window; `None` when the window has no area.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, s: &OdsSettings) -> Option<Self> {
-        let window = SweepWindow::new(env.screen_window());
-        if !window.is_usable() {
-            return None;
-        }
+        let window = SweepWindow::usable(env.screen_window())?;
         let (w, h) = (env.width() as f64, env.height() as f64);
         let (hs, vs) = (s.hsweep as f64, s.vsweep as f64);
         Some(OmnidirectionalStereo {
@@ -253,8 +252,7 @@ impl OmnidirectionalStereo {
             convergence: s.convergence,
             dphi: (hs.to_radians() / w) as f32,
             dtheta: (vs.to_radians() / h) as f32,
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
             fov: spherical_field_of_view(env, (w / hs).max(h / vs)),
         })
     }
@@ -310,8 +308,8 @@ impl OmnidirectionalStereo {
             origin_radius: 0.5 * (ox * px * oy * py).sqrt(),
             direction,
             ray_spread: 0.5 * (ax * px * ay * py).sqrt(),
-            min_dist: self.near,
-            max_dist: self.far,
+            min_dist: self.clip.near,
+            max_dist: self.clip.far,
         }
     }
 
@@ -333,21 +331,12 @@ impl OmnidirectionalStereo {
 
 impl Projection for OmnidirectionalStereo {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.fov)),
-            _ => None,
-        }
+        spherical_property(property, self.fov)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        simd::run(|| {
-            for (r, s) in c.rays.iter_mut().zip(c.screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -427,24 +416,12 @@ impl Projection for OmnidirectionalStereo {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{self, assert_refused, assert_spherical_ray_length, keeps_contract, ray_at};
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
-        let mut list = ParamList::new();
-        for (decl, v) in params {
-            list.push_text(decl, &[v], None).unwrap();
-        }
-        let mut env = ProjectionEnvironment::for_format(format);
-        let p = OmnidirectionalStereoFactory
-            .create_projection(&mut env, &list)
-            .unwrap();
-        (p, env)
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+        testing::make_env(&OmnidirectionalStereoFactory, params, format)
     }
 
     const R: f32 = 0.5 * 0.0635;
@@ -606,7 +583,7 @@ mod tests {
 
     #[test]
     fn keeps_the_contract() {
-        for (format, params) in [
+        let cases = [
             (Format::new(48, 24), vec![]),
             (
                 Format::new(48, 24),
@@ -620,33 +597,17 @@ mod tests {
                     ("float interpupilaryDistance", "0.3"),
                 ],
             ),
-        ] {
-            let (p, env) = make(&params, format);
+        ];
+        for (env, stats) in keeps_contract(&OmnidirectionalStereoFactory, &cases) {
             assert_eq!(env.deep_metric(), DeepMetric::RayLength);
-            let stats = assert_contract(p.as_ref(), &ContractTest::new(format));
-            assert_eq!(stats.valid, stats.samples);
-            assert!(
-                stats.roundtrips > 1000 && stats.spread_checked > 1000,
-                "{stats:?}"
-            );
+            stats.assert_complete(1000);
         }
     }
 
     #[test]
     fn properties_are_honest() {
         let (p, _) = make(&[], Format::new(2048, 1024));
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Spherical))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(180.0))
-        );
+        assert_spherical_ray_length(p.as_ref(), None, Some(180.0));
     }
 
     #[test]
@@ -659,24 +620,17 @@ mod tests {
 
     #[test]
     fn bad_parameters_are_explained() {
-        for (params, needle) in [
-            (vec![("float poleMergeFrom", "80")], "poleMergeFrom"),
-            (vec![("float convergenceDistance", "0.01")], "convergenceDistance"),
-            (vec![("string eye", "both")], "\"eye\""),
-            (vec![("float poleMergeTo", "95")], "poleMergeTo"),
-        ] {
-            let mut list = ParamList::new();
-            for (d, v) in params {
-                list.push_text(d, &[v], None).unwrap();
-            }
-            let mut env = ProjectionEnvironment::for_format(Format::new(8, 4));
-            let err = OmnidirectionalStereoFactory
-                .create_projection(&mut env, &list)
-                .err()
-                .unwrap()
-                .to_string();
-            assert!(err.starts_with("OmnidirectionalStereo: "), "{err}");
-            assert!(err.contains(needle), "{err}");
-        }
+        let cases = [
+            ("float poleMergeFrom", "80", "poleMergeFrom"),
+            ("float convergenceDistance", "0.01", "convergenceDistance"),
+            ("string eye", "both", "\"eye\""),
+            ("float poleMergeTo", "95", "poleMergeTo"),
+        ];
+        assert_refused(
+            &OmnidirectionalStereoFactory,
+            "OmnidirectionalStereo",
+            Format::new(8, 4),
+            &cases,
+        );
     }
 }

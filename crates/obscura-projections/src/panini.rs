@@ -67,7 +67,7 @@ use obscura_sdk::{
 };
 
 use crate::simd;
-use crate::sphere::{SweepWindow, degenerate_window};
+use crate::sphere::{SphericalClip, SweepWindow, degenerate_window};
 
 /// The name scenes use.
 pub const NAME: &str = "PxrPanini";
@@ -152,8 +152,7 @@ pub struct Panini {
     g: f64,
     /// `½·g·sqrt(Δx·Δy)/(d + 1)`.
     spread: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
     fov: f32,
 }
 
@@ -162,10 +161,7 @@ impl Panini {
     /// below [`max_fov`]`(d)`. `None` when the window has no area.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, fov: f32, d: f32) -> Option<Self> {
-        let window = SweepWindow::new(env.screen_window());
-        if !window.is_usable() {
-            return None;
-        }
+        let window = SweepWindow::usable(env.screen_window())?;
         let (dd, phi_m) = (d as f64, 0.5 * (fov as f64).to_radians());
         let x_max = (dd + 1.0) * phi_m.sin() / (dd + phi_m.cos());
         let g = x_max / window.hw as f64;
@@ -185,8 +181,7 @@ impl Panini {
             k_scale: (g / (dd + 1.0)) as f32,
             g,
             spread: (0.5 * g * (px as f64 * py as f64).sqrt() / (dd + 1.0)) as f32,
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
             fov: field_of_view.to_degrees() as f32,
         })
     }
@@ -222,9 +217,9 @@ impl Panini {
         let q = t2 + (yn * sin_phi) * (yn * sin_phi);
         let direction = Vec3::new(sin_phi * inv, tan_theta * inv, cos_phi * inv);
         let (min_dist, max_dist) = if self.d == 0.0 {
-            (self.near / direction.z, self.far / direction.z)
+            (self.clip.near / direction.z, self.clip.far / direction.z)
         } else {
-            (self.near, self.far)
+            (self.clip.near, self.clip.far)
         };
         RayGeometry {
             origin: Vec3::ZERO,
@@ -254,11 +249,7 @@ impl Projection for Panini {
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        simd::run(|| {
-            for (r, s) in c.rays.iter_mut().zip(c.screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -286,22 +277,17 @@ impl Projection for Panini {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{self, ContractTest, assert_contract, check_centred_roundtrip, ray_at};
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(fov: f32, d: f32, format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
-        let mut list = ParamList::new();
-        list.push_text("float fov", &[&fov.to_string()], None).unwrap();
-        list.push_text("float compression", &[&d.to_string()], None)
-            .unwrap();
-        let mut env = ProjectionEnvironment::for_format(format);
-        let p = PaniniFactory.create_projection(&mut env, &list).unwrap();
-        (p, env)
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+        let (fov, d) = (fov.to_string(), d.to_string());
+        testing::make_env(
+            &PaniniFactory,
+            &[("float fov", &fov), ("float compression", &d)],
+            format,
+        )
     }
 
     /// The forward model in f64: direction → Panini plane.
@@ -342,12 +328,7 @@ mod tests {
             let fov = (max_fov(d as f64) as f32 * f).min(359.0);
             let format = Format::new(300, 200);
             let (p, env) = make(fov, d, format);
-            let w = env.screen_window();
-            let s = Point2::new(u * w.right, v * w.top);
-            let r = ray_at(p.as_ref(), s);
-            let back = p.unproject(r.direction * depth, 0.0).unwrap();
-            let (px, py) = env.pixel_size();
-            prop_assert!(((back.x - s.x) / px).abs() < 1e-4 && ((back.y - s.y) / py).abs() < 1e-4, "{s:?} -> {back:?}");
+            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
         }
     }
 

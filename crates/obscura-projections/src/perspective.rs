@@ -257,17 +257,14 @@ mod avx2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{pixel_centre_rays, project_points};
+    use crate::testing::{self, assert_refused, pixel_centre_rays, project_points};
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &[&str])], format: Format) -> Box<dyn Projection> {
-        let mut list = ParamList::new();
-        for (decl, vals) in params {
-            list.push_text(decl, vals, None).unwrap();
-        }
-        let mut env = ProjectionEnvironment::for_format(format);
-        PerspectiveFactory.create_projection(&mut env, &list).unwrap()
+        testing::try_create(&PerspectiveFactory, &testing::param_list(params), format)
+            .0
+            .unwrap()
     }
 
     proptest! {
@@ -457,22 +454,12 @@ mod tests {
 
     #[test]
     fn bad_parameters_name_the_plugin_and_parameter() {
-        for (decl, val, needle) in [
+        let cases = [
             ("float fov", "0", "\"fov\" = 0 is out of range"),
             ("float fov", "180", "expected a value in (0, 180)"),
             ("float focalDistance", "-1", "\"focalDistance\""),
             ("float fovv", "40", "did you mean \"fov\""),
-        ] {
-            let mut list = ParamList::new();
-            list.push_text(decl, &[val], None).unwrap();
-            let mut env = ProjectionEnvironment::for_format(Format::new(8, 8));
-            let err = PerspectiveFactory
-                .create_projection(&mut env, &list)
-                .err()
-                .unwrap()
-                .to_string();
-            assert!(err.starts_with("PxrPerspective: "), "{err}");
-            assert!(err.contains(needle), "{err}");
-        }
+        ];
+        assert_refused(&PerspectiveFactory, "PxrPerspective", Format::new(8, 8), &cases);
     }
 }

@@ -335,13 +335,7 @@ mod tests {
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
-        let mut list = ParamList::new();
-        for (decl, v) in params {
-            list.push_text(decl, &[v], None).unwrap();
-        }
-        let mut env = ProjectionEnvironment::for_format(format);
-        let p = RollingShutterFactory.create_projection(&mut env, &list).unwrap();
-        (p, env)
+        crate::testing::make_env(&RollingShutterFactory, params, format)
     }
 
     /// Runs `project` on pre-filled rays and returns (rays, times, tints) after it.
@@ -511,21 +505,16 @@ mod tests {
 
     #[test]
     fn bad_parameters_name_the_plugin_and_parameter() {
-        for (decl, val, needle) in [
+        let cases = [
             ("string sweep", "sideways", "\"sweep\""),
             ("float duration", "1.5", "\"duration\""),
             ("float fov", "180", "\"fov\""),
-        ] {
-            let mut list = ParamList::new();
-            list.push_text(decl, &[val], None).unwrap();
-            let mut env = ProjectionEnvironment::for_format(Format::new(8, 8));
-            let err = RollingShutterFactory
-                .create_projection(&mut env, &list)
-                .err()
-                .unwrap()
-                .to_string();
-            assert!(err.starts_with("PxrRollingShutter: "), "{err}");
-            assert!(err.contains(needle), "{err}");
-        }
+        ];
+        crate::testing::assert_refused(
+            &RollingShutterFactory,
+            "PxrRollingShutter",
+            Format::new(8, 8),
+            &cases,
+        );
     }
 }

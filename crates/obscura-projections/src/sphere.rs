@@ -36,7 +36,9 @@
 //! `2·min(hsweep/(r − l), vsweep/(t − b))`: 180° for the default 2:1 equirectangular image.
 //!
 //! The module also holds what the other panoramic projections share: the window coordinates
-//! ([`SweepWindow`]), a fast `sin_cos`, sweep angles rounded toward zero, and the FieldOfView rule.
+//! ([`SweepWindow`]), a fast `sin_cos`, sweep angles rounded toward zero, the FieldOfView rule, the
+//! property answers of a Spherical camera ([`spherical_property`]) and spherical clipping
+//! ([`SphericalClip`]).
 
 use std::sync::LazyLock;
 
@@ -82,6 +84,12 @@ impl SweepWindow {
             hw: 0.5 * (window.right - window.left),
             hh: 0.5 * (window.top - window.bottom),
         }
+    }
+
+    /// The window coordinates of `window` when it has an area ([`SweepWindow::is_usable`]), else `None`.
+    #[must_use]
+    pub fn usable(window: ScreenWindow) -> Option<Self> {
+        Some(SweepWindow::new(window)).filter(SweepWindow::is_usable)
     }
 
     /// True when both half sizes are finite and non-zero.
@@ -166,6 +174,54 @@ pub fn spherical_field_of_view(env: &ProjectionEnvironment, pixels_per_degree: f
     (2.0 * s / pixels_per_degree) as f32
 }
 
+/// The property answers of a camera whose rays may leave +Z: DicingHint Spherical, DeepMetric RayLength
+/// and FieldOfView `fov` degrees; `None` for everything else.
+#[must_use]
+pub fn spherical_property(property: ProjectionProperty, fov: f32) -> Option<PropertyValue> {
+    match property {
+        ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
+        ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
+        ProjectionProperty::FieldOfView => Some(PropertyValue::Float(fov)),
+        _ => None,
+    }
+}
+
+/// The clipping of a camera whose rays may leave +Z: spheres around the camera, `min_dist = near`,
+/// `max_dist = far` (conventions.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SphericalClip {
+    /// The environment's near clipping distance.
+    pub near: f32,
+    /// The environment's far clipping distance.
+    pub far: f32,
+}
+
+impl SphericalClip {
+    /// The clipping distances of `env`.
+    #[must_use]
+    pub fn new(env: &ProjectionEnvironment) -> Self {
+        SphericalClip {
+            near: env.clipping_near(),
+            far: env.clipping_far(),
+        }
+    }
+
+    /// A ray from the camera's centre (`O = 0`, no origin radius) along the unit `direction`, clipped by
+    /// these spheres.
+    #[inline(always)]
+    #[must_use]
+    pub fn centred_ray(self, direction: Vec3, ray_spread: f32) -> RayGeometry {
+        RayGeometry {
+            origin: Vec3::ZERO,
+            origin_radius: 0.0,
+            direction,
+            ray_spread,
+            min_dist: self.near,
+            max_dist: self.far,
+        }
+    }
+}
+
 /// The error for a screen window without area.
 pub(crate) fn degenerate_window(plugin: &str, w: ScreenWindow) -> PluginError {
     PluginError::Invalid {
@@ -238,8 +294,7 @@ pub struct SphereCamera {
     half_v: f32,
     /// `½·sqrt(αx·αy)` at the equator.
     spread: f32,
-    near: f32,
-    far: f32,
+    clip: SphericalClip,
     fov: f32,
 }
 
@@ -248,10 +303,7 @@ impl SphereCamera {
     /// no area.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, hsweep: f32, vsweep: f32) -> Option<Self> {
-        let window = SweepWindow::new(env.screen_window());
-        if !window.is_usable() {
-            return None;
-        }
+        let window = SweepWindow::usable(env.screen_window())?;
         let (w, h) = (env.width() as f64, env.height() as f64);
         let (hs, vs) = (hsweep as f64, vsweep as f64);
         Some(SphereCamera {
@@ -259,8 +311,7 @@ impl SphereCamera {
             half_h: radians_toward_zero(0.5 * hs),
             half_v: radians_toward_zero(0.5 * vs),
             spread: (0.5 * (hs.to_radians() * vs.to_radians() / (w * h)).sqrt()) as f32,
-            near: env.clipping_near(),
-            far: env.clipping_far(),
+            clip: SphericalClip::new(env),
             fov: spherical_field_of_view(env, (w / hs).max(h / vs)),
         })
     }
@@ -275,34 +326,19 @@ impl SphereCamera {
         }
         let (sp, cp) = sin_cos(u * self.half_h);
         let (st, ct) = sin_cos(v * self.half_v);
-        RayGeometry {
-            origin: Vec3::ZERO,
-            origin_radius: 0.0,
-            direction: Vec3::new(sp * ct, st, cp * ct),
-            ray_spread: self.spread * ct.abs().sqrt(),
-            min_dist: self.near,
-            max_dist: self.far,
-        }
+        self.clip
+            .centred_ray(Vec3::new(sp * ct, st, cp * ct), self.spread * ct.abs().sqrt())
     }
 }
 
 impl Projection for SphereCamera {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        match property {
-            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Spherical)),
-            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::RayLength)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.fov)),
-            _ => None,
-        }
+        spherical_property(property, self.fov)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        simd::run(|| {
-            for (r, s) in c.rays.iter_mut().zip(c.screen) {
-                *r = self.ray(*s);
-            }
-        });
+        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -320,22 +356,14 @@ impl Projection for SphereCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract, project_points};
+    use crate::testing::{
+        self, assert_refused, assert_spherical_ray_length, check_centred_roundtrip, keeps_contract, ray_at,
+    };
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
-        let mut list = ParamList::new();
-        for (decl, v) in params {
-            list.push_text(decl, &[v], None).unwrap();
-        }
-        let mut env = ProjectionEnvironment::for_format(format);
-        let p = SphereCameraFactory.create_projection(&mut env, &list).unwrap();
-        (p, env)
-    }
-
-    fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
-        project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+        testing::make_env(&SphereCameraFactory, params, format)
     }
 
     proptest! {
@@ -373,12 +401,7 @@ mod tests {
         ) {
             let format = Format::new(300, 200);
             let (p, env) = make(&[("float hsweep", &hsweep.to_string()), ("float vsweep", &vsweep.to_string())], format);
-            let w = env.screen_window();
-            let s = Point2::new(u * w.right, v * w.top);
-            let r = ray_at(p.as_ref(), s);
-            let back = p.unproject(r.direction * depth, 0.0).unwrap();
-            let (px, py) = env.pixel_size();
-            prop_assert!(((back.x - s.x) / px).abs() < 1e-4 && ((back.y - s.y) / py).abs() < 1e-4, "{s:?} -> {back:?}");
+            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
         }
     }
 
@@ -421,13 +444,17 @@ mod tests {
             assert!((up.direction.x.atan2(up.direction.z) - x / 2.0 * std::f32::consts::PI).abs() < 1e-4);
             // The spread shrinks as sqrt(cos θ): a thousandth of the equator's at cos θ ≈ 10⁻⁷.
             let equator = ray_at(p.as_ref(), Point2::new(x, 0.0)).ray_spread;
-            assert!(up.ray_spread >= 0.0 && up.ray_spread < 1e-3 * equator, "{} vs {equator}", up.ray_spread);
+            assert!(
+                up.ray_spread >= 0.0 && up.ray_spread < 1e-3 * equator,
+                "{} vs {equator}",
+                up.ray_spread
+            );
         }
     }
 
     #[test]
     fn keeps_the_contract() {
-        for (format, params) in [
+        let cases = [
             (Format::new(48, 24), vec![]),
             (
                 Format::new(40, 30),
@@ -437,33 +464,16 @@ mod tests {
                 Format::new(30, 40),
                 vec![("float hsweep", "360"), ("float vsweep", "30")],
             ),
-        ] {
-            let (p, _) = make(&params, format);
-            let stats = assert_contract(p.as_ref(), &ContractTest::new(format));
-            assert_eq!(stats.valid, stats.samples, "nothing is culled");
-            assert!(
-                stats.roundtrips > 1000 && stats.spread_checked > 1000,
-                "{stats:?}"
-            );
+        ];
+        for (_, stats) in keeps_contract(&SphereCameraFactory, &cases) {
+            stats.assert_complete(1000);
         }
     }
 
     #[test]
     fn properties_are_honest() {
         let (p, env) = make(&[], Format::new(2048, 1024));
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Spherical))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
-        );
-        assert_eq!(env.deep_metric(), DeepMetric::RayLength);
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(180.0))
-        );
+        assert_spherical_ray_length(p.as_ref(), Some(&env), Some(180.0));
         assert_eq!(p.property(ProjectionProperty::FStop), None);
         // A 90° × 90° view on a 2:1 image: 1024 pixels span 90° across, the finer axis.
         let (q, _) = make(
@@ -496,21 +506,11 @@ mod tests {
 
     #[test]
     fn bad_parameters_name_the_plugin_and_parameter() {
-        for (decl, val) in [
-            ("float hsweep", "0"),
-            ("float hsweep", "400"),
-            ("float vsweep", "181"),
-        ] {
-            let mut list = ParamList::new();
-            list.push_text(decl, &[val], None).unwrap();
-            let mut env = ProjectionEnvironment::for_format(Format::new(8, 8));
-            let err = SphereCameraFactory
-                .create_projection(&mut env, &list)
-                .err()
-                .unwrap()
-                .to_string();
-            assert!(err.starts_with("PxrSphereCamera: "), "{err}");
-            assert!(err.contains(&decl[6..]), "{err}");
-        }
+        let cases = [
+            ("float hsweep", "0", "hsweep"),
+            ("float hsweep", "400", "hsweep"),
+            ("float vsweep", "181", "vsweep"),
+        ];
+        assert_refused(&SphereCameraFactory, "PxrSphereCamera", Format::new(8, 8), &cases);
     }
 }

@@ -1,6 +1,155 @@
 //! Test helpers: run a projection on hand-made samples.
 
-use obscura_sdk::{Format, Point2, Projection, ProjectionContext, RayGeometry, Rgb, ScreenWindow, Vec3};
+use obscura_sdk::{
+    DeepMetric, DicingHint, Format, ParamList, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Rgb,
+    ScreenWindow, Vec3,
+};
+
+/// A parameter list from `(declaration, values)` pairs, each value given as its own string.
+pub fn param_list(params: &[(&str, &[&str])]) -> ParamList {
+    let mut list = ParamList::new();
+    for (decl, vals) in params {
+        list.push_text(decl, vals, None).unwrap();
+    }
+    list
+}
+
+/// A parameter list from `(declaration, value)` pairs; a value with spaces is split into several, as
+/// RIB would give them (`("float[3] enhance", "0 0 2")`).
+pub fn split_param_list(params: &[(&str, &str)]) -> ParamList {
+    let mut list = ParamList::new();
+    for (decl, text) in params {
+        let vals: Vec<&str> = text.split_whitespace().collect();
+        list.push_text(decl, &vals, None).unwrap();
+    }
+    list
+}
+
+/// What `factory` makes of `list` for `format` (default screen window), and the environment after it.
+pub fn try_create(
+    factory: &dyn ProjectionFactory,
+    list: &ParamList,
+    format: Format,
+) -> (Result<Box<dyn Projection>, PluginError>, ProjectionEnvironment) {
+    let mut env = ProjectionEnvironment::for_format(format);
+    let made = factory.create_projection(&mut env, list);
+    (made, env)
+}
+
+/// The projection `factory` makes from `(declaration, value)` pairs (see [`split_param_list`]) for
+/// `format`, or its error.
+pub fn try_make(
+    factory: &dyn ProjectionFactory,
+    params: &[(&str, &str)],
+    format: Format,
+) -> Result<Box<dyn Projection>, PluginError> {
+    try_create(factory, &split_param_list(params), format).0
+}
+
+/// The projection `factory` makes from `(declaration, value)` pairs for `format`, and the environment
+/// after it; panics when the factory refuses.
+pub fn make_env(
+    factory: &dyn ProjectionFactory,
+    params: &[(&str, &str)],
+    format: Format,
+) -> (Box<dyn Projection>, ProjectionEnvironment) {
+    let (made, env) = try_create(factory, &split_param_list(params), format);
+    (made.unwrap(), env)
+}
+
+/// The projection `factory` makes from `(declaration, value)` pairs for `format`; panics when the
+/// factory refuses.
+pub fn make(factory: &dyn ProjectionFactory, params: &[(&str, &str)], format: Format) -> Box<dyn Projection> {
+    make_env(factory, params, format).0
+}
+
+/// The ray of one screen sample at the aperture centre and time 0.
+pub fn ray_at(p: &dyn Projection, s: Point2) -> RayGeometry {
+    project_points(p, &[s], &[Point2::ZERO], &[0.0])[0]
+}
+
+/// Checks that the ray through window point `(u·right, v·top)` of `env`'s screen window, taken `depth`
+/// along from the origin, unprojects to that screen point within 10⁻⁴ pixel: the round trip of a
+/// projection whose rays start at the camera's centre.
+pub fn check_centred_roundtrip(
+    p: &dyn Projection,
+    env: &ProjectionEnvironment,
+    u: f32,
+    v: f32,
+    depth: f32,
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    let w = env.screen_window();
+    let s = Point2::new(u * w.right, v * w.top);
+    let r = ray_at(p, s);
+    let back = p.unproject(r.direction * depth, 0.0).unwrap();
+    let (px, py) = env.pixel_size();
+    proptest::prop_assert!(
+        ((back.x - s.x) / px).abs() < 1e-4 && ((back.y - s.y) / py).abs() < 1e-4,
+        "{s:?} -> {back:?}"
+    );
+    Ok(())
+}
+
+/// Checks that `factory` refuses each `(declaration, value, needle)` (made for `format`) with an error
+/// that starts with `"{plugin}: "` and contains `needle`.
+pub fn assert_refused(
+    factory: &dyn ProjectionFactory,
+    plugin: &str,
+    format: Format,
+    cases: &[(&str, &str, &str)],
+) {
+    let prefix = format!("{plugin}: ");
+    for (decl, val, needle) in cases {
+        let err = try_make(factory, &[(decl, val)], format)
+            .err()
+            .unwrap_or_else(|| panic!("{decl} {val} was accepted"))
+            .to_string();
+        assert!(err.starts_with(&prefix), "{err}");
+        assert!(err.contains(needle), "{decl} {val}: {err}");
+    }
+}
+
+/// Checks the property answers of a camera whose rays may leave +Z: DicingHint Spherical and DeepMetric
+/// RayLength; when given, the same metric set in `env` and FieldOfView exactly `fov`.
+pub fn assert_spherical_ray_length(
+    p: &dyn Projection,
+    env: Option<&ProjectionEnvironment>,
+    fov: Option<f32>,
+) {
+    assert_eq!(
+        p.property(ProjectionProperty::DicingHint),
+        Some(PropertyValue::DicingHint(DicingHint::Spherical))
+    );
+    assert_eq!(
+        p.property(ProjectionProperty::DeepMetric),
+        Some(PropertyValue::DeepMetric(DeepMetric::RayLength))
+    );
+    if let Some(env) = env {
+        assert_eq!(env.deep_metric(), DeepMetric::RayLength);
+    }
+    if let Some(fov) = fov {
+        assert_eq!(
+            p.property(ProjectionProperty::FieldOfView),
+            Some(PropertyValue::Float(fov))
+        );
+    }
+}
+
+/// For each `(format, params)`: makes the projection with [`make_env`] and checks it with
+/// [`assert_contract`] at the default tolerances; returns the environments and what was seen.
+pub fn keeps_contract(
+    factory: &dyn ProjectionFactory,
+    cases: &[(Format, Vec<(&str, &str)>)],
+) -> Vec<(ProjectionEnvironment, ContractStats)> {
+    cases
+        .iter()
+        .map(|(format, params)| {
+            let (p, env) = make_env(factory, params, *format);
+            (env, assert_contract(p.as_ref(), &ContractTest::new(*format)))
+        })
+        .collect()
+}
 
 /// Projects one batch of hand-made samples and returns the rays.
 pub fn project_points(
@@ -82,6 +231,18 @@ pub struct ContractStats {
     pub roundtrips: usize,
 }
 
+impl ContractStats {
+    /// Asserts that nothing was culled and that more than `min_checked` round trips and footprints were
+    /// checked.
+    pub fn assert_complete(&self, min_checked: usize) {
+        assert_eq!(self.valid, self.samples, "nothing is culled");
+        assert!(
+            self.roundtrips > min_checked && self.spread_checked > min_checked,
+            "{self:?}"
+        );
+    }
+}
+
 /// Screen points the contract is checked at: every pixel centre, the window's edges and corners, its
 /// centre and axes, and a margin two pixels outside (where filters reach).
 pub fn contract_points(format: Format) -> Vec<Point2> {
@@ -126,8 +287,6 @@ pub fn contract_points(format: Format) -> Vec<Point2> {
 ///   the direction over a hundredth of a pixel — their means, or one side's where a fold makes the
 ///   sides differ (skipped where a neighbour is culled).
 pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
-    use obscura_sdk::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
-
     let format = t.format;
     let window = ScreenWindow::default_for(format);
     let (px, py) = window.pixel_size(format);
@@ -143,9 +302,8 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     }
     let hint = p.property(ProjectionProperty::DicingHint);
     let metric = p.property(ProjectionProperty::DeepMetric);
-    let inside = |s: Point2| {
-        s.x >= window.left && s.x <= window.right && s.y >= window.bottom && s.y <= window.top
-    };
+    let inside =
+        |s: Point2| s.x >= window.left && s.x <= window.right && s.y >= window.bottom && s.y <= window.top;
     let mut first_origin: Option<Vec3> = None;
     let mut first_dir: Option<Vec3> = None;
     for &time in &t.times {
@@ -173,13 +331,22 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
                     && !r.max_dist.is_nan(),
                 "non-finite ray at {at}: {r:?}"
             );
-            assert!(r.origin_radius >= 0.0 && r.ray_spread >= 0.0, "negative footprint at {at}: {r:?}");
-            assert!(r.min_dist >= 0.0 && r.min_dist <= r.max_dist, "bad clipping range at {at}: {r:?}");
+            assert!(
+                r.origin_radius >= 0.0 && r.ray_spread >= 0.0,
+                "negative footprint at {at}: {r:?}"
+            );
+            assert!(
+                r.min_dist >= 0.0 && r.min_dist <= r.max_dist,
+                "bad clipping range at {at}: {r:?}"
+            );
             if r.direction == Vec3::ZERO {
                 continue;
             }
             let len = r.direction.length();
-            assert!((len - 1.0).abs() <= 1e-5, "direction not unit ({len}) at {at}: {r:?}");
+            assert!(
+                (len - 1.0).abs() <= 1e-5,
+                "direction not unit ({len}) at {at}: {r:?}"
+            );
             stats.valid += 1;
             if r.direction.z < 0.0 {
                 stats.backward += 1;
@@ -192,11 +359,17 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
             match hint {
                 Some(PropertyValue::DicingHint(DicingHint::Perspective)) => {
                     let o = *first_origin.get_or_insert(r.origin);
-                    assert!((r.origin - o).length() <= 1e-6, "Perspective hint but origins differ at {at}");
+                    assert!(
+                        (r.origin - o).length() <= 1e-6,
+                        "Perspective hint but origins differ at {at}"
+                    );
                 }
                 Some(PropertyValue::DicingHint(DicingHint::Orthographic)) => {
                     let d = *first_dir.get_or_insert(r.direction);
-                    assert!((r.direction - d).length() <= 1e-6, "Orthographic hint but directions differ at {at}");
+                    assert!(
+                        (r.direction - d).length() <= 1e-6,
+                        "Orthographic hint but directions differ at {at}"
+                    );
                 }
                 _ => {}
             }
@@ -257,7 +430,9 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     stats
 }
 
-fn angle(a: Vec3, b: Vec3) -> f64 {
+/// The angle between two directions in radians, in `f64` (`atan2(|a × b|, a·b)`, accurate at every
+/// size).
+pub fn angle(a: Vec3, b: Vec3) -> f64 {
     let (a, b) = (
         [a.x as f64, a.y as f64, a.z as f64],
         [b.x as f64, b.y as f64, b.z as f64],
@@ -275,25 +450,13 @@ fn angle(a: Vec3, b: Vec3) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obscura_sdk::{ParamList, ProjectionEnvironment, ProjectionFactory};
-
-    fn make(factory: &dyn ProjectionFactory, params: &[(&str, &str)], format: Format) -> Box<dyn Projection> {
-        let mut list = ParamList::new();
-        for (d, v) in params {
-            list.push_text(d, &[v], None).unwrap();
-        }
-        factory
-            .create_projection(&mut ProjectionEnvironment::for_format(format), &list)
-            .unwrap()
-    }
 
     #[test]
     fn the_builtin_perspective_and_orthographic_keep_the_contract() {
         let f = Format::new(48, 32);
         for fov in ["20", "90", "160"] {
             let p = make(&crate::PerspectiveFactory, &[("float fov", fov)], f);
-            let s = assert_contract(p.as_ref(), &ContractTest::new(f));
-            assert!(s.valid == s.samples && s.roundtrips > 1500 && s.spread_checked > 1500, "{s:?}");
+            assert_contract(p.as_ref(), &ContractTest::new(f)).assert_complete(1500);
         }
         let p = make(&crate::OrthographicFactory, &[], f);
         let mut t = ContractTest::new(f);

@@ -1358,7 +1358,7 @@ unsafe extern "C" fn rs_unproject(p: *const c_void, point: Vec3, time: f32, scre
 
 /// Exports a [`ProjectionFactory`] from a `cdylib` through the C ABI.
 ///
-/// ```ignore
+/// ```text
 /// // Cargo.toml: [lib] crate-type = ["cdylib", "rlib"]
 /// obscura_sdk::export_projection!(MyFactory);
 /// ```

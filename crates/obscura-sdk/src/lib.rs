@@ -20,6 +20,10 @@
 //! Camera space is RenderMan's: the camera at the origin looking down +Z, +Y up, +X right. Screen space
 //! is the screen window's (y up); see [`ScreenWindow`].
 //!
+//! Beyond the interface: [`contract`] checks a projection against the whole contract (what
+//! `obscura check` runs: call it from your own tests), and [`abi`] with [`export_projection!`] turns a
+//! factory into a shared library the host loads through the C ABI of `include/obscura/projection.h`.
+//!
 //! A minimal projection:
 //!
 //! ```
@@ -56,6 +60,7 @@ mod plugin;
 mod property;
 mod ray;
 mod registry;
+pub mod simd;
 
 pub use context::{ContextLengthError, ContextParts, ProjectionContext};
 pub use environment::{Format, MotionSample, ProjectionEnvironment, ScreenWindow};

@@ -96,10 +96,10 @@ use obscura_sdk::{
 };
 
 use crate::dof::{self, DepthOfField};
+use crate::rolling_shutter::RollingShutter;
 use crate::simd;
 use distortion::Distortion;
 use focal_plane::{FocalPlane, MAX_TILT_DEGREES};
-use crate::rolling_shutter::RollingShutter;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrCamera";
@@ -589,18 +589,12 @@ impl Projection for PxrCamera {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{ContractTest, assert_contract};
+    use crate::testing::{self, ContractTest, assert_contract, assert_refused};
     use obscura_sdk::Format;
     use proptest::prelude::*;
 
     fn try_make(params: &[(&str, &str)], format: Format) -> Result<Box<dyn Projection>, PluginError> {
-        let mut list = ParamList::new();
-        for (decl, vals) in params {
-            let vals: Vec<&str> = vals.split_whitespace().collect();
-            list.push_text(decl, &vals, None).unwrap();
-        }
-        let mut env = ProjectionEnvironment::for_format(format);
-        PxrCameraFactory.create_projection(&mut env, &list)
+        testing::try_make(&PxrCameraFactory, params, format)
     }
 
     fn make(params: &[(&str, &str)], format: Format) -> Box<dyn Projection> {
@@ -1303,7 +1297,7 @@ mod tests {
 
     #[test]
     fn bad_parameters_name_the_plugin_and_parameter() {
-        for (decl, val, needle) in [
+        let cases = [
             (
                 "float[3] enhance",
                 "0 0 0",
@@ -1316,19 +1310,8 @@ mod tests {
             ("float squeeze", "0", "\"squeeze\""),
             ("float radial1", "inf", "\"radial1\""),
             ("float radail1", "0.1", "did you mean \"radial1\""),
-        ] {
-            let vals: Vec<&str> = val.split_whitespace().collect();
-            let mut list = ParamList::new();
-            list.push_text(decl, &vals, None).unwrap();
-            let mut env = ProjectionEnvironment::for_format(Format::new(8, 8));
-            let err = PxrCameraFactory
-                .create_projection(&mut env, &list)
-                .err()
-                .unwrap()
-                .to_string();
-            assert!(err.starts_with("PxrCamera: "), "{err}");
-            assert!(err.contains(needle), "{decl} {val}: {err}");
-        }
+        ];
+        assert_refused(&PxrCameraFactory, "PxrCamera", Format::new(8, 8), &cases);
     }
 
     #[test]
