@@ -2,6 +2,11 @@
 //! length) with its derivative `∂V/∂m`, and back ("unlift": ray → `m`, or `None` outside the model's
 //! valid set). Every formula is in OpenCV/COLMAP camera space: x right, **y down**, z forward.
 
+// The lane forms test validity as `!(x <= 0.0)` etc.: exactly the negation of the per-pixel
+// early-return conditions, so a NaN is treated the same way on both paths (it passes the check and
+// is culled by the non-finite ray).
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 use crate::solve::{self, InverseTable, Mat32};
@@ -81,25 +86,21 @@ pub(crate) enum Lift {
 /// A lifted ray and its derivative by the lift's input.
 pub(crate) type Lifted = ([f64; 3], Mat32);
 
-/// `dmz/dq` pieces of the unified-type formula `mz = (1 − a·q)/(α·sqrt(1 − b·q) + 1 − α)`.
-#[inline]
-fn unified_mz(alpha: f64, a: f64, b: f64, q: f64) -> Option<(f64, f64)> {
+/// `dmz/dq` pieces of the unified-type formula `mz = (1 − a·q)/(α·sqrt(1 − b·q) + 1 − α)`, with
+/// whether `q` is in its domain (branch-free: the values are computed, meaningless, outside).
+#[inline(always)]
+fn unified_mz(alpha: f64, a: f64, b: f64, q: f64) -> (bool, (f64, f64)) {
     let rad = 1.0 - b * q;
-    if rad <= 0.0 {
-        return None;
-    }
     let sq = rad.sqrt();
     let den = alpha * sq + 1.0 - alpha;
-    if den <= 0.0 {
-        return None;
-    }
     let num = 1.0 - a * q;
     let dden = -alpha * b / (2.0 * sq);
-    Some((num / den, (-a * den - num * dden) / (den * den)))
+    let ok = !(rad <= 0.0) & !(den <= 0.0);
+    (ok, (num / den, (-a * den - num * dden) / (den * den)))
 }
 
 /// `V = (s·x, s·y, vz)` with `s = s(q)`, `vz = vz(q)`: the derivative by `m` given `ds/dq`, `dvz/dq`.
-#[inline]
+#[inline(always)]
 fn radial_jacobian(m: [f64; 2], s: f64, ds: f64, dvz: f64) -> Mat32 {
     let (x, y) = (m[0], m[1]);
     [
@@ -287,112 +288,160 @@ impl Lift {
     }
 }
 
+/// A lifted ray with whether the input is in the lift's valid set, computed without branches (a
+/// loop over lanes vectorises); the values are meaningless where invalid.
+pub(crate) type LaneLifted = (bool, Lifted);
+
 /// [`Lift::Perspective`].
 #[inline(always)]
 pub(crate) fn perspective(m: [f64; 2]) -> Option<Lifted> {
-    Some(([m[0], m[1], 1.0], [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]))
+    Some(perspective_lane(m).1)
+}
+
+/// [`perspective`] per lane.
+#[inline(always)]
+pub(crate) fn perspective_lane(m: [f64; 2]) -> LaneLifted {
+    (true, ([m[0], m[1], 1.0], [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]))
 }
 
 /// [`Lift::Equidistant`].
 #[inline(always)]
 pub(crate) fn equidistant(m: [f64; 2]) -> Option<Lifted> {
+    let (ok, l) = equidistant_lane(m);
+    ok.then_some(l)
+}
+
+/// [`equidistant`] per lane (θ ≤ π where valid, inside [`solve::sin_cos_kernel`]'s range).
+#[inline(always)]
+pub(crate) fn equidistant_lane(m: [f64; 2]) -> LaneLifted {
     let q = m[0] * m[0] + m[1] * m[1];
     let t = q.sqrt();
-    if t > PI {
-        return None;
-    }
-    let (sin, cos) = solve::sin_cos(t);
-    let (s, ds) = if t < 1e-3 {
-        // sin t / t and its derivative by q = t², by series.
-        (1.0 - q / 6.0 + q * q / 120.0, -1.0 / 6.0 + q / 60.0)
-    } else {
-        (sin / t, (t * cos - sin) / (2.0 * t * q))
-    };
+    let (sin, cos) = solve::sin_cos_kernel(t);
+    // sin t / t and its derivative by q = t², by series near 0.
+    let series = (1.0 - q / 6.0 + q * q / 120.0, -1.0 / 6.0 + q / 60.0);
+    let exact = (sin / t, (t * cos - sin) / (2.0 * t * q));
+    let (s, ds) = if t < 1e-3 { series } else { exact };
     // d cos t / dq = −sin t/(2t) = −s/2.
-    Some(([s * m[0], s * m[1], cos], radial_jacobian(m, s, ds, -0.5 * s)))
+    (
+        !(t > PI),
+        ([s * m[0], s * m[1], cos], radial_jacobian(m, s, ds, -0.5 * s)),
+    )
 }
 
 /// [`Lift::Unified`].
 #[inline(always)]
 pub(crate) fn unified(alpha: f64, beta: f64, m: [f64; 2]) -> Option<Lifted> {
+    let (ok, l) = unified_lane(alpha, beta, m);
+    ok.then_some(l)
+}
+
+/// [`unified`] per lane.
+#[inline(always)]
+pub(crate) fn unified_lane(alpha: f64, beta: f64, m: [f64; 2]) -> LaneLifted {
     let q = m[0] * m[0] + m[1] * m[1];
-    let (mz, dmz) = unified_mz(alpha, alpha * alpha * beta, (2.0 * alpha - 1.0) * beta, q)?;
-    Some(([m[0], m[1], mz], radial_jacobian(m, 1.0, 0.0, dmz)))
+    let (ok, (mz, dmz)) = unified_mz(alpha, alpha * alpha * beta, (2.0 * alpha - 1.0) * beta, q);
+    (ok, ([m[0], m[1], mz], radial_jacobian(m, 1.0, 0.0, dmz)))
 }
 
 /// [`Lift::Mei`].
 #[inline(always)]
 pub(crate) fn mei(xi: f64, m: [f64; 2]) -> Option<Lifted> {
+    let (ok, l) = mei_lane(xi, m);
+    ok.then_some(l)
+}
+
+/// [`mei`] per lane.
+#[inline(always)]
+pub(crate) fn mei_lane(xi: f64, m: [f64; 2]) -> LaneLifted {
     let q = m[0] * m[0] + m[1] * m[1];
     let rad = 1.0 + (1.0 - xi * xi) * q;
-    if rad <= 0.0 {
-        return None;
-    }
     let sq = rad.sqrt();
     let lam = (xi + sq) / (1.0 + q);
     let dlam = ((1.0 - xi * xi) / (2.0 * sq) - lam) / (1.0 + q);
-    Some((
-        [lam * m[0], lam * m[1], lam - xi],
-        radial_jacobian(m, lam, dlam, dlam),
-    ))
+    (
+        !(rad <= 0.0),
+        (
+            [lam * m[0], lam * m[1], lam - xi],
+            radial_jacobian(m, lam, dlam, dlam),
+        ),
+    )
 }
 
 /// [`Lift::DoubleSphere`].
 #[inline(always)]
 pub(crate) fn double_sphere(xi: f64, alpha: f64, m: [f64; 2]) -> Option<Lifted> {
+    let (ok, l) = double_sphere_lane(xi, alpha, m);
+    ok.then_some(l)
+}
+
+/// [`double_sphere`] per lane.
+#[inline(always)]
+pub(crate) fn double_sphere_lane(xi: f64, alpha: f64, m: [f64; 2]) -> LaneLifted {
     let q = m[0] * m[0] + m[1] * m[1];
-    let (mz, dmz) = unified_mz(alpha, alpha * alpha, 2.0 * alpha - 1.0, q)?;
+    let (ok, (mz, dmz)) = unified_mz(alpha, alpha * alpha, 2.0 * alpha - 1.0, q);
     let srad = mz * mz + (1.0 - xi * xi) * q;
-    if srad < 0.0 {
-        return None;
-    }
     let s = srad.sqrt();
     let ds = (2.0 * mz * dmz + 1.0 - xi * xi) / (2.0 * s);
     let (p, dp) = (mz * xi + s, dmz * xi + ds);
     let (qq, dqq) = (mz * mz + q, 2.0 * mz * dmz + 1.0);
     let k = p / qq;
     let dk = (dp * qq - p * dqq) / (qq * qq);
-    Some((
-        [k * m[0], k * m[1], k * mz - xi],
-        radial_jacobian(m, k, dk, dk * mz + k * dmz),
-    ))
+    (
+        ok & !(srad < 0.0),
+        (
+            [k * m[0], k * m[1], k * mz - xi],
+            radial_jacobian(m, k, dk, dk * mz + k * dmz),
+        ),
+    )
 }
 
 /// [`Lift::Division`].
 #[inline(always)]
 pub(crate) fn division(k: f64, m: [f64; 2]) -> Option<Lifted> {
+    let (ok, l) = division_lane(k, m);
+    ok.then_some(l)
+}
+
+/// [`division`] per lane.
+#[inline(always)]
+pub(crate) fn division_lane(k: f64, m: [f64; 2]) -> LaneLifted {
     let q = m[0] * m[0] + m[1] * m[1];
-    if k > 0.0 && k * q >= 1.0 {
-        return None;
-    }
-    Some(([m[0], m[1], 1.0 + k * q], radial_jacobian(m, 1.0, 0.0, k)))
+    (
+        !(k > 0.0 && k * q >= 1.0),
+        ([m[0], m[1], 1.0 + k * q], radial_jacobian(m, 1.0, 0.0, k)),
+    )
 }
 
 /// [`Lift::Fov`].
 #[inline(always)]
 pub(crate) fn fov(omega: f64, c: f64, m: [f64; 2]) -> Option<Lifted> {
+    let (ok, l) = fov_lane(omega, c, m);
+    ok.then_some(l)
+}
+
+/// [`fov`] per lane (ωr < π/2 where valid, inside [`solve::sin_cos_kernel`]'s range).
+#[inline(always)]
+pub(crate) fn fov_lane(omega: f64, c: f64, m: [f64; 2]) -> LaneLifted {
     let q = m[0] * m[0] + m[1] * m[1];
     let r = q.sqrt();
     let phi = omega * r;
-    if phi >= FRAC_PI_2 {
-        return None;
-    }
-    let (sin, cos) = solve::sin_cos(phi);
+    let (sin, cos) = solve::sin_cos_kernel(phi);
     // g(r) = sin(ωr)/r and g'(r)/r, by series near 0.
-    let (g, dg_over_r) = if phi < 1e-3 {
-        let w2 = omega * omega;
-        (
-            omega * (1.0 - w2 * q / 6.0),
-            omega * w2 * (-1.0 / 3.0 + w2 * q / 30.0),
-        )
-    } else {
-        (sin / r, (phi * cos - sin) / (r * q))
-    };
+    let w2 = omega * omega;
+    let series = (
+        omega * (1.0 - w2 * q / 6.0),
+        omega * w2 * (-1.0 / 3.0 + w2 * q / 30.0),
+    );
+    let exact = (sin / r, (phi * cos - sin) / (r * q));
+    let (g, dg_over_r) = if phi < 1e-3 { series } else { exact };
     // V = (g·m, c·cos(ωr)); ∂/∂q: ds = g'/(2r), dvz = −c·ω·sin(ωr)/(2r) = −c·ω·g/2.
-    Some((
-        [g * m[0], g * m[1], c * cos],
-        radial_jacobian(m, g, 0.5 * dg_over_r, -0.5 * c * omega * g),
-    ))
+    (
+        !(phi >= FRAC_PI_2),
+        (
+            [g * m[0], g * m[1], c * cos],
+            radial_jacobian(m, g, 0.5 * dg_over_r, -0.5 * c * omega * g),
+        ),
+    )
 }
 
 /// [`Lift::Equirect`].
@@ -404,17 +453,32 @@ pub(crate) fn equirect(w: f64, h: f64, m: [f64; 2]) -> Option<Lifted> {
     }
     let theta = TAU * (u / w - 0.5);
     let phi = PI * (0.5 - v / h);
-    let (st, ct) = solve::sin_cos(theta);
-    let (sp, cp) = solve::sin_cos(phi);
+    Some(equirect_rays(w, h, solve::sin_cos(theta), solve::sin_cos(phi)))
+}
+
+/// [`equirect`] per lane, with whether the lane must be redone by [`equirect`]: the azimuth is
+/// then beyond [`solve::sin_cos_kernel`]'s range (a pixel some 16000 image widths away).
+#[inline(always)]
+pub(crate) fn equirect_lane(w: f64, h: f64, m: [f64; 2]) -> (bool, bool, Lifted) {
+    let (u, v) = (m[0], m[1]);
+    let theta = TAU * (u / w - 0.5);
+    let phi = PI * (0.5 - v / h);
+    let rays = equirect_rays(w, h, solve::sin_cos_kernel(theta), solve::sin_cos_kernel(phi));
+    ((v >= 0.0) & (v <= h), !(theta.abs() <= 1e5), rays)
+}
+
+/// The equirectangular ray and its derivative from the azimuth's and elevation's sine and cosine.
+#[inline(always)]
+fn equirect_rays(w: f64, h: f64, (st, ct): (f64, f64), (sp, cp): (f64, f64)) -> Lifted {
     let (a, b) = (TAU / w, PI / h);
-    Some((
+    (
         [cp * st, -sp, cp * ct],
         [
             [a * cp * ct, b * sp * st],
             [0.0, b * cp],
             [-a * cp * st, b * sp * ct],
         ],
-    ))
+    )
 }
 
 /// [`Lift::OCam`].
@@ -427,6 +491,18 @@ pub(crate) fn ocam(pol: &[f64], rho_max: f64, m: [f64; 2]) -> Option<Lifted> {
     let (p, dp) = solve::poly(pol, rho);
     let g = if rho > 0.0 { -dp / rho } else { 0.0 };
     Some(([m[0], m[1], -p], [[1.0, 0.0], [0.0, 1.0], [g * m[0], g * m[1]]]))
+}
+
+/// [`ocam`] per lane, with `pol` padded to `N` coefficients ([`solve::padded`]).
+#[inline(always)]
+pub(crate) fn ocam_lane<const N: usize>(pol: &[f64; N], rho_max: f64, m: [f64; 2]) -> LaneLifted {
+    let rho = (m[0] * m[0] + m[1] * m[1]).sqrt();
+    let (p, dp) = solve::poly_fixed(pol, rho);
+    let g = if rho > 0.0 { -dp / rho } else { 0.0 };
+    (
+        !(rho > rho_max),
+        ([m[0], m[1], -p], [[1.0, 0.0], [0.0, 1.0], [g * m[0], g * m[1]]]),
+    )
 }
 
 /// [`Lift::FTheta`].

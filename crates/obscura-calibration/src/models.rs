@@ -658,24 +658,60 @@ impl CameraModel {
             return;
         }
         let (ai, c) = (self.a_inv, self.c);
+        let scalar = |px| self.pixel_to_ray(px);
         match &self.lift {
-            Lift::Perspective => visitor.visit(closed_form(ai, c, lift::perspective)),
-            Lift::Equidistant => visitor.visit(closed_form(ai, c, lift::equidistant)),
-            &Lift::Unified { alpha, beta } => {
-                visitor.visit(closed_form(ai, c, move |m| lift::unified(alpha, beta, m)));
+            Lift::Perspective => visitor.visit_lanes(
+                closed_form_lanes(ai, c, |m| no_redo(lift::perspective_lane(m))),
+                scalar,
+            ),
+            Lift::Equidistant => visitor.visit_lanes(
+                closed_form_lanes(ai, c, |m| no_redo(lift::equidistant_lane(m))),
+                scalar,
+            ),
+            &Lift::Unified { alpha, beta } => visitor.visit_lanes(
+                closed_form_lanes(ai, c, move |m| no_redo(lift::unified_lane(alpha, beta, m))),
+                scalar,
+            ),
+            &Lift::Mei { xi } => visitor.visit_lanes(
+                closed_form_lanes(ai, c, move |m| no_redo(lift::mei_lane(xi, m))),
+                scalar,
+            ),
+            &Lift::DoubleSphere { xi, alpha } => visitor.visit_lanes(
+                closed_form_lanes(ai, c, move |m| no_redo(lift::double_sphere_lane(xi, alpha, m))),
+                scalar,
+            ),
+            &Lift::Division { k } => {
+                visitor.visit_lanes(
+                    closed_form_lanes(ai, c, move |m| no_redo(lift::division_lane(k, m))),
+                    scalar,
+                );
             }
-            &Lift::Mei { xi } => visitor.visit(closed_form(ai, c, move |m| lift::mei(xi, m))),
-            &Lift::DoubleSphere { xi, alpha } => {
-                visitor.visit(closed_form(ai, c, move |m| lift::double_sphere(xi, alpha, m)));
+            &Lift::Fov { omega, c: cc } => visitor.visit_lanes(
+                closed_form_lanes(ai, c, move |m| no_redo(lift::fov_lane(omega, cc, m))),
+                scalar,
+            ),
+            &Lift::Equirect { w, h } => {
+                visitor.visit_lanes(
+                    closed_form_lanes(ai, c, move |m| lift::equirect_lane(w, h, m)),
+                    scalar,
+                );
             }
-            &Lift::Division { k } => visitor.visit(closed_form(ai, c, move |m| lift::division(k, m))),
-            &Lift::Fov { omega, c: cc } => {
-                visitor.visit(closed_form(ai, c, move |m| lift::fov(omega, cc, m)));
-            }
-            &Lift::Equirect { w, h } => visitor.visit(closed_form(ai, c, move |m| lift::equirect(w, h, m))),
             Lift::OCam { pol, rho_max, .. } => {
                 let rho_max = *rho_max;
-                visitor.visit(closed_form(ai, c, move |m| lift::ocam(pol, rho_max, m)));
+                // A fixed-length polynomial, so the loop over lanes vectorises.
+                if let Some(p) = solve::padded::<6>(pol) {
+                    visitor.visit_lanes(
+                        closed_form_lanes(ai, c, move |m| no_redo(lift::ocam_lane(&p, rho_max, m))),
+                        scalar,
+                    );
+                } else if let Some(p) = solve::padded::<12>(pol) {
+                    visitor.visit_lanes(
+                        closed_form_lanes(ai, c, move |m| no_redo(lift::ocam_lane(&p, rho_max, m))),
+                        scalar,
+                    );
+                } else {
+                    visitor.visit(closed_form(ai, c, move |m| lift::ocam(pol, rho_max, m)));
+                }
             }
             Lift::FTheta { .. } => visitor.visit(closed_form(ai, c, |m| self.lift.lift(m))),
         }
@@ -724,11 +760,59 @@ fn closed_form(
     }
 }
 
-/// Something run with a model's pixel → ray function ([`CameraModel::with_kernel`]): a generic
-/// method, so each model family gets its own compiled copy.
+/// A lane's lifted ray without a redo flag.
+#[inline(always)]
+fn no_redo((ok, l): lift::LaneLifted) -> (bool, bool, Lifted) {
+    (ok, false, l)
+}
+
+/// [`closed_form`] per lane: `(valid, redo, ray)` computed without branches (garbage where not
+/// valid); `redo` asks for the lane to be recomputed by [`CameraModel::pixel_to_ray`] (an
+/// argument beyond the fast path's range).
+#[inline(always)]
+fn closed_form_lanes(
+    a_inv: Mat2,
+    c: [f64; 2],
+    lift: impl Fn([f64; 2]) -> (bool, bool, Lifted),
+) -> impl Fn([f64; 2]) -> LaneRay {
+    #[inline(always)]
+    move |px| {
+        let m = apply2(&a_inv, [px[0] - c[0], px[1] - c[1]]);
+        let (ok, redo, (v, jl)) = lift(m);
+        LaneRay {
+            ok,
+            redo,
+            ray: PixelRay {
+                v,
+                dv: mul32(&jl, &a_inv),
+            },
+        }
+    }
+}
+
+/// One lane of a batch kernel: the ray, whether it is valid, whether it must be redone by the
+/// per-pixel map.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LaneRay {
+    /// The pixel has a ray (`ray` is meaningless otherwise).
+    pub ok: bool,
+    /// The lane's arguments are beyond the branch-free path's range: recompute it with
+    /// [`CameraModel::pixel_to_ray`].
+    pub redo: bool,
+    /// The ray with its derivative.
+    pub ray: PixelRay,
+}
+
+/// Something run with a model's pixel → ray function ([`CameraModel::with_kernel`]): generic
+/// methods, so each model family gets its own compiled copy.
 pub(crate) trait RayKernel {
     /// Runs with `kernel`, the model pixel → ray map.
     fn visit(self, kernel: impl Fn([f64; 2]) -> Option<PixelRay>);
+
+    /// Runs with `lanes`, the map as a branch-free [`LaneRay`] (for a loop that vectorises), and
+    /// `scalar`, the exact per-pixel map for the lanes it flags `redo`. Valid lanes must be
+    /// exactly what `scalar` gives.
+    fn visit_lanes(self, lanes: impl Fn([f64; 2]) -> LaneRay, scalar: impl Fn([f64; 2]) -> Option<PixelRay>);
 }
 
 /// The first value in `(0, limit]` where `ok` fails (scanned in 4096 steps, then bisected), or

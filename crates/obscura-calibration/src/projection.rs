@@ -107,7 +107,7 @@ use obscura_sdk::{
 };
 
 use crate::NAME;
-use crate::models::{CameraModel, MODEL_NAMES, PixelConvention, PixelRay, RayKernel};
+use crate::models::{CameraModel, LaneRay, MODEL_NAMES, PixelConvention, PixelRay, RayKernel};
 
 /// The default camera: a 90° (horizontal) pinhole on a 640×480 image.
 const DEFAULT_PARAMS: [f32; 4] = [320.0, 320.0, 320.0, 240.0];
@@ -314,8 +314,9 @@ impl CalibratedCamera {
         if deg.is_finite() && deg > 1e-3 { deg } else { 90.0 }
     }
 
-    /// The ray geometry of a model ray `r`, or the culled ray.
-    #[inline(always)]
+    /// The ray geometry of a model ray `r`, or the culled ray: the per-ray reference of the batch
+    /// loop's geometry stage (which the tests hold it to, bit for bit).
+    #[cfg(test)]
     fn geometry(&self, r: PixelRay) -> RayGeometry {
         let [x, y, z] = r.v;
         let n2 = x * x + y * y + z * z;
@@ -362,32 +363,146 @@ struct Batch<'a> {
     rays: &'a mut [RayGeometry],
 }
 
+/// Rays per chunk of a batch: the lanes of one chunk are held as structure-of-arrays on the stack.
+const CHUNK: usize = 32;
+
+/// A chunk of model rays, structure-of-arrays: `v[k][i]` is component k of lane i's ray, `dv[2k + c]`
+/// its derivative by pixel coordinate c.
+struct Lanes {
+    ok: [bool; CHUNK],
+    redo: [bool; CHUNK],
+    v: [[f64; CHUNK]; 3],
+    dv: [[f64; CHUNK]; 6],
+}
+
+impl Lanes {
+    #[inline(always)]
+    fn set(&mut self, i: usize, ok: bool, r: &PixelRay) {
+        self.ok[i] = ok;
+        for k in 0..3 {
+            self.v[k][i] = r.v[k];
+            self.dv[2 * k][i] = r.dv[k][0];
+            self.dv[2 * k + 1][i] = r.dv[k][1];
+        }
+    }
+}
+
+impl Batch<'_> {
+    /// The batch loop: per chunk, the model pixels, then the model rays of every lane (`lanes`,
+    /// branch-free, so the loop vectorises; lanes flagged `redo` recomputed with `scalar`), then
+    /// the ray geometry of every lane (branch-free as well), then the rays written out. Run in
+    /// the widest instruction set the CPU has (AVX2 + FMA where present): Rust never contracts
+    /// `a*b + c` on its own, so every path gives the same bits as [`CalibratedCamera::geometry`]
+    /// of [`CameraModel::pixel_to_ray`].
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)] // lockstep loops over several lane arrays vectorise
+    fn run(self, lanes: impl Fn([f64; 2]) -> LaneRay, scalar: impl Fn([f64; 2]) -> Option<PixelRay>) {
+        let c = self.camera;
+        let (rays, screen) = (self.rays, self.screen);
+        let ps = c.pixel_scale as f32;
+        let (near, far, planar) = (c.near, c.far, c.planar);
+        simd::run(
+            #[inline(always)]
+            move || {
+                let mut l = Lanes {
+                    ok: [false; CHUNK],
+                    redo: [false; CHUNK],
+                    v: [[0.0; CHUNK]; 3],
+                    dv: [[0.0; CHUNK]; 6],
+                };
+                let (mut u, mut v) = ([0.0f64; CHUNK], [0.0f64; CHUNK]);
+                let mut out = [[0.0f32; CHUNK]; 6];
+                let mut valid = [false; CHUNK];
+                for (rays, screen) in rays.chunks_mut(CHUNK).zip(screen.chunks(CHUNK)) {
+                    for ((u, v), s) in u.iter_mut().zip(v.iter_mut()).zip(screen) {
+                        *u = c.su * s.x as f64 + c.ou;
+                        *v = c.sv * s.y as f64 + c.ov;
+                    }
+                    for i in 0..CHUNK {
+                        let r = lanes([u[i], v[i]]);
+                        l.set(i, r.ok, &r.ray);
+                        l.redo[i] = r.redo;
+                    }
+                    if l.redo.iter().any(|&r| r) {
+                        for i in 0..screen.len() {
+                            if l.redo[i] {
+                                match scalar([u[i], v[i]]) {
+                                    Some(r) => l.set(i, true, &r),
+                                    None => l.ok[i] = false,
+                                }
+                            }
+                        }
+                    }
+                    // `CalibratedCamera::geometry`, lane by lane, without branches.
+                    for i in 0..CHUNK {
+                        let (x, y, z) = (l.v[0][i], l.v[1][i], l.v[2][i]);
+                        let n2 = x * x + y * y + z * z;
+                        valid[i] = l.ok[i] & (n2 > 0.0) & n2.is_finite();
+                        let inv = 1.0 / n2.sqrt();
+                        let turn = |c: usize| {
+                            let dv = [l.dv[c][i], l.dv[2 + c][i], l.dv[4 + c][i]];
+                            let k = x * dv[0] + y * dv[1] + z * dv[2];
+                            ((dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2]) * n2 - k * k).max(0.0)
+                        };
+                        let i4 = (inv * inv) * (inv * inv);
+                        let product = (turn(0) * turn(1) * i4 * i4) as f32;
+                        let spread = 0.5 * product.sqrt().sqrt() * ps;
+                        let dz = (z * inv) as f32;
+                        let k = 1.0 / dz;
+                        out[0][i] = (x * inv) as f32;
+                        out[1][i] = -(y * inv) as f32;
+                        out[2][i] = dz;
+                        out[3][i] = if spread.is_finite() { spread } else { 0.0 };
+                        out[4][i] = if planar { near * k } else { near };
+                        out[5][i] = if planar { far * k } else { far };
+                    }
+                    for (i, ray) in rays.iter_mut().enumerate() {
+                        *ray = if valid[i] {
+                            RayGeometry {
+                                origin: Vec3::ZERO,
+                                origin_radius: 0.0,
+                                direction: Vec3::new(out[0][i], out[1][i], out[2][i]),
+                                ray_spread: out[3][i],
+                                min_dist: out[4][i],
+                                max_dist: out[5][i],
+                            }
+                        } else {
+                            RayGeometry::CULLED
+                        };
+                    }
+                }
+            },
+        );
+    }
+}
+
 impl RayKernel for Batch<'_> {
     #[inline(always)]
     fn visit(self, kernel: impl Fn([f64; 2]) -> Option<PixelRay>) {
-        // Two passes over small chunks, model rays then geometry: each pass is a short loop of
-        // independent iterations, which the processor overlaps far better than one long body.
-        // Run in the widest instruction set the CPU has (AVX2 + FMA where present): Rust never
-        // contracts `a*b + c` on its own, so both paths give the same bits.
-        const CHUNK: usize = 32;
-        let c = self.camera;
-        let (rays, screen) = (self.rays, self.screen);
-        simd::run(move || {
-            let mut buf = [None; CHUNK];
-            for (rays, screen) in rays.chunks_mut(CHUNK).zip(screen.chunks(CHUNK)) {
-                for (b, s) in buf.iter_mut().zip(screen) {
-                    let u = c.su * s.x as f64 + c.ou;
-                    let v = c.sv * s.y as f64 + c.ov;
-                    *b = kernel([u, v]);
-                }
-                for (ray, b) in rays.iter_mut().zip(&buf) {
-                    *ray = match b {
-                        Some(r) => c.geometry(*r),
-                        None => RayGeometry::CULLED,
-                    };
-                }
-            }
-        });
+        const NONE: PixelRay = PixelRay {
+            v: [0.0; 3],
+            dv: [[0.0; 2]; 3],
+        };
+        self.run(
+            |px| match kernel(px) {
+                Some(ray) => LaneRay {
+                    ok: true,
+                    redo: false,
+                    ray,
+                },
+                None => LaneRay {
+                    ok: false,
+                    redo: false,
+                    ray: NONE,
+                },
+            },
+            |_| None,
+        );
+    }
+
+    #[inline(always)]
+    fn visit_lanes(self, lanes: impl Fn([f64; 2]) -> LaneRay, scalar: impl Fn([f64; 2]) -> Option<PixelRay>) {
+        self.run(lanes, scalar);
     }
 }
 
@@ -499,5 +614,102 @@ mod tests {
             }
             assert!(valid > n / 2, "{model}: {valid}");
         }
+    }
+
+    /// Projects `screen` through a model and checks every ray against the per-pixel API, bit for
+    /// bit; returns the number of valid rays.
+    fn batch_matches_per_pixel(
+        model: &str,
+        params: &[f64],
+        pol: &[f64],
+        inv: &[f64],
+        screen: &[Point2],
+    ) -> usize {
+        let format = Format::new(640, 480);
+        let env = ProjectionEnvironment::for_format(format);
+        let m = CameraModel::new(model, params, pol, inv, 640.0, 480.0).unwrap();
+        let cam = CalibratedCamera::new(&env, m, [640, 480], None);
+        let n = screen.len();
+        let (lens, mut time) = (vec![Point2::ZERO; n], vec![0.0; n]);
+        let (mut rays, mut tint) = (vec![RayGeometry::CULLED; n], vec![Rgb::WHITE; n]);
+        let mut ctx = ProjectionContext::new(screen, &lens, &lens, &mut time, &mut rays, &mut tint).unwrap();
+        cam.project(&mut ctx);
+        let mut valid = 0;
+        for (s, r) in screen.iter().zip(&rays) {
+            let px = [cam.su * s.x as f64 + cam.ou, cam.sv * s.y as f64 + cam.ov];
+            let expected = cam
+                .model
+                .pixel_to_ray(px)
+                .map_or(RayGeometry::CULLED, |p| cam.geometry(p));
+            assert_eq!(*r, expected, "{model} at {s:?}");
+            valid += usize::from(!r.is_culled());
+        }
+        valid
+    }
+
+    /// The vectorised closed-form kernels (and the scalar ones behind them) of every family not in
+    /// `the_batch_kernels_are_the_per_pixel_map`, including the lanes that fall back to the
+    /// per-pixel map: an equirectangular azimuth beyond the fast sine's range, an OCamCalib
+    /// polynomial too long for the fixed-length kernels. Batch lengths that are not a multiple of
+    /// the chunk exercise the tail.
+    #[test]
+    fn every_family_batch_is_its_per_pixel_map() {
+        let format = Format::new(640, 480);
+        let w = ScreenWindow::default_for(format);
+        let n = 1001;
+        let screen: Vec<Point2> = (0..n)
+            .map(|i| {
+                let fx = (i as f64 * 0.618_033_988_75).fract();
+                let fy = (i as f64 * 0.754_877_666_25).fract();
+                w.raster_to_screen(format, fx * 800.0 - 80.0, fy * 600.0 - 60.0)
+            })
+            .collect();
+        let pol5 = [-206.517, 0.0, 2.207161e-03, -4.879622e-06, 1.865656e-08];
+        let pol8 = [-206.517, 0.0, 2.2e-03, -4.9e-06, 1.9e-08, 1e-12, -1e-15, 1e-19];
+        let mut pol14 = pol5.to_vec();
+        pol14.resize(14, 0.0);
+        pol14[13] = 1e-40;
+        let ocam = [239.5, 319.5, 1.00033, 0.000219, 0.000257];
+        /// (model, params, polynomial, inversePolynomial).
+        type Case<'a> = (&'a str, &'a [f64], &'a [f64], &'a [f64]);
+        let cases: [Case; 14] = [
+            ("SIMPLE_PINHOLE", &[500.0, 320.0, 240.0], &[], &[]),
+            ("FISHEYE", &[200.0, 210.0, 320.0, 240.0], &[], &[]),
+            ("DIVISION", &[400.0, 405.0, 320.0, 240.0, -0.15], &[], &[]),
+            ("SIMPLE_DIVISION", &[400.0, 320.0, 240.0, 0.3], &[], &[]),
+            ("UCM", &[300.0, 300.0, 320.0, 240.0, 0.58], &[], &[]),
+            ("DOUBLE_SPHERE", &[200.0, 200.0, 320.0, 240.0, 0.4, 0.3], &[], &[]),
+            ("FOV", &[250.0, 250.0, 320.0, 240.0, 1.2], &[], &[]),
+            ("EQUIRECTANGULAR", &[640.0, 480.0], &[], &[]),
+            ("OCAMCALIB", &ocam, &pol5, &[]),
+            ("OCAMCALIB", &ocam, &pol8, &[]),
+            ("OCAMCALIB", &ocam, &pol14, &[]),
+            ("RADIAL", &[500.0, 320.0, 240.0, -0.2, 0.05], &[], &[]),
+            (
+                "FULL_OPENCV",
+                &[
+                    500.0, 490.0, 322.0, 241.0, -0.28, 0.07, 0.001, -0.0005, -0.002, 0.01, 0.003, 0.0002,
+                ],
+                &[],
+                &[],
+            ),
+            ("FTHETA", &[319.5, 239.5, 1.7], &[], &[0.0, 250.0, -5.0, 1.0]),
+        ];
+        for (model, params, pol, inv) in cases {
+            let valid = batch_matches_per_pixel(model, params, pol, inv, &screen);
+            assert!(valid > n / 3, "{model}: {valid}");
+        }
+        // Equirectangular azimuths far beyond ±π (and beyond the fast sine's 1e5 rad) wrap around.
+        let far: Vec<Point2> = (0..77)
+            .map(|i| {
+                w.raster_to_screen(
+                    format,
+                    1e7 * (i as f64 - 38.0) + 0.37 * i as f64,
+                    240.0 + i as f64,
+                )
+            })
+            .collect();
+        let valid = batch_matches_per_pixel("EQUIRECTANGULAR", &[640.0, 480.0], &[], &[], &far);
+        assert_eq!(valid, far.len());
     }
 }

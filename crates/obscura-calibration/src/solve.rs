@@ -224,9 +224,19 @@ pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
     if x.abs() > 1e5 || x.is_nan() {
         return x.sin_cos();
     }
-    // Round to nearest by the 1.5·2⁵² trick (no SSE4.1 `round` on the baseline instruction set).
+    sin_cos_kernel(x)
+}
+
+/// [`sin_cos`] without the range check: exact to an ulp or two for `|x| ≤ 1e5`, meaningless
+/// beyond. Branch-free (the quadrant is read from the rounded value's bits), so a loop over
+/// independent arguments vectorises.
+#[inline(always)]
+pub(crate) fn sin_cos_kernel(x: f64) -> (f64, f64) {
+    // Round to nearest by the 1.5·2⁵² trick (no SSE4.1 `round` on the baseline instruction set);
+    // the low mantissa bits of the shifted value are k in two's complement.
     const SHIFTER: f64 = 6_755_399_441_055_744.0;
-    let k = (x * std::f64::consts::FRAC_2_PI + SHIFTER) - SHIFTER;
+    let shifted = x * std::f64::consts::FRAC_2_PI + SHIFTER;
+    let k = shifted - SHIFTER;
     // π/2 split (1.5707963267341256 + 6.077100506506192e-11): the high part has 33 significant bits, so k·PIO2_HI is exact for |k| < 2²⁰.
     const PIO2_HI: f64 = f64::from_bits(0x3FF9_21FB_5440_0000);
     const PIO2_LO: f64 = f64::from_bits(0x3DD0_B461_1A62_6331);
@@ -248,11 +258,32 @@ pub(crate) fn sin_cos(x: f64) -> (f64, f64) {
                         + r2 * (-1.0 / 3_628_800.0
                             + r2 * (1.0 / 479_001_600.0
                                 + r2 * (-1.0 / 87_178_291_200.0 + r2 * (1.0 / 20_922_789_888_000.0))))))));
-    let q = (k as i64) & 3;
+    let q = shifted.to_bits() & 3;
     let (a, b) = if q & 1 == 0 { (s, c) } else { (c, s) };
     let sin_sign = if q & 2 == 0 { 1.0 } else { -1.0 };
     let cos_sign = if (q + 1) & 2 == 0 { 1.0 } else { -1.0 };
     (sin_sign * a, cos_sign * b)
+}
+
+/// [`poly`] for a fixed number of coefficients (the polynomial padded with zeros at the top):
+/// the same value and derivative bit for bit at any finite `x ≥ 0` (the padding contributes exact
+/// zeros), and a fixed trip count, so a loop over lanes vectorises.
+#[inline(always)]
+pub(crate) fn poly_fixed<const N: usize>(c: &[f64; N], x: f64) -> (f64, f64) {
+    let mut p = 0.0;
+    let mut dp = 0.0;
+    for &a in c.iter().rev() {
+        dp = dp * x + p;
+        p = p * x + a;
+    }
+    (p, dp)
+}
+
+/// `c` padded with zeros to `N` coefficients, or `None` when it has more.
+pub(crate) fn padded<const N: usize>(c: &[f64]) -> Option<[f64; N]> {
+    let mut out = [0.0; N];
+    out.get_mut(..c.len())?.copy_from_slice(c);
+    Some(out)
 }
 
 #[cfg(test)]
@@ -337,6 +368,33 @@ mod tests {
             proptest::prop_assert!((s - s0).abs() <= 4e-16 && (c - c0).abs() <= 4e-16, "{x}: {s} {c} vs {s0} {c0}");
             proptest::prop_assert!((s * s + c * c - 1.0).abs() <= 6e-16);
         }
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn the_padded_polynomial_is_the_polynomial(
+            c in proptest::collection::vec(-10.0f64..10.0, 0..7),
+            x in 0.0f64..50.0,
+        ) {
+            let fixed = poly_fixed(&padded::<8>(&c).unwrap(), x);
+            let (p, dp) = poly(&c, x);
+            proptest::prop_assert_eq!(fixed.0.to_bits(), p.to_bits());
+            proptest::prop_assert_eq!(fixed.1.to_bits(), dp.to_bits());
+        }
+
+        #[test]
+        fn the_sin_cos_kernel_is_sin_cos_over_its_range(x in -1e5f64..1e5) {
+            let (s, c) = sin_cos_kernel(x);
+            let (s0, c0) = x.sin_cos();
+            let tol = 4e-16 + 1e-22 * x.abs();
+            proptest::prop_assert!((s - s0).abs() <= tol && (c - c0).abs() <= tol, "{x}: {s} {c} vs {s0} {c0}");
+        }
+    }
+
+    #[test]
+    fn padding_refuses_a_longer_polynomial() {
+        assert!(padded::<2>(&[1.0, 2.0, 3.0]).is_none());
+        assert_eq!(padded::<3>(&[1.0]), Some([1.0, 0.0, 0.0]));
     }
 
     #[test]

@@ -2,7 +2,6 @@
 //!
 //! Argument handling and printing only; the checks are `obscura_sdk::contract`.
 
-
 use clap::Args;
 use obscura_host::cli_params::push_param_arg;
 use obscura_host::plugins::{PluginSearch, ensure};

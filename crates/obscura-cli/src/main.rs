@@ -7,9 +7,9 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::cli_params::push_param_arg;
+use obscura_host::plugins::{PluginSearch, ensure};
 use obscura_host::raymap::{trace_ray_map, write_exr};
 use obscura_host::shutter::ShutterDesc;
-use obscura_host::plugins::{PluginSearch, ensure};
 use obscura_host::{CameraDesc, CameraStage, CropWindow, listing};
 use obscura_projections::builtin_registry;
 use obscura_render::integrator::PathOptions;
@@ -418,10 +418,9 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             .map_err(|e| e.to_string())?;
     }
     let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
-    if !a.quiet {
-        for w in prepared.stage().setup_warnings() {
-            eprintln!("{w}");
-        }
+    // Warnings are printed even with --quiet, which only silences progress and summaries.
+    for w in prepared.stage().setup_warnings() {
+        eprintln!("{w}");
     }
     let _ = ctrlc::set_handler(|| {
         if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {

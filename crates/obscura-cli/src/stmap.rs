@@ -78,6 +78,9 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
     if let Some(w) = st.a_report.warning(&a.from) {
         eprintln!("{w}");
     }
+    if let Some(w) = st.unproject_warning(&a.from) {
+        eprintln!("{w}");
+    }
     if let Some(w) = st.consistency_warning(&a.from) {
         eprintln!("{w}");
     }

@@ -296,6 +296,45 @@ fn a_panicking_plugin_loses_batches_and_the_render_goes_on() {
 }
 
 #[test]
+fn a_panicking_inverse_loses_pixels_of_an_stmap_and_the_map_is_written() {
+    // Panicking's unproject panics right of screen x = panicAbove (0.45): those pixels of the map stay empty
+    // (alpha 0), the warning counts them and quotes the panic, and the file is still written.
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    let r = obscura(
+        &[
+            "stmap",
+            "--from",
+            "Panicking",
+            "--from-param",
+            "panicAbove=0.45",
+            "--to",
+            "PxrPerspective",
+            "--format",
+            "32x18",
+            "-o",
+            "m.exr",
+        ],
+        work.path(),
+        Some(plugins.path()),
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(r.status.success(), "{err}");
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("warning: Panicking: unproject failed at "))
+        .unwrap_or_else(|| panic!("no unproject warning in {err}"));
+    // PxrPerspective's default 90° pinhole on a 16:9 frame spans screen x in [-16/9, 16/9]: column i
+    // sits at x = (i + ½ − 16)/9, right of 0.45 from i = 20 (x = 0.5; i = 19 is at 0.39): 12 columns
+    // of 18 rows.
+    assert!(line.contains("at 216 pixels"), "{line}");
+    // unproject has no error sink: the status says what happened, the plugin's panic hook said why.
+    assert!(line.contains("status 3 (OBSCURA_PANIC"), "{line}");
+    assert!(err.contains("deliberate panic in unproject at screen x"), "{err}");
+    assert!(work.path().join("m.exr").exists());
+}
+
+#[test]
 fn plugins_lists_a_loaded_plugins_table_and_refuses_unknown_names_clearly() {
     let plugins = plugin_dir();
     let work = tempfile::tempdir().unwrap();

@@ -243,10 +243,7 @@ fn bad_input_gets_a_clear_error_and_exit_code() {
             vec!["rays", "-o", "/nonexistent-dir/x.exr"],
             "cannot write /nonexistent-dir/x.exr",
         ),
-        (
-            vec!["plugins", "Nope"],
-            "known projections: CalibratedCamera, ",
-        ),
+        (vec!["plugins", "Nope"], "known projections: CalibratedCamera, "),
     ] {
         let r = obscura(&args);
         let err = String::from_utf8_lossy(&r.stderr);

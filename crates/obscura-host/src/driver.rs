@@ -19,6 +19,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use obscura_sdk::abi::panic_message;
 use obscura_sdk::optics::{OrthographicRays, PerspectiveRays, screen_distance};
 use obscura_sdk::{
     DeepMetric, DicingHint, ParamList, PluginError, Point2, Projection, ProjectionContext,
@@ -434,11 +435,7 @@ impl CameraStage {
             self.projection.project(&mut ctx);
         }));
         if let Err(payload) = outcome {
-            let why = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "a non-string panic".into());
+            let why = panic_message(payload.as_ref());
             for (r, s) in batch.rays.iter_mut().zip(&batch.screen) {
                 r.direction = Vec3::ZERO;
                 report.record(Violation::Panicked, *s, || format!("panicked: {why}"));
@@ -501,7 +498,19 @@ fn read_properties(
     warnings: &mut Vec<String>,
 ) -> Properties {
     let mut ask = |prop: ProjectionProperty| -> Option<PropertyValue> {
-        let v = p.property(prop)?;
+        // A panic here (a built-in's bug, or a plugin's failed call raised by its adapter) leaves the
+        // property unanswered with a warning; the render goes on.
+        let v = match catch_unwind(AssertUnwindSafe(|| p.property(prop))) {
+            Ok(v) => v?,
+            Err(payload) => {
+                warnings.push(format!(
+                    "warning: projection {name} failed to answer {}: {}; treated as unanswered",
+                    prop.renderman_name(),
+                    panic_message(payload.as_ref())
+                ));
+                return None;
+            }
+        };
         if prop.accepts(v) {
             Some(v)
         } else {

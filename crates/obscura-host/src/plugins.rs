@@ -20,6 +20,11 @@
 //! A status other than OK from the plugin's `project` (a caught panic, an error) becomes a panic in
 //! [`Projection::project`] (raised with `resume_unwind`, so no second panic message is printed); the
 //! camera stage already catches that, culls and counts the batch's samples, and the render goes on.
+//! The same holds for `property` and `unproject`: a failed call (any status but OK and UNSUPPORTED)
+//! is raised, never passed off as "unanswered" or "outside the view", and a property value that does
+//! not decode is raised as an [`UndecodableProperty`]. Every caller catches them: the camera stage's
+//! property reader warns and goes on without the property, `stmap` counts the pixels, and
+//! `obscura check` reports a panic or a property of the wrong type.
 
 use std::ffi::{CString, c_char, c_void};
 use std::panic::resume_unwind;
@@ -29,7 +34,7 @@ use std::sync::{Mutex, PoisonError};
 use obscura_sdk::abi::{
     self, ABI_VERSION, CreateFn, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NUL, EntryFn, FinalizeFn, InitFn,
     OwnedEnvironment, OwnedParamList, ProjectFn, ProjectionDescriptor, PropertyFn, RawContext,
-    RawPropertyValue, SynchronizeFn, UnprojectFn, collect_message,
+    RawPropertyValue, SynchronizeFn, UndecodableProperty, UnprojectFn, collect_message,
 };
 use obscura_sdk::{
     ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
@@ -287,6 +292,18 @@ fn or_status(msg: String, status: abi::Status) -> String {
     } else {
         msg
     }
+}
+
+/// A status as `3 (OBSCURA_PANIC)`, for messages about calls that have no error sink.
+fn status_name(status: abi::Status) -> String {
+    let name = match status {
+        abi::OK => "OBSCURA_OK",
+        abi::UNSUPPORTED => "OBSCURA_UNSUPPORTED",
+        abi::ERROR => "OBSCURA_ERROR",
+        abi::PANIC => "OBSCURA_PANIC: a panic or exception caught in the plugin",
+        _ => "not a status of the ABI",
+    };
+    format!("{status} ({name})")
 }
 
 /// Every library this process has opened, by canonical path. Leaked: libraries are never unloaded.
@@ -629,25 +646,18 @@ impl Projection for PluginProjection {
         match status {
             abi::OK => match abi::value_from_raw(v) {
                 Ok(v) => Some(v),
-                Err(e) => {
-                    eprintln!(
-                        "warning: projection {} answered {} with {e}; ignored",
-                        self.lib.name,
-                        property.renderman_name()
-                    );
-                    None
-                }
+                // Not `None`: the reader catches this and warns, `obscura check` counts a wrong type.
+                Err(reason) => resume_unwind(Box::new(UndecodableProperty {
+                    property: property.renderman_name(),
+                    reason,
+                })),
             },
             abi::UNSUPPORTED => None,
-            s => {
-                eprintln!(
-                    "warning: projection {} failed to answer {} (status {s}{}); treated as unanswered",
-                    self.lib.name,
-                    property.renderman_name(),
-                    if s == abi::PANIC { ", a panic" } else { "" }
-                );
-                None
-            }
+            s => resume_unwind(Box::new(format!(
+                "property({}) failed with status {}",
+                property.renderman_name(),
+                status_name(s)
+            ))),
         }
     }
 
@@ -690,7 +700,15 @@ impl Projection for PluginProjection {
         let mut out = Point2::ZERO;
         // SAFETY: a live projection handle and an out-pointer valid for the call.
         let status = unsafe { f(self.handle, point, time, &mut out) };
-        (status == abi::OK).then_some(out)
+        match status {
+            abi::OK => Some(out),
+            abi::UNSUPPORTED => None,
+            // A failure is not "outside the view": callers catch this and count it.
+            s => resume_unwind(Box::new(format!(
+                "unproject failed with status {}",
+                status_name(s)
+            ))),
+        }
     }
 }
 

@@ -48,11 +48,13 @@
 //! Keeping `(s, t)` where the position exists but lies outside A's image lets overscan workflows use
 //! it; the alpha says whether A's image holds the colour.
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, IntegerBounds, Layer, LayerAttributes,
 };
+use obscura_sdk::abi::panic_message;
 use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Registry, Vec3};
 use rayon::prelude::*;
 
@@ -108,6 +110,10 @@ pub struct StMapStats {
     pub inconsistent: u64,
     /// The largest such miss, in A's pixels, and the pixel of B (column, row) where it happened.
     pub worst_miss: Option<(f64, (u32, u32))>,
+    /// Pixels where A's `unproject` panicked (or a plugin's returned a failure): left unmapped.
+    pub unproject_failed: u64,
+    /// The first such failure's message.
+    pub unproject_failure: Option<String>,
     /// Contract breaches of B's rays (culled and counted by the driver).
     pub b_report: ContractReport,
     /// Contract breaches of A's rays traced for the consistency check.
@@ -123,6 +129,10 @@ impl StMapStats {
         self.outside_a += o.outside_a;
         self.culled_by_a += o.culled_by_a;
         self.inconsistent += o.inconsistent;
+        self.unproject_failed += o.unproject_failed;
+        if self.unproject_failure.is_none() {
+            self.unproject_failure.clone_from(&o.unproject_failure);
+        }
         if let Some((m, at)) = o.worst_miss
             && self.worst_miss.is_none_or(|(w, _)| m > w)
         {
@@ -130,6 +140,19 @@ impl StMapStats {
         }
         self.b_report.merge(&o.b_report);
         self.a_report.merge(&o.a_report);
+    }
+
+    /// One warning line when A's `unproject` failed at some pixels, else `None`.
+    #[must_use]
+    pub fn unproject_warning(&self, from: &str) -> Option<String> {
+        (self.unproject_failed > 0).then(|| {
+            format!(
+                "warning: {from}: unproject failed at {} pixel{} (left unmapped, alpha 0); first: {}",
+                self.unproject_failed,
+                if self.unproject_failed == 1 { "" } else { "s" },
+                self.unproject_failure.as_deref().unwrap_or("no message")
+            )
+        })
     }
 
     /// One warning line when A's inverse disagreed with its rays, else `None`.
@@ -181,9 +204,25 @@ pub enum StMapError {
         /// The projection.
         projection: String,
     },
+    /// A's inverse found none of its own rays, and failed (panicked, or a plugin's call returned a
+    /// failure) on some of them.
+    #[error("--from {projection}: its unproject failed: {message}")]
+    UnprojectFailed {
+        /// The projection.
+        projection: String,
+        /// The panic's or the plugin's message.
+        message: String,
+    },
     /// Writing the file failed.
     #[error(transparent)]
     Output(#[from] ExrWriteError),
+}
+
+/// A's `unproject(p, 0)`, with a panic (or a plugin's failed call, which its adapter raises as one)
+/// as `Err(message)`.
+fn unproject_caught(a: &CameraStage, p: Vec3) -> Result<Option<Point2>, String> {
+    catch_unwind(AssertUnwindSafe(|| a.projection().unproject(p, 0.0)))
+        .map_err(|payload| panic_message(payload.as_ref()))
 }
 
 /// The two stages of an ST-map made from a registry: `(A, B)`. Each camera uses RenderMan's defaults
@@ -270,18 +309,24 @@ fn check_inverse(from: &CameraStage, distance: f32) -> Result<(), StMapError> {
         .collect();
     let (rays, _) = chief_rays(from, &screen);
     let live: Vec<&RayGeometry> = rays.iter().filter(|r| r.direction != Vec3::ZERO).collect();
-    if live.is_empty()
-        || live.iter().any(|r| {
-            from.projection()
-                .unproject(r.origin + r.direction * distance, 0.0)
-                .is_some()
-        })
-    {
-        Ok(())
-    } else {
-        Err(StMapError::NoInverse {
+    let mut found = live.is_empty();
+    let mut failure = None;
+    for r in live {
+        match unproject_caught(from, r.origin + r.direction * distance) {
+            Ok(back) => found |= back.is_some(),
+            Err(message) => failure = failure.or(Some(message)),
+        }
+    }
+    // Some failures are counted pixel by pixel later; only an inverse that never answers is an error.
+    match (found, failure) {
+        (true, _) => Ok(()),
+        (false, Some(message)) => Err(StMapError::UnprojectFailed {
             projection: from.name().to_string(),
-        })
+            message,
+        }),
+        (false, None) => Err(StMapError::NoInverse {
+            projection: from.name().to_string(),
+        }),
     }
 }
 
@@ -335,9 +380,17 @@ fn map_row(from: &CameraStage, to: &CameraStage, distance: f32, y: u32) -> (Vec<
             continue;
         }
         let p = r.origin + r.direction * distance;
-        let Some(sa) = from.projection().unproject(p, 0.0) else {
-            stats.unseen_by_a += 1;
-            continue;
+        let sa = match unproject_caught(from, p) {
+            Ok(Some(sa)) => sa,
+            Ok(None) => {
+                stats.unseen_by_a += 1;
+                continue;
+            }
+            Err(message) => {
+                stats.unproject_failed += 1;
+                stats.unproject_failure.get_or_insert(message);
+                continue;
+            }
         };
         let (xa, ya) = aw.screen_to_raster(af, sa);
         let s = xa / af.width as f64;

@@ -76,7 +76,8 @@ fn projection(name: &str, params: &[(&str, &str)]) -> Box<dyn Projection> {
     let mut list = ParamList::new();
     for (decl, v) in params {
         let values: Vec<&str> = v.split_whitespace().collect();
-        list.push_text(decl, &values, None).expect("valid bench parameter");
+        list.push_text(decl, &values, None)
+            .expect("valid bench parameter");
     }
     let mut env = ProjectionEnvironment::for_format(Format::new(1920, 1080));
     builtin_registry()
@@ -143,24 +144,56 @@ fn orthographic_thin_lens(bencher: Bencher, n: usize) {
 }
 
 /// A library entry: its label, the projection's name and its parameters.
-type Entry = (&'static str, &'static str, &'static [(&'static str, &'static str)]);
+type Entry = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+);
 
 /// The projection library (issues 4 and 6) at batch 4096: one configuration per model, by label.
 const LIBRARY: &[Entry] = &[
     ("sphere", "PxrSphereCamera", &[]),
     ("cylinder", "PxrCylinderCamera", &[]),
-    ("panini", "PxrPanini", &[("float fov", "150"), ("float compression", "1")]),
+    (
+        "panini",
+        "PxrPanini",
+        &[("float fov", "150"), ("float compression", "1")],
+    ),
     ("ods", "OmnidirectionalStereo", &[]),
-    ("rolling_shutter", "PxrRollingShutter", &[("float duration", "0.2")]),
-    ("fisheye_equidistant", "Fisheye", &[("string mapping", "equidistant")]),
+    (
+        "rolling_shutter",
+        "PxrRollingShutter",
+        &[("float duration", "0.2")],
+    ),
+    (
+        "fisheye_equidistant",
+        "Fisheye",
+        &[("string mapping", "equidistant")],
+    ),
     ("fisheye_equisolid", "Fisheye", &[("string mapping", "equisolid")]),
-    ("fisheye_stereographic", "Fisheye", &[("string mapping", "stereographic")]),
-    ("fisheye_orthographic", "Fisheye", &[("string mapping", "orthographic")]),
-    ("fisheye_polynomial", "Fisheye", &[("string mapping", "polynomial")]),
+    (
+        "fisheye_stereographic",
+        "Fisheye",
+        &[("string mapping", "stereographic")],
+    ),
+    (
+        "fisheye_orthographic",
+        "Fisheye",
+        &[("string mapping", "orthographic")],
+    ),
+    (
+        "fisheye_polynomial",
+        "Fisheye",
+        &[("string mapping", "polynomial")],
+    ),
     ("mirror_ball", "MirrorBall", &[]),
     ("cube_face", "EquiangularCubemapFace", &[]),
     ("octahedral", "Octahedral", &[]),
-    ("pxrcamera_pinhole", "PxrCamera", &[("float fov", "60"), ("float fStop", "0")]),
+    (
+        "pxrcamera_pinhole",
+        "PxrCamera",
+        &[("float fov", "60"), ("float fStop", "0")],
+    ),
     (
         "pxrcamera_distortion_dof",
         "PxrCamera",
@@ -195,10 +228,7 @@ const LIBRARY: &[Entry] = &[
 
 #[divan::bench(args = LIBRARY.iter().map(|e| e.0))]
 fn library(bencher: Bencher, label: &str) {
-    let (_, name, params) = LIBRARY
-        .iter()
-        .find(|e| e.0 == label)
-        .expect("a label of LIBRARY");
+    let (_, name, params) = LIBRARY.iter().find(|e| e.0 == label).expect("a label of LIBRARY");
     bench_projection(bencher, 4096, name, params);
 }
 

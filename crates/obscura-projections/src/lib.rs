@@ -20,8 +20,8 @@
 //!
 //! [`register_builtins`] adds them all to a [`Registry`]; [`builtin_registry`] makes one holding them.
 
-pub mod cylinder;
 pub mod cubemap;
+pub mod cylinder;
 pub mod dof;
 pub mod fisheye;
 pub mod mirrorball;
@@ -40,17 +40,17 @@ mod testing;
 use obscura_sdk::Registry;
 
 pub use cubemap::{CubemapFace, CubemapFaceFactory, Face as CubemapFaceName};
+pub use cylinder::{CylinderCamera, CylinderCameraFactory};
 pub use fisheye::{Fisheye, FisheyeFactory, Mapping as FisheyeMapping};
 pub use mirrorball::{MirrorBall, MirrorBallFactory};
 pub use octahedral::{Octahedral, OctahedralFactory};
-pub use orthographic::{Orthographic, OrthographicFactory};
 pub use omnistereo::{Eye, OdsSettings, OmnidirectionalStereo, OmnidirectionalStereoFactory};
+pub use orthographic::{Orthographic, OrthographicFactory};
 pub use panini::{Panini, PaniniFactory};
 pub use perspective::{Perspective, PerspectiveFactory};
 pub use pxrcamera::{PxrCamera, PxrCameraFactory};
-pub use cylinder::{CylinderCamera, CylinderCameraFactory};
-pub use sphere::{SphereCamera, SphereCameraFactory};
 pub use rolling_shutter::{RollingShutter, RollingShutterFactory, RollingShutterModifier, Sweep};
+pub use sphere::{SphereCamera, SphereCameraFactory};
 
 /// Adds every built-in projection to `registry`.
 ///

@@ -452,14 +452,39 @@ pub unsafe fn report(sink: *const ErrorSink, message: &str) {
     }
 }
 
-/// The text of a panic payload.
+/// The panic payload with which a host adapter reports a property value that does not decode (an
+/// unknown value kind or enum value sent through the ABI).
+///
+/// The adapter raises it with [`std::panic::resume_unwind`] instead of answering `None`, so nothing
+/// is lost: the host's property reader catches it and warns, and `obscura check` counts it as a
+/// property of the wrong type rather than as an unanswered one.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UndecodableProperty {
+    /// The property asked, by RenderMan's name (`k_FieldOfView`).
+    pub property: &'static str,
+    /// What was wrong with the value (`unknown property value kind 7 (expected 0, 1 or 2)`).
+    pub reason: String,
+}
+
+impl std::fmt::Display for UndecodableProperty {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} answered with {}", self.property, self.reason)
+    }
+}
+
+/// The text of a panic payload (a `&str`, a `String` or an [`UndecodableProperty`]).
 #[must_use]
 pub fn panic_message(payload: &(dyn Any + Send)) -> String {
     payload
         .downcast_ref::<&str>()
         .map(|s| (*s).to_string())
         .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "a non-string panic".into())
+        .or_else(|| {
+            payload
+                .downcast_ref::<UndecodableProperty>()
+                .map(ToString::to_string)
+        })
+        .unwrap_or_else(|| "a panic with a non-string payload".into())
 }
 
 // ------------------------------------------------------------------------------------------------

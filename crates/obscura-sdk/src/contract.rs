@@ -115,6 +115,7 @@
 use std::fmt::{self, Write as _};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
+use crate::abi::{UndecodableProperty, panic_message};
 use crate::context::ProjectionContext;
 use crate::environment::{Format, ProjectionEnvironment, ScreenWindow};
 use crate::geometry::{Point2, Rgb, Vec3};
@@ -1019,14 +1020,6 @@ impl Prefill {
     }
 }
 
-fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| (*s).to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .unwrap_or_else(|| "a panic with a non-string payload".into())
-}
-
 /// One run over all batches: the outputs (`None` for samples of a panicked batch) and the panics as
 /// (first sample of the batch, message).
 struct Run {
@@ -1239,6 +1232,22 @@ impl<'a> Checker<'a> {
             self.report.at(CheckKind::Panic).examined += 1;
             let answer = match catch_unwind(AssertUnwindSafe(|| self.p.property(prop))) {
                 Ok(a) => a,
+                Err(payload) if payload.is::<UndecodableProperty>() => {
+                    // A value sent through the ABI that is no property value at all: the wrong type.
+                    let bad = payload.downcast_ref::<UndecodableProperty>();
+                    let reason = bad.map(|b| b.reason.clone()).unwrap_or_default();
+                    let types = self.report.at(CheckKind::PropertyType);
+                    types.examined += 1;
+                    types.fail(1.0, || Case {
+                        sample: None,
+                        what: prop.renderman_name().into(),
+                        expected: format!("{} or None", expected_type(prop)),
+                        got: reason.clone(),
+                        severity: 0.0,
+                    });
+                    self.report.properties.push((prop, None));
+                    continue;
+                }
                 Err(payload) => {
                     let msg = panic_message(payload.as_ref());
                     record_panic(

@@ -8,6 +8,10 @@
 use crate::{Point2, RayGeometry};
 
 /// Runs `kernel` in the widest instruction set this CPU supports.
+///
+/// Mark a large kernel `#[inline(always)]` (`run(#[inline(always)] || …)`): the wide path only
+/// applies to code inlined into the AVX2 trampoline, and LLVM's inliner may otherwise leave a big
+/// closure as a baseline-compiled call.
 #[inline(always)]
 pub fn run<R>(kernel: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
@@ -24,11 +28,14 @@ pub fn run<R>(kernel: impl FnOnce() -> R) -> R {
 /// projection whose rays depend on the screen position alone. `ray` is inlined into the loop.
 #[inline(always)]
 pub fn map_screen(rays: &mut [RayGeometry], screen: &[Point2], ray: impl Fn(Point2) -> RayGeometry) {
-    run(|| {
-        for (r, s) in rays.iter_mut().zip(screen) {
-            *r = ray(*s);
-        }
-    });
+    run(
+        #[inline(always)]
+        || {
+            for (r, s) in rays.iter_mut().zip(screen) {
+                *r = ray(*s);
+            }
+        },
+    );
 }
 
 /// True when the AVX2 + FMA path is taken on this machine.

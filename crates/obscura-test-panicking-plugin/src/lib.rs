@@ -3,17 +3,21 @@
 //! It is a modifier (RenderMan's sense): it reports a 90° field of view and leaves the host's default
 //! pinhole rays alone, except that `project` panics whenever its batch holds a screen sample with
 //! `sx > panicAbove`. The host must report the panic, cull and count that batch's samples, and keep
-//! rendering the other batches.
+//! rendering the other batches. Its `unproject` (the 90° pinhole's inverse, `(x/z, y/z)`) panics in
+//! the same region, so `obscura stmap --from Panicking` must count the pixels and go on.
 
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    ParamDecl, ParamList, Params, PluginError, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue,
+    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionFactory, ProjectionProperty, PropertyValue, Vec3,
 };
 
 static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
-    vec![ParamDecl::float("panicAbove", 0.5).doc("project panics on a batch with a screen x above this")]
+    vec![
+        ParamDecl::float("panicAbove", 0.5)
+            .doc("project (on a batch) and unproject panic at a screen x above this"),
+    ]
 });
 
 /// Creates [`Panicking`] projections.
@@ -60,6 +64,19 @@ impl Projection for Panicking {
         if let Some(s) = ctx.screen().iter().find(|s| s.x > self.above) {
             panic!("deliberate panic at screen x {}", s.x);
         }
+    }
+
+    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
+        if point.z <= 0.0 {
+            return None;
+        }
+        let s = Point2::new(point.x / point.z, point.y / point.z);
+        assert!(
+            s.x <= self.above,
+            "deliberate panic in unproject at screen x {}",
+            s.x
+        );
+        Some(s)
     }
 }
 
