@@ -79,7 +79,7 @@ impl Distortion {
     }
 
     /// `R(q)` and `dR/dq`.
-    #[inline]
+    #[inline(always)]
     fn radial(&self, q: f64) -> (f64, f64) {
         let (mut n, mut dn) = (0.0, 0.0);
         for &k in self.num[..self.num_len].iter().rev() {
@@ -107,7 +107,7 @@ impl Distortion {
 
     /// Tangential and prism terms added to `(x, y)` with radial factor `rr` and `drr = dR/dq`; value
     /// and Jacobian by `(x, y)`.
-    #[inline]
+    #[inline(always)]
     fn tangential(&self, x: f64, y: f64, rr: f64, drr: f64) -> ([f64; 2], Mat2) {
         let [p1, p2] = self.p;
         let [s1, s2, s3, s4] = self.s;
@@ -130,7 +130,7 @@ impl Distortion {
     }
 
     /// The distorted point of `m` and the Jacobian `∂m_d/∂m`.
-    #[inline]
+    #[inline(always)]
     pub fn forward(&self, m: [f64; 2]) -> ([f64; 2], Mat2) {
         let (rr, drr) = self.radial(m[0] * m[0] + m[1] * m[1]);
         if !self.tangential_after_radial {
@@ -247,10 +247,11 @@ impl Distortion {
     /// image of the fold (or the solve does not converge).
     #[inline]
     pub fn inverse(&self, md: [f64; 2]) -> Option<([f64; 2], Mat2)> {
+        if let Some(solved) = self.seed(md).and_then(|seed| self.inverse_from(md, seed)) {
+            return Some(solved);
+        }
         let (m, j) = if self.is_radial() {
             self.invert_radial(md)?
-        } else if let Some(solved) = self.seed(md).and_then(|seed| self.inverse_from(md, seed)) {
-            return Some(solved);
         } else if self.tangential_after_radial {
             let t = |x: [f64; 2]| self.tangential(x[0], x[1], 1.0, 0.0);
             let (r, jt) = Self::newton(t, md, md, f64::INFINITY)?;
@@ -285,56 +286,105 @@ impl Distortion {
         let scale = 1.0 + md[0].abs() + md[1].abs();
         let mut m = seed;
         for _ in 0..SEEDED_ITERATIONS {
-            let (v, j) = self.forward(m);
-            let r = [v[0] - md[0], v[1] - md[1]];
-            let det = det2(&j);
-            // Inside the fold the determinant is positive; NaN (a seed next to an invalid table
-            // node) fails here too.
-            if !(det > 0.0 && det.is_finite()) {
-                return None;
-            }
-            let k = 1.0 / det;
-            let ji = [[j[1][1] * k, -j[0][1] * k], [-j[1][0] * k, j[0][0] * k]];
-            let step = apply2(&ji, r);
-            m = [m[0] - step[0], m[1] - step[1]];
-            if step[0].abs() + step[1].abs() <= SEEDED_TOLERANCE
-                && r[0].abs() + r[1].abs() <= SEEDED_TOLERANCE * scale
-            {
-                let inside = m[0] * m[0] + m[1] * m[1] <= self.max_radius * self.max_radius;
-                return inside.then_some((m, ji));
+            match self.newton_step(md, scale, m) {
+                Step::Failed => return None,
+                Step::Converged(m, ji) => return self.inside(m).then_some((m, ji)),
+                Step::Moved(next) => m = next,
             }
         }
         None
     }
 
-    /// The radial inverse from the table alone (Hermite interpolation, ~1e-13 from the root), or
-    /// `None` beyond the table.
+    /// One step of [`Distortion::inverse_from`] from `m` toward `md` (`scale = 1 + |md|₁`).
     #[inline(always)]
-    fn radial_seed(&self, md: [f64; 2]) -> Option<[f64; 2]> {
-        let rd = (md[0] * md[0] + md[1] * md[1]).sqrt();
-        if rd == 0.0 {
-            return Some([0.0, 0.0]);
+    pub fn newton_step(&self, md: [f64; 2], scale: f64, m: [f64; 2]) -> Step {
+        let (v, j) = self.forward(m);
+        let r = [v[0] - md[0], v[1] - md[1]];
+        let det = det2(&j);
+        // Inside the fold the determinant is positive; NaN (a seed next to an invalid table node)
+        // fails here too.
+        if !(det > 0.0 && det.is_finite()) {
+            return Step::Failed;
         }
-        let k = self.radial_table.as_ref()?.seed(rd)? / rd;
-        Some([md[0] * k, md[1] * k])
+        let k = 1.0 / det;
+        let ji = [[j[1][1] * k, -j[0][1] * k], [-j[1][0] * k, j[0][0] * k]];
+        let step = apply2(&ji, r);
+        let m = [m[0] - step[0], m[1] - step[1]];
+        if step[0].abs() + step[1].abs() <= SEEDED_TOLERANCE
+            && r[0].abs() + r[1].abs() <= SEEDED_TOLERANCE * scale
+        {
+            Step::Converged(m, ji)
+        } else {
+            Step::Moved(m)
+        }
+    }
+
+    /// `m` lies within the fold.
+    #[inline(always)]
+    pub fn inside(&self, m: [f64; 2]) -> bool {
+        m[0] * m[0] + m[1] * m[1] <= self.max_radius * self.max_radius
+    }
+
+    /// The radial inverse from the table alone (Hermite interpolation, ~1e-13 from the root), or
+    /// `false` beyond the table (branch-free; the point is meaningless then).
+    #[inline(always)]
+    fn radial_seed_lane(&self, md: [f64; 2]) -> (bool, [f64; 2]) {
+        let Some(table) = self.radial_table.as_ref() else {
+            return (false, [0.0; 2]);
+        };
+        let rd = (md[0] * md[0] + md[1] * md[1]).sqrt();
+        let (ok, r) = table.seed_lane(rd);
+        let k = r / rd;
+        let at_centre = rd == 0.0;
+        let m = if at_centre {
+            [0.0, 0.0]
+        } else {
+            [md[0] * k, md[1] * k]
+        };
+        (ok | at_centre, m)
     }
 
     /// A starting point for the two-dimensional inverse, a few 1e-6 from the root for real
-    /// calibrations: the tabulated radial inverse of `md` with the tangential and prism
-    /// displacement `δ` taken out once. OpenCV order (`md = R·m + δ(m)`):
-    /// `m₀ = R⁻¹(md)`, seed `R⁻¹(md − δ(m₀))`; Aria order (`md = x + δ(x)`, `x = R·m`): seed
-    /// `R⁻¹(md − δ(md))`. The error is of the order of `|∂δ|·|δ|`.
+    /// calibrations (branch-free; `false` when there is none): the tabulated radial inverse of `md`
+    /// with the tangential and prism displacement `δ` taken out once. OpenCV order
+    /// (`md = R·m + δ(m)`): `m₀ = R⁻¹(md)`, seed `R⁻¹(md − δ(m₀))`; Aria order (`md = x + δ(x)`,
+    /// `x = R·m`): seed `R⁻¹(md − δ(md))`. The error is of the order of `|∂δ|·|δ|`. A purely radial
+    /// map's seed is `R⁻¹(md)`.
     #[inline(always)]
-    fn seed(&self, md: [f64; 2]) -> Option<[f64; 2]> {
-        let at = if self.tangential_after_radial {
-            md
+    fn seed_lane(&self, md: [f64; 2]) -> (bool, [f64; 2]) {
+        let (ok0, at) = self.seed_first(md);
+        let (ok1, m) = self.seed_second(md, at);
+        (ok0 & ok1, m)
+    }
+
+    /// The first half of [`Distortion::seed_lane`] (split so a batch can run each half over all its
+    /// lanes): the point where `δ` is evaluated.
+    #[inline(always)]
+    pub fn seed_first(&self, md: [f64; 2]) -> (bool, [f64; 2]) {
+        if self.is_radial() || self.tangential_after_radial {
+            (true, md)
         } else {
-            self.radial_seed(md)?
-        };
+            self.radial_seed_lane(md)
+        }
+    }
+
+    /// The second half of [`Distortion::seed_lane`], from [`Distortion::seed_first`]'s point.
+    #[inline(always)]
+    pub fn seed_second(&self, md: [f64; 2], at: [f64; 2]) -> (bool, [f64; 2]) {
+        if self.is_radial() {
+            return self.radial_seed_lane(md);
+        }
         // δ(x): the tangential and prism terms alone (radial factor 1).
         let (t, _) = self.tangential(at[0], at[1], 1.0, 0.0);
         let d = [t[0] - at[0], t[1] - at[1]];
-        self.radial_seed([md[0] - d[0], md[1] - d[1]])
+        self.radial_seed_lane([md[0] - d[0], md[1] - d[1]])
+    }
+
+    /// [`Distortion::seed_lane`] as an option.
+    #[inline(always)]
+    pub fn seed(&self, md: [f64; 2]) -> Option<[f64; 2]> {
+        let (ok, m) = self.seed_lane(md);
+        ok.then_some(m)
     }
 
     /// Tabulates the radial inverse over distorted radii `[0, rd_max]` (the image's extent), to seed
@@ -391,9 +441,20 @@ impl Distortion {
     }
 }
 
+/// The outcome of one [`Distortion::newton_step`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum Step {
+    /// The Jacobian is singular or not finite there: the seeded solve gives up.
+    Failed,
+    /// The step was below the tolerance: the point after it, and `∂m/∂m_d` from before it.
+    Converged([f64; 2], Mat2),
+    /// Not yet converged: the next iterate.
+    Moved([f64; 2]),
+}
+
 /// Newton steps [`Distortion::inverse_from`] takes from a seed before giving up (two suffice from
 /// [`Distortion::seed`] for real calibrations).
-const SEEDED_ITERATIONS: usize = 4;
+pub(crate) const SEEDED_ITERATIONS: usize = 4;
 
 /// Step (and residual) size, in normalised coordinates, after which [`Distortion::inverse_from`]
 /// takes one last step and stops.
@@ -457,6 +518,7 @@ impl Tilt {
         Some(Tilt { h, inv: inv3(&h)? })
     }
 
+    #[inline(always)]
     fn map(h: &[[f64; 3]; 3], p: [f64; 2]) -> Option<([f64; 2], Mat2)> {
         let a = h[0][0] * p[0] + h[0][1] * p[1] + h[0][2];
         let b = h[1][0] * p[0] + h[1][1] * p[1] + h[1][2];
@@ -478,6 +540,7 @@ impl Tilt {
     }
 
     /// Point on the tilted sensor → distorted point, with the Jacobian.
+    #[inline(always)]
     pub fn inverse(&self, p: [f64; 2]) -> Option<([f64; 2], Mat2)> {
         Self::map(&self.inv, p)
     }

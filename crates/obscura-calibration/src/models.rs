@@ -21,7 +21,7 @@
 //! Pixel coordinates here are the model's own (its library's pixel convention); the projection
 //! converts from raster space.
 
-use crate::distortion::{Distortion, Tilt};
+use crate::distortion::{Distortion, SEEDED_ITERATIONS, Step, Tilt};
 use crate::lift::{self, Forward, Lift, Lifted};
 use crate::solve::{self, Mat2, Mat32, apply2, inv2, mul2, mul32};
 
@@ -643,12 +643,126 @@ impl CameraModel {
         })
     }
 
+    /// [`CameraModel::pixel_to_ray_with`] for a chunk of lanes of a model with `distortion` (and
+    /// perhaps a tilt) and a branch-free `lift`, breadth first: every lane's seed, then Newton step
+    /// after Newton step over the lanes still running (independent lanes, so their latencies
+    /// overlap), then every lane's lift. The same operations as the per-pixel map, so the same
+    /// bits; a lane the seeded path cannot solve is flagged `redo`.
+    #[inline(always)]
+    fn distortion_chunk(
+        &self,
+        d: &Distortion,
+        lift: impl Fn([f64; 2]) -> lift::LaneLifted,
+        px: &[[f64; 2]; CHUNK],
+        out: &mut [LaneRay; CHUNK],
+    ) {
+        #[derive(Clone, Copy)]
+        struct Lane {
+            md: [f64; 2],
+            scale: f64,
+            jac: Mat2,
+            m: [f64; 2],
+            ji: Mat2,
+            running: bool,
+            solved: bool,
+        }
+        let mut lanes = [Lane {
+            md: [0.0; 2],
+            scale: 0.0,
+            jac: solve::I2,
+            m: [0.0; 2],
+            ji: solve::I2,
+            running: false,
+            solved: false,
+        }; CHUNK];
+        for (l, p) in lanes.iter_mut().zip(px) {
+            let mt = apply2(&self.a_inv, [p[0] - self.c[0], p[1] - self.c[1]]);
+            let tilted = match &self.tilt {
+                Some(t) => t.inverse(mt).map(|(md, jt)| (md, mul2(&jt, &self.a_inv))),
+                None => Some((mt, self.a_inv)),
+            };
+            if let Some((md, jac)) = tilted {
+                let (ok, at) = d.seed_first(md);
+                *l = Lane {
+                    md,
+                    scale: 1.0 + md[0].abs() + md[1].abs(),
+                    jac,
+                    m: at,
+                    running: ok,
+                    ..*l
+                };
+            }
+        }
+        // The seed's second table look-up, in its own pass: one long chain per lane is two short ones.
+        for l in lanes.iter_mut() {
+            let (ok, seed) = d.seed_second(l.md, l.m);
+            l.m = seed;
+            l.running &= ok;
+        }
+        for _ in 0..SEEDED_ITERATIONS {
+            let mut any = false;
+            for l in lanes.iter_mut().filter(|l| l.running) {
+                match d.newton_step(l.md, l.scale, l.m) {
+                    Step::Failed => l.running = false,
+                    Step::Converged(m, ji) => {
+                        (l.m, l.ji, l.running) = (m, ji, false);
+                        l.solved = d.inside(m);
+                    }
+                    Step::Moved(m) => {
+                        l.m = m;
+                        any = true;
+                    }
+                }
+            }
+            if !any {
+                break;
+            }
+        }
+        for (o, l) in out.iter_mut().zip(&lanes) {
+            let (lifted, (v, jl)) = lift(l.m);
+            *o = LaneRay {
+                ok: l.solved & lifted,
+                redo: !l.solved,
+                ray: PixelRay {
+                    v,
+                    dv: mul32(&jl, &mul2(&l.ji, &l.jac)),
+                },
+            };
+        }
+    }
+
     /// Hands `visitor` this model's pixel → ray function, specialised: one closure type per model
     /// family, so the visitor's loop over a batch is compiled once per family with the lift inlined
     /// and no per-ray dispatch. Every kernel computes exactly what [`CameraModel::pixel_to_ray`]
     /// does.
     #[inline]
     pub(crate) fn with_kernel<V: RayKernel>(&self, visitor: V) {
+        if let Some(d) = &self.distortion {
+            // The seeded Newton path of the exact inverse, a chunk of lanes at a time; a lane that
+            // needs the safeguarded path is redone by `pixel_to_ray`.
+            let scalar = |px| self.pixel_to_ray(px);
+            match &self.lift {
+                Lift::Perspective => {
+                    return visitor.visit_chunks(
+                        |px, out| self.distortion_chunk(d, lift::perspective_lane, px, out),
+                        scalar,
+                    );
+                }
+                Lift::Equidistant => {
+                    return visitor.visit_chunks(
+                        |px, out| self.distortion_chunk(d, lift::equidistant_lane, px, out),
+                        scalar,
+                    );
+                }
+                &Lift::Mei { xi } => {
+                    return visitor.visit_chunks(
+                        |px, out| self.distortion_chunk(d, |m| lift::mei_lane(xi, m), px, out),
+                        scalar,
+                    );
+                }
+                _ => {}
+            }
+        }
         if self.tilt.is_some() || self.distortion.is_some() {
             match &self.lift {
                 Lift::Perspective => visitor.visit(|px| self.pixel_to_ray_with(px, lift::perspective)),
@@ -803,6 +917,22 @@ pub(crate) struct LaneRay {
     pub ray: PixelRay,
 }
 
+impl LaneRay {
+    /// An invalid lane (nothing to redo).
+    pub const NONE: LaneRay = LaneRay {
+        ok: false,
+        redo: false,
+        ray: PixelRay {
+            v: [0.0; 3],
+            dv: [[0.0; 2]; 3],
+        },
+    };
+}
+
+/// Lanes per chunk of a batch: a batch kernel holds one chunk's lanes as structure-of-arrays on the
+/// stack, and a whole-chunk kernel ([`RayKernel::visit_chunks`]) advances them together.
+pub(crate) const CHUNK: usize = 32;
+
 /// Something run with a model's pixel → ray function ([`CameraModel::with_kernel`]): generic
 /// methods, so each model family gets its own compiled copy.
 pub(crate) trait RayKernel {
@@ -813,6 +943,15 @@ pub(crate) trait RayKernel {
     /// `scalar`, the exact per-pixel map for the lanes it flags `redo`. Valid lanes must be
     /// exactly what `scalar` gives.
     fn visit_lanes(self, lanes: impl Fn([f64; 2]) -> LaneRay, scalar: impl Fn([f64; 2]) -> Option<PixelRay>);
+
+    /// Runs with `chunk`, the map of [`CHUNK`] model pixels at once (for iterative maps: the lanes
+    /// advance together, so their long dependency chains overlap), and `scalar` for the lanes it
+    /// flags `redo`. Valid lanes must be exactly what `scalar` gives.
+    fn visit_chunks(
+        self,
+        chunk: impl Fn(&[[f64; 2]; CHUNK], &mut [LaneRay; CHUNK]),
+        scalar: impl Fn([f64; 2]) -> Option<PixelRay>,
+    );
 }
 
 /// The first value in `(0, limit]` where `ok` fails (scanned in 4096 steps, then bisected), or

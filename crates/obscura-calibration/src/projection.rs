@@ -107,7 +107,7 @@ use obscura_sdk::{
 };
 
 use crate::NAME;
-use crate::models::{CameraModel, LaneRay, MODEL_NAMES, PixelConvention, PixelRay, RayKernel};
+use crate::models::{CHUNK, CameraModel, LaneRay, MODEL_NAMES, PixelConvention, PixelRay, RayKernel};
 
 /// The default camera: a 90° (horizontal) pinhole on a 640×480 image.
 const DEFAULT_PARAMS: [f32; 4] = [320.0, 320.0, 320.0, 240.0];
@@ -363,9 +363,6 @@ struct Batch<'a> {
     rays: &'a mut [RayGeometry],
 }
 
-/// Rays per chunk of a batch: the lanes of one chunk are held as structure-of-arrays on the stack.
-const CHUNK: usize = 32;
-
 /// A chunk of model rays, structure-of-arrays: `v[k][i]` is component k of lane i's ray, `dv[2k + c]`
 /// its derivative by pixel coordinate c.
 struct Lanes {
@@ -388,15 +385,20 @@ impl Lanes {
 }
 
 impl Batch<'_> {
-    /// The batch loop: per chunk, the model pixels, then the model rays of every lane (`lanes`,
-    /// branch-free, so the loop vectorises; lanes flagged `redo` recomputed with `scalar`), then
+    /// The batch loop: per chunk, the model pixels, then the model rays of every lane (`fill`: a
+    /// branch-free loop over lanes that vectorises, or a whole-chunk kernel; lanes flagged `redo`
+    /// recomputed with `scalar`), then
     /// the ray geometry of every lane (branch-free as well), then the rays written out. Run in
     /// the widest instruction set the CPU has (AVX2 + FMA where present): Rust never contracts
     /// `a*b + c` on its own, so every path gives the same bits as [`CalibratedCamera::geometry`]
     /// of [`CameraModel::pixel_to_ray`].
     #[inline(always)]
     #[allow(clippy::needless_range_loop)] // lockstep loops over several lane arrays vectorise
-    fn run(self, lanes: impl Fn([f64; 2]) -> LaneRay, scalar: impl Fn([f64; 2]) -> Option<PixelRay>) {
+    fn run(
+        self,
+        fill: impl Fn(&[f64; CHUNK], &[f64; CHUNK], &mut Lanes),
+        scalar: impl Fn([f64; 2]) -> Option<PixelRay>,
+    ) {
         let c = self.camera;
         let (rays, screen) = (self.rays, self.screen);
         let ps = c.pixel_scale as f32;
@@ -418,11 +420,7 @@ impl Batch<'_> {
                         *u = c.su * s.x as f64 + c.ou;
                         *v = c.sv * s.y as f64 + c.ov;
                     }
-                    for i in 0..CHUNK {
-                        let r = lanes([u[i], v[i]]);
-                        l.set(i, r.ok, &r.ray);
-                        l.redo[i] = r.redo;
-                    }
+                    fill(&u, &v, &mut l);
                     if l.redo.iter().any(|&r| r) {
                         for i in 0..screen.len() {
                             if l.redo[i] {
@@ -479,11 +477,8 @@ impl Batch<'_> {
 impl RayKernel for Batch<'_> {
     #[inline(always)]
     fn visit(self, kernel: impl Fn([f64; 2]) -> Option<PixelRay>) {
-        const NONE: PixelRay = PixelRay {
-            v: [0.0; 3],
-            dv: [[0.0; 2]; 3],
-        };
-        self.run(
+        const NONE: PixelRay = LaneRay::NONE.ray;
+        self.visit_lanes(
             |px| match kernel(px) {
                 Some(ray) => LaneRay {
                     ok: true,
@@ -502,7 +497,38 @@ impl RayKernel for Batch<'_> {
 
     #[inline(always)]
     fn visit_lanes(self, lanes: impl Fn([f64; 2]) -> LaneRay, scalar: impl Fn([f64; 2]) -> Option<PixelRay>) {
-        self.run(lanes, scalar);
+        self.run(
+            #[inline(always)]
+            |u, v, l| {
+                for i in 0..CHUNK {
+                    let r = lanes([u[i], v[i]]);
+                    l.set(i, r.ok, &r.ray);
+                    l.redo[i] = r.redo;
+                }
+            },
+            scalar,
+        );
+    }
+
+    #[inline(always)]
+    fn visit_chunks(
+        self,
+        chunk: impl Fn(&[[f64; 2]; CHUNK], &mut [LaneRay; CHUNK]),
+        scalar: impl Fn([f64; 2]) -> Option<PixelRay>,
+    ) {
+        self.run(
+            #[inline(always)]
+            |u, v, l| {
+                let px: [[f64; 2]; CHUNK] = std::array::from_fn(|i| [u[i], v[i]]);
+                let mut out = [LaneRay::NONE; CHUNK];
+                chunk(&px, &mut out);
+                for (i, r) in out.iter().enumerate() {
+                    l.set(i, r.ok, &r.ray);
+                    l.redo[i] = r.redo;
+                }
+            },
+            scalar,
+        );
     }
 }
 
@@ -672,7 +698,7 @@ mod tests {
         let ocam = [239.5, 319.5, 1.00033, 0.000219, 0.000257];
         /// (model, params, polynomial, inversePolynomial).
         type Case<'a> = (&'a str, &'a [f64], &'a [f64], &'a [f64]);
-        let cases: [Case; 14] = [
+        let cases: [Case; 19] = [
             ("SIMPLE_PINHOLE", &[500.0, 320.0, 240.0], &[], &[]),
             ("FISHEYE", &[200.0, 210.0, 320.0, 240.0], &[], &[]),
             ("DIVISION", &[400.0, 405.0, 320.0, 240.0, -0.15], &[], &[]),
@@ -694,6 +720,44 @@ mod tests {
                 &[],
             ),
             ("FTHETA", &[319.5, 239.5, 1.7], &[], &[0.0, 250.0, -5.0, 1.0]),
+            // The chunked Newton kernels: OpenCV order with rational, prism and tilt terms; the
+            // Kannala–Brandt θ-plane; Aria order; Mei's sphere with radial-tangential terms.
+            (
+                "OPENCV_PINHOLE",
+                &[
+                    500.0, 490.0, 322.0, 241.0, -0.28, 0.07, 0.001, -0.0005, -0.002, 0.01, 0.003, 0.0002,
+                    0.001, -0.0002, 0.0008, 0.0001, 0.01, -0.008,
+                ],
+                &[],
+                &[],
+            ),
+            (
+                "OPENCV",
+                &[500.0, 490.0, 322.0, 241.0, -0.28, 0.07, 0.001, -0.0005],
+                &[],
+                &[],
+            ),
+            (
+                "KANNALA_BRANDT",
+                &[300.0, 300.0, 320.0, 240.0, -0.01, 0.02, -0.003, 0.0005],
+                &[],
+                &[],
+            ),
+            (
+                "RAD_TAN_THIN_PRISM_FISHEYE",
+                &[
+                    240.0, 241.0, 320.0, 240.0, 0.02, -0.004, 0.0005, -0.0001, 0.00002, -0.000003, 0.0008,
+                    -0.0006, 0.0004, -0.0001, 0.0003, 0.00005,
+                ],
+                &[],
+                &[],
+            ),
+            (
+                "OPENCV_OMNIDIR",
+                &[400.0, 400.0, 320.0, 240.0, 0.5, 1.2, -0.1, 0.02, 0.001, -0.0005],
+                &[],
+                &[],
+            ),
         ];
         for (model, params, pol, inv) in cases {
             let valid = batch_matches_per_pixel(model, params, pol, inv, &screen);

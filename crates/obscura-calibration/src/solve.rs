@@ -199,11 +199,18 @@ impl InverseTable {
     /// a preimage.
     #[inline]
     pub fn seed(&self, y: f64) -> Option<f64> {
+        let (ok, x) = self.seed_lane(y);
+        ok.then_some(x)
+    }
+
+    /// [`InverseTable::seed`] without branches, for loops over lanes: `(false, _)` for `None`.
+    #[inline(always)]
+    pub fn seed_lane(&self, y: f64) -> (bool, f64) {
         let t = y * self.scale;
-        if !(t >= 0.0 && t < (self.samples.len() - 1) as f64) {
-            return None;
-        }
-        let i = t as usize;
+        let last = self.samples.len() - 1;
+        let inside = (t >= 0.0) & (t < last as f64);
+        // Outside the table: any node (the result is discarded); `as` saturates, NaN gives 0.
+        let i = (t as usize).min(last - 1);
         let u = t - i as f64;
         let ([x0, s0], [x1, s1]) = (self.samples[i], self.samples[i + 1]);
         // Cubic Hermite in Horner form: x0 + u·(s0 + u·(c2 + u·c3)).
@@ -211,7 +218,7 @@ impl InverseTable {
         let c2 = 3.0 * d - 2.0 * s0 - s1;
         let c3 = s0 + s1 - 2.0 * d;
         let x = x0 + u * (s0 + u * (c2 + u * c3));
-        x.is_finite().then_some(x)
+        (inside & x.is_finite(), x)
     }
 }
 
