@@ -81,14 +81,22 @@ impl Distortion {
     /// `R(q)` and `dR/dq`.
     #[inline(always)]
     fn radial(&self, q: f64) -> (f64, f64) {
+        self.radial_terms(&self.num[..self.num_len], self.den != [0.0; 3], q)
+    }
+
+    /// `R(q)` and `dR/dq` from the numerator terms `num` (the leading ones, or all six: leading zero
+    /// terms leave Horner's result bit for bit unchanged at any finite `q`), with the denominator
+    /// when `rational`.
+    #[inline(always)]
+    fn radial_terms(&self, num: &[f64], rational: bool, q: f64) -> (f64, f64) {
         let (mut n, mut dn) = (0.0, 0.0);
-        for &k in self.num[..self.num_len].iter().rev() {
+        for &k in num.iter().rev() {
             dn = dn * q + n;
             n = n * q + k;
         }
         // n holds Σ kᵢ q^(i−1); numerator N = 1 + q·n.
         let (num, dnum) = (1.0 + q * n, n + q * dn);
-        if self.den == [0.0; 3] {
+        if !rational {
             return (num, dnum);
         }
         let [d1, d2, d3] = self.den;
@@ -132,8 +140,15 @@ impl Distortion {
     /// The distorted point of `m` and the Jacobian `∂m_d/∂m`.
     #[inline(always)]
     pub fn forward(&self, m: [f64; 2]) -> ([f64; 2], Mat2) {
-        let (rr, drr) = self.radial(m[0] * m[0] + m[1] * m[1]);
-        if !self.tangential_after_radial {
+        self.forward_with(m, |q| self.radial(q), self.tangential_after_radial)
+    }
+
+    /// [`Distortion::forward`] with the radial factor and the order given (so a batch kernel can fix
+    /// both at compile time and run the same operations).
+    #[inline(always)]
+    fn forward_with(&self, m: [f64; 2], radial: impl Fn(f64) -> (f64, f64), aria: bool) -> ([f64; 2], Mat2) {
+        let (rr, drr) = radial(m[0] * m[0] + m[1] * m[1]);
+        if !aria {
             return self.tangential(m[0], m[1], rr, drr);
         }
         let r = [m[0] * rr, m[1] * rr];
@@ -298,25 +313,55 @@ impl Distortion {
     /// One step of [`Distortion::inverse_from`] from `m` toward `md` (`scale = 1 + |md|₁`).
     #[inline(always)]
     pub fn newton_step(&self, md: [f64; 2], scale: f64, m: [f64; 2]) -> Step {
-        let (v, j) = self.forward(m);
+        match Self::newton_core(self.forward(m), md, scale, m) {
+            (false, ..) => Step::Failed,
+            (true, true, m, ji) => Step::Converged(m, ji),
+            (true, false, m, _) => Step::Moved(m),
+        }
+    }
+
+    /// [`Distortion::newton_step`] without branches for a batch loop over lanes, with the shape
+    /// fixed at compile time: `RATIONAL` is "the denominator is not 1", `ARIA` the order; the
+    /// numerator is evaluated with all six terms (the same bits at finite arguments). Returns
+    /// (Jacobian usable, converged, next iterate, `∂m/∂m_d`).
+    #[inline(always)]
+    pub fn newton_lane<const RATIONAL: bool, const ARIA: bool>(
+        &self,
+        md: [f64; 2],
+        scale: f64,
+        m: [f64; 2],
+    ) -> (bool, bool, [f64; 2], Mat2) {
+        debug_assert!(RATIONAL == (self.den != [0.0; 3]) && ARIA == self.tangential_after_radial);
+        let forward = self.forward_with(m, |q| self.radial_terms(&self.num, RATIONAL, q), ARIA);
+        Self::newton_core(forward, md, scale, m)
+    }
+
+    /// The step from `m` given the forward map there: (Jacobian usable, converged, next iterate,
+    /// `∂m/∂m_d`). Inside the fold the determinant is positive; NaN (a seed next to an invalid table
+    /// node) is unusable too.
+    #[inline(always)]
+    fn newton_core(
+        (v, j): ([f64; 2], Mat2),
+        md: [f64; 2],
+        scale: f64,
+        m: [f64; 2],
+    ) -> (bool, bool, [f64; 2], Mat2) {
         let r = [v[0] - md[0], v[1] - md[1]];
         let det = det2(&j);
-        // Inside the fold the determinant is positive; NaN (a seed next to an invalid table node)
-        // fails here too.
-        if !(det > 0.0 && det.is_finite()) {
-            return Step::Failed;
-        }
+        let usable = (det > 0.0) & det.is_finite();
         let k = 1.0 / det;
         let ji = [[j[1][1] * k, -j[0][1] * k], [-j[1][0] * k, j[0][0] * k]];
         let step = apply2(&ji, r);
-        let m = [m[0] - step[0], m[1] - step[1]];
-        if step[0].abs() + step[1].abs() <= SEEDED_TOLERANCE
-            && r[0].abs() + r[1].abs() <= SEEDED_TOLERANCE * scale
-        {
-            Step::Converged(m, ji)
-        } else {
-            Step::Moved(m)
-        }
+        let next = [m[0] - step[0], m[1] - step[1]];
+        let converged = (step[0].abs() + step[1].abs() <= SEEDED_TOLERANCE)
+            & (r[0].abs() + r[1].abs() <= SEEDED_TOLERANCE * scale);
+        (usable, converged, next, ji)
+    }
+
+    /// The compile-time shape of [`Distortion::newton_lane`] that fits this distortion:
+    /// `(rational, aria)`.
+    pub fn shape(&self) -> (bool, bool) {
+        (self.den != [0.0; 3], self.tangential_after_radial)
     }
 
     /// `m` lies within the fold.
@@ -526,10 +571,12 @@ impl Tilt {
         if c <= 0.0 {
             return None;
         }
-        let (x, y) = (a / c, b / c);
+        // One division: a batch of tilted pixels is bound by their latency.
+        let w = 1.0 / c;
+        let (x, y) = (a * w, b * w);
         let j = [
-            [(h[0][0] - x * h[2][0]) / c, (h[0][1] - x * h[2][1]) / c],
-            [(h[1][0] - y * h[2][0]) / c, (h[1][1] - y * h[2][1]) / c],
+            [(h[0][0] - x * h[2][0]) * w, (h[0][1] - x * h[2][1]) * w],
+            [(h[1][0] - y * h[2][0]) * w, (h[1][1] - y * h[2][1]) * w],
         ];
         Some(([x, y], j))
     }

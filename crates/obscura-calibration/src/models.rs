@@ -21,7 +21,7 @@
 //! Pixel coordinates here are the model's own (its library's pixel convention); the projection
 //! converts from raster space.
 
-use crate::distortion::{Distortion, SEEDED_ITERATIONS, Step, Tilt};
+use crate::distortion::{Distortion, SEEDED_ITERATIONS, Tilt};
 use crate::lift::{self, Forward, Lift, Lifted};
 use crate::solve::{self, Mat2, Mat32, apply2, inv2, mul2, mul32};
 
@@ -644,90 +644,110 @@ impl CameraModel {
     }
 
     /// [`CameraModel::pixel_to_ray_with`] for a chunk of lanes of a model with `distortion` (and
-    /// perhaps a tilt) and a branch-free `lift`, breadth first: every lane's seed, then Newton step
-    /// after Newton step over the lanes still running (independent lanes, so their latencies
-    /// overlap), then every lane's lift. The same operations as the per-pixel map, so the same
-    /// bits; a lane the seeded path cannot solve is flagged `redo`.
+    /// perhaps a tilt) and a branch-free `lift`, breadth first and structure-of-arrays: every lane's
+    /// tilt and seed, then Newton step after Newton step over all lanes (branch-free, the distortion's
+    /// shape fixed at compile time, so the loop vectorises; lanes that stopped keep their values),
+    /// then every lane's lift. The same operations as the per-pixel map, so the same bits; a lane
+    /// the seeded path cannot solve is flagged `redo`.
     #[inline(always)]
-    fn distortion_chunk(
+    #[allow(clippy::needless_range_loop)] // lockstep loops over several lane arrays vectorise
+    fn distortion_chunk<const RATIONAL: bool, const ARIA: bool>(
         &self,
         d: &Distortion,
         lift: impl Fn([f64; 2]) -> lift::LaneLifted,
         px: &[[f64; 2]; CHUNK],
         out: &mut [LaneRay; CHUNK],
     ) {
-        #[derive(Clone, Copy)]
-        struct Lane {
-            md: [f64; 2],
-            scale: f64,
-            jac: Mat2,
-            m: [f64; 2],
-            ji: Mat2,
-            running: bool,
-            solved: bool,
-        }
-        let mut lanes = [Lane {
-            md: [0.0; 2],
-            scale: 0.0,
-            jac: solve::I2,
-            m: [0.0; 2],
-            ji: solve::I2,
-            running: false,
-            solved: false,
-        }; CHUNK];
-        for (l, p) in lanes.iter_mut().zip(px) {
+        let zero = [0.0; CHUNK];
+        let (mut md, mut m, mut scale) = ([zero; 2], [zero; 2], zero);
+        // ∂m_d/∂pixel (the tilt's and A⁻¹) and ∂m/∂m_d, row-major.
+        let (mut jac, mut ji) = ([zero; 4], [zero; 4]);
+        let (mut running, mut solved) = ([false; CHUNK], [false; CHUNK]);
+        for i in 0..CHUNK {
+            let p = px[i];
             let mt = apply2(&self.a_inv, [p[0] - self.c[0], p[1] - self.c[1]]);
-            let tilted = match &self.tilt {
-                Some(t) => t.inverse(mt).map(|(md, jt)| (md, mul2(&jt, &self.a_inv))),
-                None => Some((mt, self.a_inv)),
+            let (tilted, d_md, j) = match &self.tilt {
+                Some(t) => match t.inverse(mt) {
+                    Some((d_md, jt)) => (true, d_md, mul2(&jt, &self.a_inv)),
+                    None => (false, mt, self.a_inv),
+                },
+                None => (true, mt, self.a_inv),
             };
-            if let Some((md, jac)) = tilted {
-                let (ok, at) = d.seed_first(md);
-                *l = Lane {
-                    md,
-                    scale: 1.0 + md[0].abs() + md[1].abs(),
-                    jac,
-                    m: at,
-                    running: ok,
-                    ..*l
-                };
-            }
+            let (seeded, at) = d.seed_first(d_md);
+            (md[0][i], md[1][i], m[0][i], m[1][i]) = (d_md[0], d_md[1], at[0], at[1]);
+            (jac[0][i], jac[1][i], jac[2][i], jac[3][i]) = (j[0][0], j[0][1], j[1][0], j[1][1]);
+            scale[i] = 1.0 + d_md[0].abs() + d_md[1].abs();
+            running[i] = tilted & seeded;
         }
         // The seed's second table look-up, in its own pass: one long chain per lane is two short ones.
-        for l in lanes.iter_mut() {
-            let (ok, seed) = d.seed_second(l.md, l.m);
-            l.m = seed;
-            l.running &= ok;
+        for i in 0..CHUNK {
+            let (ok, seed) = d.seed_second([md[0][i], md[1][i]], [m[0][i], m[1][i]]);
+            (m[0][i], m[1][i]) = (seed[0], seed[1]);
+            running[i] &= ok;
         }
         for _ in 0..SEEDED_ITERATIONS {
             let mut any = false;
-            for l in lanes.iter_mut().filter(|l| l.running) {
-                match d.newton_step(l.md, l.scale, l.m) {
-                    Step::Failed => l.running = false,
-                    Step::Converged(m, ji) => {
-                        (l.m, l.ji, l.running) = (m, ji, false);
-                        l.solved = d.inside(m);
-                    }
-                    Step::Moved(m) => {
-                        l.m = m;
-                        any = true;
-                    }
+            for i in 0..CHUNK {
+                let (usable, converged, next, j) =
+                    d.newton_lane::<RATIONAL, ARIA>([md[0][i], md[1][i]], scale[i], [m[0][i], m[1][i]]);
+                let moved = running[i] & usable;
+                let take = moved & converged;
+                for k in 0..2 {
+                    m[k][i] = if moved { next[k] } else { m[k][i] };
                 }
+                let j = [j[0][0], j[0][1], j[1][0], j[1][1]];
+                for k in 0..4 {
+                    ji[k][i] = if take { j[k] } else { ji[k][i] };
+                }
+                solved[i] |= take & d.inside(next);
+                running[i] = moved & !converged;
+                any |= running[i];
             }
             if !any {
                 break;
             }
         }
-        for (o, l) in out.iter_mut().zip(&lanes) {
-            let (lifted, (v, jl)) = lift(l.m);
-            *o = LaneRay {
-                ok: l.solved & lifted,
-                redo: !l.solved,
+        for i in 0..CHUNK {
+            let (lifted, (v, jl)) = lift([m[0][i], m[1][i]]);
+            let jd = [[ji[0][i], ji[1][i]], [ji[2][i], ji[3][i]]];
+            let jp = [[jac[0][i], jac[1][i]], [jac[2][i], jac[3][i]]];
+            out[i] = LaneRay {
+                ok: solved[i] & lifted,
+                redo: !solved[i],
                 ray: PixelRay {
                     v,
-                    dv: mul32(&jl, &mul2(&l.ji, &l.jac)),
+                    dv: mul32(&jl, &mul2(&jd, &jp)),
                 },
             };
+        }
+    }
+
+    /// Runs `visitor` with [`CameraModel::distortion_chunk`] for `d`'s shape and `lift`.
+    #[inline(always)]
+    fn visit_distortion<V: RayKernel, L: Fn([f64; 2]) -> lift::LaneLifted + Copy>(
+        &self,
+        visitor: V,
+        d: &Distortion,
+        lift: L,
+    ) {
+        let scalar = |px| self.pixel_to_ray(px);
+        match d.shape() {
+            (false, false) => visitor.visit_chunks(
+                |px, o| self.distortion_chunk::<false, false>(d, lift, px, o),
+                scalar,
+            ),
+            (true, false) => visitor.visit_chunks(
+                |px, o| self.distortion_chunk::<true, false>(d, lift, px, o),
+                scalar,
+            ),
+            (false, true) => visitor.visit_chunks(
+                |px, o| self.distortion_chunk::<false, true>(d, lift, px, o),
+                scalar,
+            ),
+            (true, true) => visitor.visit_chunks(
+                |px, o| self.distortion_chunk::<true, true>(d, lift, px, o),
+                scalar,
+            ),
         }
     }
 
@@ -740,25 +760,11 @@ impl CameraModel {
         if let Some(d) = &self.distortion {
             // The seeded Newton path of the exact inverse, a chunk of lanes at a time; a lane that
             // needs the safeguarded path is redone by `pixel_to_ray`.
-            let scalar = |px| self.pixel_to_ray(px);
             match &self.lift {
-                Lift::Perspective => {
-                    return visitor.visit_chunks(
-                        |px, out| self.distortion_chunk(d, lift::perspective_lane, px, out),
-                        scalar,
-                    );
-                }
-                Lift::Equidistant => {
-                    return visitor.visit_chunks(
-                        |px, out| self.distortion_chunk(d, lift::equidistant_lane, px, out),
-                        scalar,
-                    );
-                }
+                Lift::Perspective => return self.visit_distortion(visitor, d, lift::perspective_lane),
+                Lift::Equidistant => return self.visit_distortion(visitor, d, lift::equidistant_lane),
                 &Lift::Mei { xi } => {
-                    return visitor.visit_chunks(
-                        |px, out| self.distortion_chunk(d, |m| lift::mei_lane(xi, m), px, out),
-                        scalar,
-                    );
+                    return self.visit_distortion(visitor, d, move |m| lift::mei_lane(xi, m));
                 }
                 _ => {}
             }

@@ -610,7 +610,6 @@ mod tests {
             ),
         ];
         let format = Format::new(640, 480);
-        let env = ProjectionEnvironment::for_format(format);
         let w = ScreenWindow::default_for(format);
         let n = 2000;
         let screen: Vec<Point2> = (0..n)
@@ -621,23 +620,7 @@ mod tests {
             })
             .collect();
         for (model, params) in cases {
-            let m = CameraModel::new(model, params, &[], &[], 640.0, 480.0).unwrap();
-            let cam = CalibratedCamera::new(&env, m, [640, 480], None);
-            let (lens, mut time) = (vec![Point2::ZERO; n], vec![0.0; n]);
-            let (mut rays, mut tint) = (vec![RayGeometry::CULLED; n], vec![Rgb::WHITE; n]);
-            let mut ctx =
-                ProjectionContext::new(&screen, &lens, &lens, &mut time, &mut rays, &mut tint).unwrap();
-            cam.project(&mut ctx);
-            let mut valid = 0;
-            for (s, r) in screen.iter().zip(&rays) {
-                let px = [cam.su * s.x as f64 + cam.ou, cam.sv * s.y as f64 + cam.ov];
-                let expected = cam
-                    .model
-                    .pixel_to_ray(px)
-                    .map_or(RayGeometry::CULLED, |p| cam.geometry(p));
-                assert_eq!(*r, expected, "{model} at {s:?}");
-                valid += usize::from(!r.is_culled());
-            }
+            let valid = batch_matches_per_pixel(model, params, &[], &[], &screen);
             assert!(valid > n / 2, "{model}: {valid}");
         }
     }

@@ -56,7 +56,7 @@ pub(crate) fn mul32(a: &Mat32, b: &Mat2) -> Mat32 {
 }
 
 /// A polynomial `c[0] + c[1]·x + c[2]·x² + …` and its derivative at `x` (Horner).
-#[inline]
+#[inline(always)]
 pub(crate) fn poly(c: &[f64], x: f64) -> (f64, f64) {
     let mut p = 0.0;
     let mut dp = 0.0;
@@ -277,13 +277,8 @@ pub(crate) fn sin_cos_kernel(x: f64) -> (f64, f64) {
 /// zeros), and a fixed trip count, so a loop over lanes vectorises.
 #[inline(always)]
 pub(crate) fn poly_fixed<const N: usize>(c: &[f64; N], x: f64) -> (f64, f64) {
-    let mut p = 0.0;
-    let mut dp = 0.0;
-    for &a in c.iter().rev() {
-        dp = dp * x + p;
-        p = p * x + a;
-    }
-    (p, dp)
+    // `poly` inlined on a slice of constant length: the trip count is known.
+    poly(c, x)
 }
 
 /// `c` padded with zeros to `N` coefficients, or `None` when it has more.
