@@ -451,8 +451,7 @@ pub(crate) fn equirect(w: f64, h: f64, m: [f64; 2]) -> Option<Lifted> {
     if !(0.0..=h).contains(&v) {
         return None;
     }
-    let theta = TAU * (u / w - 0.5);
-    let phi = PI * (0.5 - v / h);
+    let (theta, phi) = equirect_angles(w, h, u, v);
     Some(equirect_rays(w, h, solve::sin_cos(theta), solve::sin_cos(phi)))
 }
 
@@ -461,10 +460,16 @@ pub(crate) fn equirect(w: f64, h: f64, m: [f64; 2]) -> Option<Lifted> {
 #[inline(always)]
 pub(crate) fn equirect_lane(w: f64, h: f64, m: [f64; 2]) -> (bool, bool, Lifted) {
     let (u, v) = (m[0], m[1]);
-    let theta = TAU * (u / w - 0.5);
-    let phi = PI * (0.5 - v / h);
+    let (theta, phi) = equirect_angles(w, h, u, v);
     let rays = equirect_rays(w, h, solve::sin_cos_kernel(theta), solve::sin_cos_kernel(phi));
     ((v >= 0.0) & (v <= h), !(theta.abs() <= 1e5), rays)
+}
+
+/// Azimuth `θ = 2π·u/w − π` and elevation `φ = π/2 − π·v/h` of model pixel `(u, v)` (a product by
+/// each constant instead of a division: the batch loop is bound by its divisions).
+#[inline(always)]
+fn equirect_angles(w: f64, h: f64, u: f64, v: f64) -> (f64, f64) {
+    (u * (TAU / w) - PI, FRAC_PI_2 - v * (PI / h))
 }
 
 /// The equirectangular ray and its derivative from the azimuth's and elevation's sine and cosine.
@@ -518,16 +523,15 @@ pub(crate) fn ftheta(
     if rho > rho_max {
         return None;
     }
-    let (theta, dtheta) = match (bw, fw) {
-        (Some(bw), _) => solve::poly(bw, rho),
-        (None, Some(fw)) => {
-            let t = fw.invert(rho, theta_max)?;
-            (t, 1.0 / solve::poly(&fw.coefficients, t).1)
+    match (bw, fw) {
+        (Some(bw), _) => {
+            let (theta, dtheta) = solve::poly(bw, rho);
+            let (sin, cos) = solve::sin_cos(theta);
+            Some(angle_lift(m, rho, sin, cos, dtheta))
         }
-        (None, None) => return None,
-    };
-    let (sin, cos) = solve::sin_cos(theta);
-    Some(angle_lift(m, rho, sin, cos, dtheta))
+        (None, Some(fw)) => Some(fw.lift_at(m, rho, fw.invert(rho, theta_max)?)),
+        (None, None) => None,
+    }
 }
 
 /// f-theta's forward polynomial (angle → pixel distance) with a table of its inverse, which seeds
@@ -567,14 +571,34 @@ impl Forward {
     /// The angle of pixel distance `rho` (within `[0, θ_max]`), to the last bits.
     #[inline]
     pub fn invert(&self, rho: f64, theta_max: f64) -> Option<f64> {
-        let f = |t| solve::poly(&self.coefficients, t);
-        match self.table.as_ref().and_then(|t| t.seed(rho)) {
-            Some(seed) => Some(solve::solve_bracketed(f, rho, 0.0, theta_max, seed)),
+        match self.seed(rho) {
+            Some(seed) => Some(self.solve_from(rho, theta_max, seed)),
             None => {
+                let f = |t| solve::poly(&self.coefficients, t);
                 let guess = rho / f(0.0).1.max(1e-300);
                 solve::solve_increasing(f, rho, 0.0, theta_max, guess)
             }
         }
+    }
+
+    /// The table's seed for the angle of `rho`, or `None` beyond the table.
+    #[inline(always)]
+    pub fn seed(&self, rho: f64) -> Option<f64> {
+        self.table.as_ref().and_then(|t| t.seed(rho))
+    }
+
+    /// The angle of `rho` to the last bits, from a `seed` of [`Forward::seed`].
+    #[inline(always)]
+    pub fn solve_from(&self, rho: f64, theta_max: f64, seed: f64) -> f64 {
+        solve::solve_bracketed(|t| solve::poly(&self.coefficients, t), rho, 0.0, theta_max, seed)
+    }
+
+    /// The ray of `m` (at distance `rho`) seen at angle `theta`, with its derivative.
+    #[inline(always)]
+    pub fn lift_at(&self, m: [f64; 2], rho: f64, theta: f64) -> Lifted {
+        let dtheta = 1.0 / solve::poly(&self.coefficients, theta).1;
+        let (sin, cos) = solve::sin_cos(theta);
+        angle_lift(m, rho, sin, cos, dtheta)
     }
 }
 

@@ -833,6 +833,15 @@ impl CameraModel {
                     visitor.visit(closed_form(ai, c, move |m| lift::ocam(pol, rho_max, m)));
                 }
             }
+            &Lift::FTheta {
+                bw: None,
+                fw: Some(ref fw),
+                rho_max,
+                theta_max,
+            } => visitor.visit_chunks(
+                |px, out| forward_ftheta_chunk(fw, rho_max, theta_max, ai, c, px, out),
+                scalar,
+            ),
             Lift::FTheta { .. } => visitor.visit(closed_form(ai, c, |m| self.lift.lift(m))),
         }
     }
@@ -877,6 +886,48 @@ fn closed_form(
             v,
             dv: mul32(&jl, &a_inv),
         })
+    }
+}
+
+/// [`closed_form`] of f-theta given only its forward polynomial, for a chunk of lanes breadth first:
+/// every lane's pixel distance and table seed, then every lane's Newton solve (independent lanes, so
+/// their latencies overlap), then every lane's ray. The same operations as [`lift::ftheta`], so the
+/// same bits; a lane beyond the seed table is flagged `redo`.
+#[inline(always)]
+fn forward_ftheta_chunk(
+    fw: &lift::Forward,
+    rho_max: f64,
+    theta_max: f64,
+    a_inv: Mat2,
+    c: [f64; 2],
+    px: &[[f64; 2]; CHUNK],
+    out: &mut [LaneRay; CHUNK],
+) {
+    let m: [[f64; 2]; CHUNK] = std::array::from_fn(|i| apply2(&a_inv, [px[i][0] - c[0], px[i][1] - c[1]]));
+    let rho: [f64; CHUNK] = std::array::from_fn(|i| (m[i][0] * m[i][0] + m[i][1] * m[i][1]).sqrt());
+    // Some(seed) to solve, None for a lane outside the view (rho beyond rho_max) or to redo.
+    let seed: [Option<f64>; CHUNK] =
+        std::array::from_fn(|i| (rho[i] <= rho_max).then(|| fw.seed(rho[i])).flatten());
+    let theta: [f64; CHUNK] =
+        std::array::from_fn(|i| seed[i].map_or(0.0, |s| fw.solve_from(rho[i], theta_max, s)));
+    for i in 0..CHUNK {
+        out[i] = match seed[i] {
+            Some(_) => {
+                let (v, jl) = fw.lift_at(m[i], rho[i], theta[i]);
+                LaneRay {
+                    ok: true,
+                    redo: false,
+                    ray: PixelRay {
+                        v,
+                        dv: mul32(&jl, &a_inv),
+                    },
+                }
+            }
+            None => LaneRay {
+                redo: rho[i] <= rho_max,
+                ..LaneRay::NONE
+            },
+        };
     }
 }
 
