@@ -307,3 +307,107 @@ fn render_through_a_calibration() {
         assert!(out.with_extension("png").exists());
     }
 }
+
+/// An OpenCV FileStorage calibration with `coefficients` (and `fisheye_model: 1` when `fisheye`).
+fn opencv_yaml(k: [f64; 4], coefficients: &[f64], fisheye: bool) -> String {
+    let [fx, fy, cx, cy] = k;
+    let list = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ");
+    format!(
+        "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\n{}camera_matrix: !!opencv-matrix\n   rows: 3\n   \
+         cols: 3\n   dt: d\n   data: [ {} ]\ndistortion_coefficients: !!opencv-matrix\n   rows: {}\n   cols: 1\n   \
+         dt: d\n   data: [ {} ]\n",
+        if fisheye { "fisheye_model: 1\n" } else { "" },
+        list(&[fx, 0.0, cx, 0.0, fy, cy, 0.0, 0.0, 1.0]),
+        coefficients.len(),
+        list(coefficients)
+    )
+}
+
+/// Every ray of three OpenCV calibrations (the 5-coefficient fixture, 14 coefficients with thin prism
+/// and tilted sensor, and the fisheye model) against OpenCV's own `undistortPoints`, run to
+/// convergence, through `tests/opencv_rays.py`. CI installs `opencv-python-headless` and sets
+/// OBSCURA_REQUIRE_OPENCV=1, so there a missing OpenCV is a failure, not a skip.
+#[test]
+// The fixture's values are its text, digit for digit.
+#[allow(clippy::excessive_precision)]
+fn every_ray_matches_opencvs_own_undistortion() {
+    let required = std::env::var_os("OBSCURA_REQUIRE_OPENCV").is_some();
+    let probe = Command::new("python3")
+        .args(["-c", "import cv2, numpy, OpenEXR"])
+        .output();
+    if !probe.as_ref().is_ok_and(|o| o.status.success()) {
+        assert!(
+            !required,
+            "python3 with cv2, numpy and OpenEXR is required here but missing"
+        );
+        eprintln!("skipping: python3 with OpenCV and OpenEXR is not installed (CI installs them)");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let fixture_k = [
+        5.3591573396163199e+02,
+        5.3591573396163199e+02,
+        3.4228315473308373e+02,
+        2.3557082909788173e+02,
+    ];
+    let fixture_d = [
+        -2.6637260909660682e-01,
+        -3.8588898922304653e-02,
+        1.7831947042852964e-03,
+        -2.8122100441115472e-04,
+        2.3839153080878486e-01,
+    ];
+    let pinhole_k = [500.0, 490.0, 322.0, 241.0];
+    let pinhole_d = [
+        -0.28, 0.07, 0.001, -0.0005, -0.002, 0.01, 0.003, 0.0002, 0.001, -0.0002, 0.0008, 0.0001, 0.01,
+        -0.008,
+    ];
+    let fisheye_k = [300.0, 300.0, 320.0, 240.0];
+    let fisheye_d = [-0.01, 0.02, -0.003, 0.0005];
+    let cases: [(&str, Option<String>, [f64; 4], &[f64], &str); 3] = [
+        ("five", None, fixture_k, &fixture_d, "pinhole"),
+        (
+            "fourteen",
+            Some(opencv_yaml(pinhole_k, &pinhole_d, false)),
+            pinhole_k,
+            &pinhole_d,
+            "pinhole",
+        ),
+        (
+            "fisheye",
+            Some(opencv_yaml(fisheye_k, &fisheye_d, true)),
+            fisheye_k,
+            &fisheye_d,
+            "fisheye",
+        ),
+    ];
+    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/opencv_rays.py");
+    for (name, yaml, k, d, model) in cases {
+        let cal = match yaml {
+            Some(text) => {
+                let p = dir.path().join(format!("{name}.yml"));
+                std::fs::write(&p, text).unwrap();
+                p.to_str().unwrap().to_string()
+            }
+            None => fixture("opencv_calibration.yml"),
+        };
+        let out = dir.path().join(format!("{name}.exr"));
+        rays(&out, &["--calibration", &cal, "--format", "160x120"]);
+        let mut args = vec![
+            script.to_str().unwrap().to_string(),
+            out.to_str().unwrap().into(),
+            model.into(),
+        ];
+        args.extend(k.iter().map(f64::to_string));
+        args.extend(["640".into(), "480".into()]);
+        args.extend(d.iter().map(f64::to_string));
+        let r = Command::new("python3").args(&args).output().unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&r.stdout),
+            String::from_utf8_lossy(&r.stderr)
+        );
+        assert!(r.status.success(), "{name}: {text}");
+        assert!(text.contains("19200 rays"), "{name}: {text}");
+    }
+}
