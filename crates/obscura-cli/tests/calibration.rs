@@ -364,7 +364,9 @@ fn every_ray_matches_opencvs_own_undistortion() {
     ];
     let fisheye_k = [300.0, 300.0, 320.0, 240.0];
     let fisheye_d = [-0.01, 0.02, -0.003, 0.0005];
-    let cases: [(&str, Option<String>, [f64; 4], &[f64], &str); 3] = [
+    /// (name, calibration file text (None: the fixture), fx fy cx cy, coefficients, OpenCV model).
+    type Case<'a> = (&'a str, Option<String>, [f64; 4], &'a [f64], &'a str);
+    let cases: [Case; 3] = [
         ("five", None, fixture_k, &fixture_d, "pinhole"),
         (
             "fourteen",
