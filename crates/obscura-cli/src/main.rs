@@ -7,7 +7,7 @@ use std::process::ExitCode;
 use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::cli_params::push_param_arg;
-use obscura_host::plugins::{PluginSearch, ensure};
+use obscura_host::plugins::{PluginSearch, ensure, load_all};
 use obscura_host::raymap::{trace_ray_map, write_exr};
 use obscura_host::shutter::ShutterDesc;
 use obscura_host::{CameraDesc, CameraStage, CropWindow, listing};
@@ -38,7 +38,8 @@ enum Command {
     Rays(Box<RaysArgs>),
     /// Render a scene (RIB, glTF, OBJ, or the built-in one) through any projection: EXR + PNG.
     Render(Box<RenderArgs>),
-    /// List the projections and their parameter tables.
+    /// List the projections and their parameter tables: the built-ins and every plugin library on the
+    /// plugin path (--plugin-path, OBSCURA_PLUGIN_PATH), or the one named.
     Plugins {
         /// Show only this projection.
         name: Option<String>,
@@ -496,12 +497,24 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
 }
 
 /// `obscura plugins [NAME]`: a NAME that is not built in (or a path) is loaded as a plugin first.
-fn plugins(name: Option<&str>, search: &PluginSearch) -> Result<(), String> {
+/// `obscura plugins [NAME] [--names]`: one projection (a built-in, or a plugin found by name or
+/// path), or every built-in and every plugin library along the plugin path. A library that does not
+/// load is a warning naming it; the others are still listed.
+fn plugins(name: Option<&str>, names_only: bool, search: &PluginSearch) -> Result<(), String> {
     let mut registry = builtin_registry();
     let name = match name {
         Some(n) => Some(ensure(&mut registry, n, search).map_err(|e| e.to_string())?),
-        None => None,
+        None => {
+            for e in load_all(&mut registry, search).1 {
+                eprintln!("warning: {e}");
+            }
+            None
+        }
     };
+    if names_only {
+        registry.names().iter().for_each(|n| println!("{n}"));
+        return Ok(());
+    }
     let text = listing::list(&registry, name.as_deref()).map_err(|e| e.to_string())?;
     print!("{text}");
     Ok(())
@@ -515,11 +528,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Check(a) => check::run(a, &search),
-        Command::Plugins { names: true, .. } => {
-            builtin_registry().names().iter().for_each(|n| println!("{n}"));
-            Ok(())
-        }
-        Command::Plugins { name, .. } => plugins(name.as_deref(), &search),
+        Command::Plugins { name, names } => plugins(name.as_deref(), *names, &search),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

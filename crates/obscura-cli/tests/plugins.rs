@@ -335,6 +335,47 @@ fn a_panicking_inverse_loses_pixels_of_an_stmap_and_the_map_is_written() {
 }
 
 #[test]
+fn plugins_lists_every_library_on_the_plugin_path_and_warns_about_broken_ones() {
+    let plugins = plugin_dir();
+    let work = tempfile::tempdir().unwrap();
+    // Not a library at all: a warning naming it, and the others are still listed.
+    let bad = work.path().join(lib_name("NotALibrary"));
+    std::fs::write(&bad, "not an ELF file").unwrap();
+    let dirs = format!("{}:{}", plugins.path().display(), work.path().display());
+    let builtins = obscura_projections::builtin_registry().names();
+    let r = obscura(&["plugins", "--names"], work.path(), Some(Path::new(&dirs)));
+    assert!(r.status.success());
+    let names: Vec<String> = String::from_utf8_lossy(&r.stdout)
+        .lines()
+        .map(str::to_string)
+        .collect();
+    let mut want = builtins.clone();
+    want.extend(["CFisheye", "Panicking", "TinyPlanet"].map(String::from));
+    want.sort();
+    assert_eq!(names, want);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.starts_with("warning: ") && err.contains(bad.to_str().unwrap()) && err.lines().count() == 1,
+        "{err}"
+    );
+    // The full listing: every table, each plugin with the file it came from, built-ins without.
+    let r = obscura(&["plugins"], work.path(), Some(Path::new(&dirs)));
+    let out = String::from_utf8_lossy(&r.stdout);
+    for name in ["CFisheye", "Panicking", "TinyPlanet"] {
+        let file = plugins.path().join(lib_name(name));
+        assert!(
+            out.contains(&format!("    plugin: {}\n", file.display())),
+            "{name}: {out}"
+        );
+    }
+    assert_eq!(out.matches("    plugin: ").count(), 3, "{out}");
+    assert!(
+        out.contains("PxrPerspective\n") && out.contains("\"float fov\""),
+        "{out}"
+    );
+}
+
+#[test]
 fn plugins_lists_a_loaded_plugins_table_and_refuses_unknown_names_clearly() {
     let plugins = plugin_dir();
     let work = tempfile::tempdir().unwrap();

@@ -61,14 +61,23 @@ fn allowed_text(d: &ParamDecl) -> String {
 /// # Errors
 /// [`PluginError::Unknown`] when `name` is not registered.
 pub fn list(registry: &Registry, name: Option<&str>) -> Result<String, PluginError> {
+    let entry = |n: &str| -> Result<String, PluginError> {
+        let mut text = describe(registry.find(n)?);
+        // A plugin says where it came from, under its summary.
+        if let Some(path) = registry.path(n).filter(|p| !p.is_empty()) {
+            let at = text.find('\n').map_or(text.len(), |i| i + 1);
+            let at = text[at..].find('\n').map_or(text.len(), |i| at + i + 1);
+            text.insert_str(at, &format!("    plugin: {path}\n"));
+        }
+        Ok(text)
+    };
     match name {
-        Some(n) => Ok(describe(registry.find(n)?)),
+        Some(n) => entry(n),
         None => Ok(registry
             .names()
             .iter()
-            .filter_map(|n| registry.get(n))
-            .map(describe)
-            .collect::<Vec<_>>()
+            .map(|n| entry(n))
+            .collect::<Result<Vec<_>, _>>()?
             .join("\n")),
     }
 }

@@ -191,6 +191,38 @@ impl PluginSearch {
         &self.paths
     }
 
+    /// Every plugin library along the path: each `*.so` (`.dylib`, `.dll`) file of each directory,
+    /// sorted by file name, and only the first of a file name (the one `find` would take).
+    /// Directories that cannot be read are skipped.
+    #[must_use]
+    pub fn libraries(&self) -> Vec<PathBuf> {
+        let mut seen = std::collections::HashSet::new();
+        let mut found = Vec::new();
+        for dir in &self.paths {
+            let Ok(entries) = std::fs::read_dir(dir) else {
+                continue;
+            };
+            let mut here: Vec<PathBuf> = entries
+                .filter_map(Result::ok)
+                .map(|e| e.path())
+                .filter(|p| p.is_file())
+                .filter(|p| {
+                    p.extension()
+                        .is_some_and(|e| e == std::env::consts::DLL_EXTENSION)
+                })
+                .collect();
+            here.sort();
+            for p in here {
+                if let Some(file) = p.file_name().map(std::ffi::OsStr::to_os_string)
+                    && seen.insert(file)
+                {
+                    found.push(p);
+                }
+            }
+        }
+        found
+    }
+
     /// The first `<name>.so` (`.dylib`, `.dll`) along the path that exists.
     #[must_use]
     pub fn find(&self, name: &str) -> Option<PathBuf> {
@@ -741,6 +773,21 @@ pub fn load_file(registry: &mut Registry, path: &Path) -> Result<String, PluginL
             name: d.0,
         })?;
     Ok(name)
+}
+
+/// Loads every library along `search` ([`PluginSearch::libraries`]) into `registry`, as `obscura
+/// plugins` does to list what a user can render with. Returns the names loaded and, for each library
+/// that could not be loaded (or whose projection is already registered), the error naming its file;
+/// one bad library does not stop the others.
+pub fn load_all(registry: &mut Registry, search: &PluginSearch) -> (Vec<String>, Vec<PluginLoadError>) {
+    let (mut loaded, mut failed) = (Vec::new(), Vec::new());
+    for path in search.libraries() {
+        match load_file(registry, &path) {
+            Ok(name) => loaded.push(name),
+            Err(e) => failed.push(e),
+        }
+    }
+    (loaded, failed)
 }
 
 /// Makes sure the projection a user or a scene names is in `registry`, and returns its registered

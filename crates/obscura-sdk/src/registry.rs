@@ -53,6 +53,15 @@ impl Registry {
         Ok(())
     }
 
+    /// Where the projection `name` was loaded from: `Some("")` for a built-in, `None` when unknown.
+    #[must_use]
+    pub fn path(&self, name: &str) -> Option<&str> {
+        self.entries
+            .iter()
+            .find(|e| e.factory.name() == name)
+            .map(|e| e.path.as_str())
+    }
+
     /// Every registered name, sorted.
     #[must_use]
     pub fn names(&self) -> Vec<String> {
