@@ -445,7 +445,7 @@ fn a_failing_property_call_fails_the_panic_check() {
     assert!(
         panic.json.contains(
             "\"what\":\"property(k_FieldOfView)\",\"expected\":\"no panic\",\"got\":\"panicked: \
-             property(k_FieldOfView) failed with status 3 (OBSCURA_PANIC"
+             the plugin returned status 3 (OBSCURA_PANIC"
         ),
         "{out}"
     );
@@ -455,11 +455,31 @@ fn a_failing_property_call_fails_the_panic_check() {
 
 #[test]
 fn a_render_goes_on_without_a_property_whose_call_fails() {
-    // What the renderer does with the same plugin: a warning naming the plugin and the property, the
+    // What the renderer does with the same plugins: a warning naming the plugin and the property, the
     // property unanswered, every pixel rendered.
     let dir = tempfile::tempdir().unwrap();
-    let lib = pinhole(dir.path(), "PropertyFails", Some("DEFECT_PROPERTY_FAILS"));
-    let out = dir.path().join("r.exr");
+    for (defect, warning) in [
+        (
+            "DEFECT_PROPERTY_FAILS",
+            "warning: projection ContractPinhole failed to answer k_FieldOfView: the plugin returned \
+             status 3 (OBSCURA_PANIC",
+        ),
+        (
+            "DEFECT_UNKNOWN_VALUE_KIND",
+            "warning: projection ContractPinhole answered k_FieldOfView with unknown property value \
+             kind 7 (expected 0, 1 or 2); ignored",
+        ),
+    ] {
+        let err = render_with(dir.path(), defect);
+        assert!(err.contains(warning), "{defect}: {err}");
+    }
+}
+
+/// Renders a small frame through the pinhole built with `defect`; returns stderr (the render must
+/// succeed and write its file).
+fn render_with(dir: &Path, defect: &str) -> String {
+    let lib = pinhole(dir, defect, Some(defect));
+    let out = dir.join(format!("{defect}.exr"));
     let run = obscura(&[
         "render",
         "-p",
@@ -475,13 +495,7 @@ fn a_render_goes_on_without_a_property_whose_call_fails() {
         out.to_str().unwrap(),
     ]);
     let err = text(&run.stderr);
-    assert!(run.status.success(), "{err}");
-    assert!(
-        err.contains(
-            "warning: projection ContractPinhole failed to answer k_FieldOfView: property(k_FieldOfView) \
-             failed with status 3 (OBSCURA_PANIC"
-        ),
-        "{err}"
-    );
-    assert!(out.exists());
+    assert!(run.status.success(), "{defect}: {err}");
+    assert!(out.exists(), "{defect}");
+    err
 }

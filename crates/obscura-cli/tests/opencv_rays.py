@@ -36,7 +36,11 @@ def main() -> int:
     k = np.array([[fx, 0.0, cx], [0.0, fy, cy], [0.0, 0.0, 1.0]])
     converge = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 1000, 1e-15)
     if model == "pinhole":
-        want = cv2.undistortPoints(pts, k, coeffs, criteria=converge)
+        try:
+            want = cv2.undistortPoints(pts, k, coeffs, criteria=converge)
+        except (TypeError, cv2.error):
+            # OpenCV 4.x names the overload with termination criteria undistortPointsIter.
+            want = cv2.undistortPointsIter(pts, k, coeffs, None, None, converge)
     elif model == "fisheye":
         want = cv2.fisheye.undistortPoints(pts, k, coeffs, criteria=converge)
     else:

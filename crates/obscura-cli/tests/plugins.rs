@@ -341,6 +341,9 @@ fn plugins_lists_every_library_on_the_plugin_path_and_warns_about_broken_ones() 
     // Not a library at all: a warning naming it, and the others are still listed.
     let bad = work.path().join(lib_name("NotALibrary"));
     std::fs::write(&bad, "not an ELF file").unwrap();
+    // A plugin under another file name could only be used by path: refused, with the name to give it.
+    let renamed = work.path().join(lib_name("planet_v2"));
+    std::fs::copy(plugins.path().join(lib_name("TinyPlanet")), &renamed).unwrap();
     let dirs = format!("{}:{}", plugins.path().display(), work.path().display());
     let builtins = obscura_projections::builtin_registry().names();
     let r = obscura(&["plugins", "--names"], work.path(), Some(Path::new(&dirs)));
@@ -354,8 +357,15 @@ fn plugins_lists_every_library_on_the_plugin_path_and_warns_about_broken_ones() 
     want.sort();
     assert_eq!(names, want);
     let err = String::from_utf8_lossy(&r.stderr);
+    let warnings: Vec<&str> = err.lines().collect();
+    assert_eq!(warnings.len(), 2, "{err}");
     assert!(
-        err.starts_with("warning: ") && err.contains(bad.to_str().unwrap()) && err.lines().count() == 1,
+        warnings[0].starts_with(&format!("warning: {}: ", bad.display())),
+        "{err}"
+    );
+    assert!(
+        warnings[1].starts_with(&format!("warning: {}: ", renamed.display()))
+            && warnings[1].contains("this library is projection \"TinyPlanet\", not \"planet_v2\""),
         "{err}"
     );
     // The full listing: every table, each plugin with the file it came from, built-ins without.

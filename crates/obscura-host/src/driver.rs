@@ -19,7 +19,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use obscura_sdk::abi::panic_message;
+use obscura_sdk::abi::{UndecodableProperty, panic_message};
 use obscura_sdk::optics::{OrthographicRays, PerspectiveRays, screen_distance};
 use obscura_sdk::{
     DeepMetric, DicingHint, ParamList, PluginError, Point2, Projection, ProjectionContext,
@@ -503,11 +503,17 @@ fn read_properties(
         let v = match catch_unwind(AssertUnwindSafe(|| p.property(prop))) {
             Ok(v) => v?,
             Err(payload) => {
-                warnings.push(format!(
-                    "warning: projection {name} failed to answer {}: {}; treated as unanswered",
-                    prop.renderman_name(),
-                    panic_message(payload.as_ref())
-                ));
+                warnings.push(match payload.downcast_ref::<UndecodableProperty>() {
+                    Some(bad) => format!(
+                        "warning: projection {name} answered {} with {}; ignored",
+                        bad.property, bad.reason
+                    ),
+                    None => format!(
+                        "warning: projection {name} failed to answer {}: {}; treated as unanswered",
+                        prop.renderman_name(),
+                        panic_message(payload.as_ref())
+                    ),
+                });
                 return None;
             }
         };

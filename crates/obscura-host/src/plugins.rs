@@ -685,11 +685,7 @@ impl Projection for PluginProjection {
                 })),
             },
             abi::UNSUPPORTED => None,
-            s => resume_unwind(Box::new(format!(
-                "property({}) failed with status {}",
-                property.renderman_name(),
-                status_name(s)
-            ))),
+            s => resume_unwind(Box::new(format!("the plugin returned status {}", status_name(s)))),
         }
     }
 
@@ -736,10 +732,7 @@ impl Projection for PluginProjection {
             abi::OK => Some(out),
             abi::UNSUPPORTED => None,
             // A failure is not "outside the view": callers catch this and count it.
-            s => resume_unwind(Box::new(format!(
-                "unproject failed with status {}",
-                status_name(s)
-            ))),
+            s => resume_unwind(Box::new(format!("the plugin returned status {}", status_name(s)))),
         }
     }
 }
@@ -775,14 +768,27 @@ pub fn load_file(registry: &mut Registry, path: &Path) -> Result<String, PluginL
     Ok(name)
 }
 
-/// Loads every library along `search` ([`PluginSearch::libraries`]) into `registry`, as `obscura
-/// plugins` does to list what a user can render with. Returns the names loaded and, for each library
-/// that could not be loaded (or whose projection is already registered), the error naming its file;
-/// one bad library does not stop the others.
+/// Loads every library along `search` ([`PluginSearch::libraries`]) into `registry` by its file's
+/// name, as `obscura plugins` does to list what a user can render with. Returns the names loaded and,
+/// for each library that could not be loaded, is named unlike its projection, or whose name is
+/// already registered, the error naming its file; one bad library does not stop the others.
 pub fn load_all(registry: &mut Registry, search: &PluginSearch) -> (Vec<String>, Vec<PluginLoadError>) {
     let (mut loaded, mut failed) = (Vec::new(), Vec::new());
     for path in search.libraries() {
-        match load_file(registry, &path) {
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
+            continue;
+        };
+        if registry.get(stem).is_some() {
+            // `<Name>.so` of a projection already known (a built-in): never reachable by name.
+            failed.push(PluginLoadError::Duplicate {
+                name: stem.to_string(),
+                path,
+            });
+            continue;
+        }
+        // By name, exactly as `render -p <stem>` would find it: a library whose projection is not
+        // named like its file is refused (it could only be used by path).
+        match ensure(registry, stem, search) {
             Ok(name) => loaded.push(name),
             Err(e) => failed.push(e),
         }

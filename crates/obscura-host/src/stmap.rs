@@ -313,7 +313,11 @@ fn check_inverse(from: &CameraStage, distance: f32) -> Result<(), StMapError> {
     let mut failure = None;
     for r in live {
         match unproject_caught(from, r.origin + r.direction * distance) {
-            Ok(back) => found |= back.is_some(),
+            Ok(Some(_)) => {
+                found = true;
+                break;
+            }
+            Ok(None) => {}
             Err(message) => failure = failure.or(Some(message)),
         }
     }
