@@ -609,20 +609,31 @@ mod tests {
                 &[400.0, 400.0, 320.0, 240.0, 0.5, 1.2, -0.1, 0.02, 0.001, -0.0005],
             ),
         ];
-        let format = Format::new(640, 480);
-        let w = ScreenWindow::default_for(format);
         let n = 2000;
-        let screen: Vec<Point2> = (0..n)
-            .map(|i| {
-                let fx = (i as f64 * 0.618_033_988_75).fract();
-                let fy = (i as f64 * 0.754_877_666_25).fract();
-                w.raster_to_screen(format, fx * 700.0 - 30.0, fy * 520.0 - 20.0)
-            })
-            .collect();
+        let screen = spread_over_640x480(n, 30.0);
         for (model, params) in cases {
             let valid = batch_matches_per_pixel(model, params, &[], &[], &screen);
             assert!(valid > n / 2, "{model}: {valid}");
         }
+    }
+
+    /// `n` screen positions spread over a 640×480 frame and a margin of `margin_x` pixels left and
+    /// right (three quarters of that above and below) by a golden-ratio sequence.
+    fn spread_over_640x480(n: usize, margin_x: f64) -> Vec<Point2> {
+        let format = Format::new(640, 480);
+        let w = ScreenWindow::default_for(format);
+        let margin_y = 0.75 * margin_x;
+        (0..n)
+            .map(|i| {
+                let fx = (i as f64 * 0.618_033_988_75).fract();
+                let fy = (i as f64 * 0.754_877_666_25).fract();
+                w.raster_to_screen(
+                    format,
+                    fx * (640.0 + 2.0 * margin_x) - margin_x,
+                    fy * (480.0 + 2.0 * margin_y) - margin_y,
+                )
+            })
+            .collect()
     }
 
     /// Projects `screen` through a model and checks every ray against the per-pixel API, bit for
@@ -666,13 +677,7 @@ mod tests {
         let format = Format::new(640, 480);
         let w = ScreenWindow::default_for(format);
         let n = 1001;
-        let screen: Vec<Point2> = (0..n)
-            .map(|i| {
-                let fx = (i as f64 * 0.618_033_988_75).fract();
-                let fy = (i as f64 * 0.754_877_666_25).fract();
-                w.raster_to_screen(format, fx * 800.0 - 80.0, fy * 600.0 - 60.0)
-            })
-            .collect();
+        let screen = spread_over_640x480(n, 80.0);
         let pol5 = [-206.517, 0.0, 2.207161e-03, -4.879622e-06, 1.865656e-08];
         let pol8 = [-206.517, 0.0, 2.2e-03, -4.9e-06, 1.9e-08, 1e-12, -1e-15, 1e-19];
         let mut pol14 = pol5.to_vec();

@@ -6,6 +6,8 @@ use std::process::{Command, Output};
 
 use exr::prelude::{FlatImage, FlatSamples, read_all_flat_layers_from_file};
 
+mod support;
+
 fn obscura(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_obscura"))
         .args(args)
@@ -331,16 +333,7 @@ fn opencv_yaml(k: [f64; 4], coefficients: &[f64], fisheye: bool) -> String {
 // The fixture's values are its text, digit for digit.
 #[allow(clippy::excessive_precision)]
 fn every_ray_matches_opencvs_own_undistortion() {
-    let required = std::env::var_os("OBSCURA_REQUIRE_OPENCV").is_some();
-    let probe = Command::new("python3")
-        .args(["-c", "import cv2, numpy, OpenEXR"])
-        .output();
-    if !probe.as_ref().is_ok_and(|o| o.status.success()) {
-        assert!(
-            !required,
-            "python3 with cv2, numpy and OpenEXR is required here but missing"
-        );
-        eprintln!("skipping: python3 with OpenCV and OpenEXR is not installed (CI installs them)");
+    if !support::python_has("cv2, numpy, OpenEXR", "OBSCURA_REQUIRE_OPENCV") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();

@@ -5,6 +5,8 @@ use std::process::{Command, Output};
 
 use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
 
+mod support;
+
 fn obscura(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_obscura"))
         .args(args)
@@ -165,16 +167,7 @@ fn a_crop_writes_the_same_region_of_the_full_image() {
 /// OBSCURA_REQUIRE_INDEPENDENT_EXR=1, so there a missing reader is a failure, not a skip.
 #[test]
 fn an_independent_reader_agrees() {
-    let required = std::env::var_os("OBSCURA_REQUIRE_INDEPENDENT_EXR").is_some();
-    let probe = Command::new("python3")
-        .args(["-c", "import OpenEXR, numpy"])
-        .output();
-    if !probe.as_ref().is_ok_and(|o| o.status.success()) {
-        assert!(
-            !required,
-            "python3 with OpenEXR and numpy is required here but missing"
-        );
-        eprintln!("skipping: python3 with the OpenEXR module is not installed (CI installs it)");
+    if !support::python_has("OpenEXR, numpy", "OBSCURA_REQUIRE_INDEPENDENT_EXR") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
