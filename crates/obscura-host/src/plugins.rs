@@ -341,6 +341,21 @@ fn status_name(status: abi::Status) -> String {
 /// Every library this process has opened, by canonical path. Leaked: libraries are never unloaded.
 static LOADED: Mutex<Vec<&'static Loaded>> = Mutex::new(Vec::new());
 
+/// An error with its sources: libloading's own text is only "dlopen failed"; the system loader's
+/// reason ("file too short", "wrong ELF class") is its source.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut text = e.to_string();
+    let mut source = e.source();
+    while let Some(s) = source {
+        let more = s.to_string();
+        if !text.contains(&more) {
+            text = format!("{text}: {more}");
+        }
+        source = s.source();
+    }
+    text
+}
+
 /// Opens and checks a plugin library (once per process per file).
 fn open(path: &Path) -> Result<&'static Loaded, PluginLoadError> {
     let canonical = path.canonicalize().map_err(|e| PluginLoadError::Open {
@@ -355,7 +370,7 @@ fn open(path: &Path) -> Result<&'static Loaded, PluginLoadError> {
     // library is leaked below, so nothing it hands out ever dangles.
     let lib = unsafe { libloading::Library::new(&canonical) }.map_err(|e| PluginLoadError::Open {
         path: canonical.clone(),
-        reason: e.to_string(),
+        reason: error_chain(&e),
     })?;
     let lib: &'static libloading::Library = Box::leak(Box::new(lib));
     // SAFETY: the symbol's type is the ABI's entry point type.
@@ -901,6 +916,9 @@ mod tests {
         let e = load_file(&mut reg, &p).unwrap_err();
         assert!(matches!(e, PluginLoadError::Open { .. }), "{e:?}");
         assert!(e.to_string().contains("Junk"), "{e}");
+        // The system loader's reason, not only libloading's "dlopen failed".
+        #[cfg(target_os = "linux")]
+        assert!(e.to_string().contains("file too short"), "{e}");
         let e = load_file(&mut reg, &dir.path().join("missing.so")).unwrap_err();
         assert!(e.to_string().contains("missing.so: cannot load"), "{e}");
     }

@@ -131,3 +131,54 @@ impl Drop for Registry {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::param::ParamDecl;
+
+    struct Named(&'static str);
+
+    impl ProjectionFactory for Named {
+        fn name(&self) -> &str {
+            self.0
+        }
+
+        fn summary(&self) -> &str {
+            "test factory"
+        }
+
+        fn param_table(&self) -> &[ParamDecl] {
+            &[]
+        }
+
+        fn create_projection(
+            &self,
+            _env: &mut ProjectionEnvironment,
+            _params: &ParamList,
+        ) -> Result<Box<dyn Projection>, PluginError> {
+            Err(PluginError::Unknown {
+                name: self.0.into(),
+                suggestion: None,
+                known: Vec::new(),
+            })
+        }
+    }
+
+    #[test]
+    fn path_says_where_each_projection_came_from_and_a_taken_name_is_refused() {
+        let mut r = Registry::new();
+        r.register(Box::new(Named("Built")), "").unwrap();
+        r.register(Box::new(Named("Loaded")), "/plugins/Loaded.so")
+            .unwrap();
+        assert_eq!(r.path("Built"), Some(""));
+        assert_eq!(r.path("Loaded"), Some("/plugins/Loaded.so"));
+        assert_eq!(r.path("Nope"), None);
+        let dup = r
+            .register(Box::new(Named("Loaded")), "/elsewhere/Loaded.so")
+            .unwrap_err();
+        assert_eq!(dup.0, "Loaded");
+        assert_eq!(r.path("Loaded"), Some("/plugins/Loaded.so"));
+        assert_eq!(r.names(), ["Built", "Loaded"]);
+    }
+}
