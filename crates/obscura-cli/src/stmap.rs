@@ -1,7 +1,7 @@
 //! `obscura stmap`: the ST-map between two projections (arguments only; the work is
 //! [`obscura_host::stmap`]).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use clap::Args;
 use obscura_host::cli_params::push_param_arg;
@@ -13,21 +13,37 @@ use obscura_sdk::{Format, ParamList, Registry};
 #[derive(Args, Debug)]
 pub struct StmapArgs {
     /// A: the projection the source image was made with (the STMap node's src input).
-    #[arg(long, value_name = "NAME")]
-    from: String,
-    /// A parameter of A: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
+    #[arg(long, value_name = "NAME", required_unless_present = "from_calibration")]
+    from: Option<String>,
+    /// A is the real camera of this calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
+    /// camchain.yaml, OCamCalib calib_results.txt): map B = a pinhole to undistort its plates, or
+    /// A = a pinhole and --to-calibration to distort renders to match them.
+    #[arg(long, value_name = "FILE", conflicts_with = "from")]
+    from_calibration: Option<PathBuf>,
+    /// The camera of --from-calibration's file when it holds several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    #[arg(long, value_name = "ID", requires = "from_calibration")]
+    from_camera: Option<String>,
+    /// A parameter of A: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable; with
+    /// --from-calibration, adds to or replaces the calibration's parameters.
     #[arg(long = "from-param", value_name = "PARAM")]
     from_params: Vec<String>,
     /// B: the projection of the output image (the map has B's size).
-    #[arg(long, value_name = "NAME")]
-    to: String,
+    #[arg(long, value_name = "NAME", required_unless_present = "to_calibration")]
+    to: Option<String>,
+    /// B is the real camera of this calibration file (formats as --from-calibration).
+    #[arg(long, value_name = "FILE", conflicts_with = "to")]
+    to_calibration: Option<PathBuf>,
+    /// The camera of --to-calibration's file when it holds several.
+    #[arg(long, value_name = "ID", requires = "to_calibration")]
+    to_camera: Option<String>,
     /// A parameter of B, as --from-param. Repeatable.
     #[arg(long = "to-param", value_name = "PARAM")]
     to_params: Vec<String>,
-    /// B's image size (the map's size), WIDTHxHEIGHT.
-    #[arg(long, default_value = "1920x1080", value_parser = crate::parse_format)]
-    format: (u32, u32),
-    /// A's image size, WIDTHxHEIGHT (default: B's).
+    /// B's image size (the map's size), WIDTHxHEIGHT [default: the image size of --to-calibration,
+    /// else of --from-calibration (a plate's undistorted twin), else 1920x1080].
+    #[arg(long, value_parser = crate::parse_format)]
+    format: Option<(u32, u32)>,
+    /// A's image size, WIDTHxHEIGHT [default: --from-calibration's image size, else B's].
     #[arg(long, value_parser = crate::parse_format)]
     from_format: Option<(u32, u32)>,
     /// Distance along B's rays (scene units) of the point A's inverse is asked for. Only matters for
@@ -39,14 +55,64 @@ pub struct StmapArgs {
     output: PathBuf,
 }
 
-fn read_params(registry: &Registry, flag: &str, name: &str, args: &[String]) -> Result<ParamList, String> {
-    let factory = registry.find(name).map_err(|e| format!("{flag} {name}: {e}"))?;
-    let mut list = ParamList::new();
+/// One side of the map, resolved: the projection's registered name, its parameters, the size of
+/// a calibration's image (when the side is a calibration), its name in messages and what the EXR
+/// records of it.
+struct Side {
+    name: String,
+    params: ParamList,
+    calibrated_size: Option<(u32, u32)>,
+    label: String,
+    record: String,
+}
+
+/// Resolves one side (`flag` is "--from" or "--to"): a projection by name (a built-in, a plugin on
+/// the plugin path, or a plugin's path), or a calibration file's camera.
+fn side(
+    registry: &mut Registry,
+    search: &PluginSearch,
+    flag: &str,
+    (name, calibration, camera): (Option<&str>, Option<&Path>, Option<&str>),
+    args: &[String],
+) -> Result<Side, String> {
+    if let Some(path) = calibration {
+        let (c, mut params) =
+            crate::load_calibration(path, camera, true).map_err(|e| format!("{flag}-calibration: {e}"))?;
+        if let Some(note) = c.selection_note() {
+            eprintln!("note: {}", note.replace("--camera", &format!("{flag}-camera")));
+        }
+        let factory = registry.find(crate::CALIBRATED).map_err(|e| e.to_string())?;
+        crate::merge_param_args(&mut params, args, factory.name(), factory.param_table())
+            .map_err(|e| format!("{flag}-param: {e}"))?;
+        return Ok(Side {
+            name: crate::CALIBRATED.to_string(),
+            params,
+            calibrated_size: Some((c.width, c.height)),
+            label: match &c.camera {
+                Some(id) => format!("{} camera {id}", c.file),
+                None => c.file.clone(),
+            },
+            record: c.summary(),
+        });
+    }
+    // Clap requires the name when there is no calibration.
+    let name = name.ok_or_else(|| format!("{flag} NAME or {flag}-calibration FILE is required"))?;
+    let registered = ensure(registry, name, search).map_err(|e| format!("{flag} {name}: {e}"))?;
+    let factory = registry
+        .find(&registered)
+        .map_err(|e| format!("{flag} {name}: {e}"))?;
+    let mut params = ParamList::new();
     for p in args {
-        push_param_arg(&mut list, p, factory.name(), factory.param_table())
+        push_param_arg(&mut params, p, factory.name(), factory.param_table())
             .map_err(|e| format!("{flag}-param: {e}"))?;
     }
-    Ok(list)
+    Ok(Side {
+        name: registered,
+        params,
+        calibrated_size: None,
+        label: name.to_string(),
+        record: name.to_string(),
+    })
 }
 
 /// Runs `obscura stmap` with the projections of `registry`.
@@ -54,17 +120,43 @@ fn read_params(registry: &Registry, flag: &str, name: &str, args: &[String]) -> 
 /// # Errors
 /// A message naming the option at fault, the projection or the file.
 pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Result<(), String> {
-    // Either side may be a plugin on the plugin path, or a path to one.
-    let from_name = ensure(registry, &a.from, search).map_err(|e| format!("--from {}: {e}", a.from))?;
-    let to_name = ensure(registry, &a.to, search).map_err(|e| format!("--to {}: {e}", a.to))?;
-    let from_params = read_params(registry, "--from", &from_name, &a.from_params)?;
-    let to_params = read_params(registry, "--to", &to_name, &a.to_params)?;
-    let to_format = Format::new(a.format.0, a.format.1);
-    let from_format = a.from_format.map_or(to_format, |(w, h)| Format::new(w, h));
+    // Either side may be a plugin on the plugin path, a path to one, or a calibration file.
+    let from_side = side(
+        registry,
+        search,
+        "--from",
+        (
+            a.from.as_deref(),
+            a.from_calibration.as_deref(),
+            a.from_camera.as_deref(),
+        ),
+        &a.from_params,
+    )?;
+    let to_side = side(
+        registry,
+        search,
+        "--to",
+        (
+            a.to.as_deref(),
+            a.to_calibration.as_deref(),
+            a.to_camera.as_deref(),
+        ),
+        &a.to_params,
+    )?;
+    let (tw, th) = a
+        .format
+        .or(to_side.calibrated_size)
+        .or(from_side.calibrated_size)
+        .unwrap_or((1920, 1080));
+    let to_format = Format::new(tw, th);
+    let from_format = match a.from_format.or(from_side.calibrated_size) {
+        Some((w, h)) => Format::new(w, h),
+        None => to_format,
+    };
     let (from, to) = stages(
         registry,
-        (&from_name, &from_params, from_format),
-        (&to_name, &to_params, to_format),
+        (&from_side.name, &from_side.params, from_format),
+        (&to_side.name, &to_side.params, to_format),
     )
     .map_err(|e| e.to_string())?;
     for w in from.setup_warnings().iter().chain(to.setup_warnings()) {
@@ -72,26 +164,27 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
     }
     let map = compute_stmap(&from, &to, a.distance).map_err(|e| e.to_string())?;
     let st = &map.stats;
-    if let Some(w) = st.b_report.warning(&a.to) {
+    let (a_label, b_label) = (&from_side.label, &to_side.label);
+    if let Some(w) = st.b_report.warning(b_label) {
         eprintln!("{w}");
     }
-    if let Some(w) = st.a_report.warning(&a.from) {
+    if let Some(w) = st.a_report.warning(a_label) {
         eprintln!("{w}");
     }
-    if let Some(w) = st.unproject_warning(&a.from) {
+    if let Some(w) = st.unproject_warning(a_label) {
         eprintln!("{w}");
     }
-    if let Some(w) = st.consistency_warning(&a.from) {
+    if let Some(w) = st.consistency_warning(a_label) {
         eprintln!("{w}");
     }
     let attributes = [
-        ("obscura:stmapFrom", a.from.clone()),
+        ("obscura:stmapFrom", from_side.record.clone()),
         ("obscura:stmapFromParameters", a.from_params.join("; ")),
         (
             "obscura:stmapFromFormat",
             format!("{}x{}", from_format.width, from_format.height),
         ),
-        ("obscura:stmapTo", a.to.clone()),
+        ("obscura:stmapTo", to_side.record.clone()),
         ("obscura:stmapToParameters", a.to_params.join("; ")),
         ("obscura:stmapDistance", a.distance.to_string()),
         (
@@ -106,8 +199,8 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
         "wrote {}: ST-map {} -> {} ({}x{} from {}x{}): {} of {} pixels mapped, {} culled by {}, \
          {} not seen by {}, {} outside its frame, {} culled by it",
         a.output.display(),
-        a.from,
-        a.to,
+        a_label,
+        b_label,
         to_format.width,
         to_format.height,
         from_format.width,
@@ -115,9 +208,9 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
         st.mapped,
         st.pixels,
         st.culled_by_b,
-        a.to,
+        b_label,
         st.unseen_by_a,
-        a.from,
+        a_label,
         st.outside_a,
         st.culled_by_a
     );

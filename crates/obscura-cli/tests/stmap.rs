@@ -299,3 +299,181 @@ sys.exit(0 if ok else 1)
         String::from_utf8_lossy(&r.stderr)
     );
 }
+
+fn fixture(name: &str) -> String {
+    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../obscura-calibration/tests/fixtures")
+        .join(name)
+        .to_str()
+        .unwrap()
+        .to_string()
+}
+
+/// The lens-removal map a compositor asks for, checked against OpenCV's own undistortion maps
+/// (`cv2.initUndistortRectifyMap` and `cv2.fisheye.initUndistortRectifyMap`: forward distortion,
+/// code we did not write). CI installs OpenCV and sets OBSCURA_REQUIRE_OPENCV=1.
+#[test]
+fn undistortion_maps_of_calibration_files_match_opencvs() {
+    if !support::python_has("cv2, numpy, OpenEXR", "OBSCURA_REQUIRE_OPENCV") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let checker = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/opencv_stmap.py");
+    // (file, camera, B's fov, the checker's MODEL FX FY CX CY W H, coefficients): the fixtures' values.
+    let cases: [(&str, &str, &str, &str); 3] = [
+        (
+            "opencv_calibration.yml",
+            "",
+            "40",
+            "pinhole 5.3591573396163199e+02 5.3591573396163199e+02 3.4228315473308373e+02 \
+             2.3557082909788173e+02 640 480 -2.6637260909660682e-01 -3.8588898922304653e-02 \
+             1.7831947042852964e-03 -2.8122100441115472e-04 2.3839153080878486e-01",
+        ),
+        // Wider than the plate: the map must leave the pixels it cannot fill unmapped, as OpenCV does.
+        (
+            "opencv_calibration.yml",
+            "",
+            "70",
+            "pinhole 5.3591573396163199e+02 5.3591573396163199e+02 3.4228315473308373e+02 \
+             2.3557082909788173e+02 640 480 -2.6637260909660682e-01 -3.8588898922304653e-02 \
+             1.7831947042852964e-03 -2.8122100441115472e-04 2.3839153080878486e-01",
+        ),
+        (
+            "camchain.yaml",
+            "cam1",
+            "150",
+            "fisheye 190.97847715128717 190.9733070521226 254.93170605935475 256.8974428996504 \
+             512 512 0.0034823894022493434 0.0007150348452162257 -0.0020532361418706202 \
+             0.00020293673591811182",
+        ),
+    ];
+    for (file, camera, fov, model) in cases {
+        let out = dir.path().join(format!("{file}-{fov}.exr"));
+        let path = fixture(file);
+        let fov_param = format!("fov={fov}");
+        let mut args = vec![
+            "stmap",
+            "--from-calibration",
+            &path,
+            "--to",
+            "PxrPerspective",
+            "--to-param",
+            &fov_param,
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        if !camera.is_empty() {
+            args.extend(["--from-camera", camera]);
+        }
+        let run = obscura(&args);
+        assert!(
+            run.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        // The map takes the plate's size when no --format is given.
+        let mut words: Vec<&str> = model.split_whitespace().collect();
+        words.insert(7, fov);
+        let r = Command::new("python3")
+            .arg(checker)
+            .arg(&out)
+            .args(&words)
+            .output()
+            .unwrap();
+        assert!(
+            r.status.success(),
+            "{file} {camera} fov {fov}: {}{}",
+            String::from_utf8_lossy(&r.stdout),
+            String::from_utf8_lossy(&r.stderr)
+        );
+    }
+}
+
+/// Both sides may be calibrations; the EXR records which camera of which file, and messages name
+/// the side's own options.
+#[test]
+fn calibration_sides_are_recorded_and_their_errors_name_the_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("c2c.exr");
+    let cameras = fixture("cameras.txt");
+    let camchain = fixture("camchain.yaml");
+    let run = obscura(&[
+        "stmap",
+        "--from-calibration",
+        &cameras,
+        "--from-camera",
+        "2",
+        "--to-calibration",
+        &camchain,
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("using the first, cam0 (choose with --to-camera)"),
+        "{err}"
+    );
+    let stdout = String::from_utf8_lossy(&run.stdout);
+    // B takes its own calibration's size, A its own.
+    assert!(stdout.contains("752x480 from 1600x1200"), "{stdout}");
+    let image = read_all_flat_layers_from_file(&out).unwrap();
+    let from = text_attribute(&image, "obscura:stmapFrom").unwrap();
+    let to = text_attribute(&image, "obscura:stmapTo").unwrap();
+    assert!(
+        from.starts_with("camera 2 (") && from.contains("cameras.txt"),
+        "{from}"
+    );
+    assert!(
+        to.starts_with("camera cam0 (") && to.contains("camchain.yaml"),
+        "{to}"
+    );
+
+    let never = dir.path().join("never.exr");
+    let malformed = fixture("malformed_cameras.txt");
+    for (args, needle) in [
+        (
+            vec![
+                "--from-calibration",
+                "/no/such/cameras.txt",
+                "--to",
+                "PxrPerspective",
+            ],
+            "--from-calibration: /no/such/cameras.txt: cannot read",
+        ),
+        (
+            vec!["--from", "PxrPerspective", "--to-calibration", &malformed],
+            "--to-calibration: ",
+        ),
+        (
+            vec![
+                "--from-calibration",
+                &camchain,
+                "--from-camera",
+                "cam9",
+                "--to",
+                "PxrPerspective",
+            ],
+            "cam9",
+        ),
+        (
+            vec![
+                "--from-calibration",
+                &cameras,
+                "--from-param",
+                "fvo=1",
+                "--to",
+                "PxrPerspective",
+            ],
+            "--from-param: ",
+        ),
+    ] {
+        let mut all = vec!["stmap", "-o", never.to_str().unwrap()];
+        all.extend(args.iter().copied());
+        let run = obscura(&all);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{args:?} succeeded");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!never.exists());
+    }
+}
