@@ -309,6 +309,11 @@ fn fixture(name: &str) -> String {
         .to_string()
 }
 
+/// opencv_calibration.yml's camera for opencv_stmap.py: MODEL FX FY CX CY W H, then k1 k2 p1 p2 k3.
+const OPENCV_YML: &str = "pinhole 5.3591573396163199e+02 5.3591573396163199e+02 3.4228315473308373e+02 \
+     2.3557082909788173e+02 640 480 -2.6637260909660682e-01 -3.8588898922304653e-02 \
+     1.7831947042852964e-03 -2.8122100441115472e-04 2.3839153080878486e-01";
+
 /// The lens-removal map a compositor asks for, checked against OpenCV's own undistortion maps
 /// (`cv2.initUndistortRectifyMap` and `cv2.fisheye.initUndistortRectifyMap`: forward distortion,
 /// code we did not write). CI installs OpenCV and sets OBSCURA_REQUIRE_OPENCV=1.
@@ -321,23 +326,9 @@ fn undistortion_maps_of_calibration_files_match_opencvs() {
     let checker = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/opencv_stmap.py");
     // (file, camera, B's fov, the checker's MODEL FX FY CX CY W H, coefficients): the fixtures' values.
     let cases: [(&str, &str, &str, &str); 3] = [
-        (
-            "opencv_calibration.yml",
-            "",
-            "40",
-            "pinhole 5.3591573396163199e+02 5.3591573396163199e+02 3.4228315473308373e+02 \
-             2.3557082909788173e+02 640 480 -2.6637260909660682e-01 -3.8588898922304653e-02 \
-             1.7831947042852964e-03 -2.8122100441115472e-04 2.3839153080878486e-01",
-        ),
+        ("opencv_calibration.yml", "", "40", OPENCV_YML),
         // Wider than the plate: the map must leave the pixels it cannot fill unmapped, as OpenCV does.
-        (
-            "opencv_calibration.yml",
-            "",
-            "70",
-            "pinhole 5.3591573396163199e+02 5.3591573396163199e+02 3.4228315473308373e+02 \
-             2.3557082909788173e+02 640 480 -2.6637260909660682e-01 -3.8588898922304653e-02 \
-             1.7831947042852964e-03 -2.8122100441115472e-04 2.3839153080878486e-01",
-        ),
+        ("opencv_calibration.yml", "", "70", OPENCV_YML),
         (
             "camchain.yaml",
             "cam1",
