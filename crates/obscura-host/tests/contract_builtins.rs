@@ -79,6 +79,44 @@ fn perspective_pinhole_thin_lens_and_zoom_are_clean() {
     }
 }
 
+/// Regression: PxrCamera reported its undistorted `fov` as FieldOfView, up to 20° off the rays'
+/// extent with strong distortion or a lens shift.
+#[test]
+fn pxrcamera_distortion_shift_and_lens_keep_the_contract() {
+    let mut registry = builtin_registry();
+    let cases: [&[(&str, &str)]; 6] = [
+        &[("float radial1", "-0.3")],
+        &[("float radial1", "0.3")],
+        &[
+            ("float radial1", "-0.1"),
+            ("float squeeze", "2"),
+            ("float assymY", "0.05"),
+        ],
+        &[("float shiftX", "0.3")],
+        &[
+            ("float shiftY", "-0.5"),
+            ("float fov", "60"),
+            ("float fovEnd", "40"),
+        ],
+        &[
+            ("float focalLength", "0.05"),
+            ("float fStop", "2"),
+            ("float tilt", "10"),
+            ("float radial1", "-0.05"),
+            ("float natural", "1"),
+        ],
+    ];
+    for case in cases {
+        let report = check_registered(&mut registry, "PxrCamera", &params(case), &options()).unwrap();
+        assert!(report.is_clean(), "{case:?}\n{report}");
+        assert_eq!(
+            report.get(CheckKind::FieldOfView).status(),
+            Status::Ok,
+            "{case:?}\n{report}"
+        );
+    }
+}
+
 #[test]
 fn a_zoom_passes_with_the_narrower_field_of_view_either_way_round() {
     let mut registry = builtin_registry();

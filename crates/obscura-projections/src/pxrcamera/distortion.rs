@@ -135,6 +135,21 @@ impl Distortion {
         })
     }
 
+    /// The ideal position of sensor position `p` in f64, or `None` beyond the fold (as [`forward`]
+    /// decides in f32).
+    ///
+    /// [`forward`]: Distortion::forward
+    pub(crate) fn ideal(&self, p: [f64; 2]) -> Option<[f64; 2]> {
+        let q = self.q(p);
+        // NaN fails this too.
+        if q.is_nan() || q >= self.q_max {
+            return None;
+        }
+        let dx = 1.0 + q * (self.cx + self.k2 * q);
+        let dy = 1.0 + q * (self.cy + self.k2 * q);
+        (dx > 0.0 && dy > 0.0).then(|| [p[0] / dx, p[1] / dy])
+    }
+
     /// The forward map and its Jacobian in f64 (no fold check).
     pub(crate) fn forward_f64(&self, p: [f64; 2]) -> ([f64; 2], [f64; 4]) {
         let [x, y] = p;

@@ -64,9 +64,12 @@
 //!
 //! # Properties
 //!
-//! DicingHint Perspective; DeepMetric CameraZ; FieldOfView the un-enhanced `fov` (the narrower of
-//! `fov` and `fovEnd` during a zoom) — enhance leaves dicing alone, as RenderMan documents, while the
-//! ray spread is the true, enhanced footprint. With the thin lens on: FStop `fStop/dofMult` (the
+//! DicingHint Perspective; DeepMetric CameraZ; FieldOfView the angle the un-enhanced image spans
+//! across the `[−1, 1]` square: `fov` itself (the narrower of `fov` and `fovEnd` during a zoom) unless
+//! distortion, shift or the green `transverse` magnification reshape the image, and then the angle
+//! between the green chief rays at screen `(±1, 0)` or `(0, ±1)`, the narrower pair — what the rays
+//! really span, as `obscura check` measures it. Enhance leaves dicing alone, as RenderMan documents,
+//! while the ray spread is the true, enhanced footprint. With the thin lens on: FStop `fStop/dofMult` (the
 //! f-number of the lens actually used), FocalLength, FocalDistance (where the view axis meets the green
 //! plane of focus).
 //!
@@ -252,6 +255,8 @@ pub struct PxrCamera {
     extra: bool,
     /// What the FStop, FocalLength, FocalDistance properties report.
     reported_dof: DepthOfField,
+    /// What the FieldOfView property reports ([`PxrCamera::measured_field_of_view`]).
+    field_of_view: f32,
 }
 
 /// Green: the reference channel when there is no chromatic aberration, and the one `unproject` inverts.
@@ -332,7 +337,7 @@ impl PxrCamera {
         let shutter = Some(RollingShutter::from_params(p, env.screen_window())?).filter(|r| !r.is_global());
         let (natural, optical) = (p.float("natural")?, p.float("optical")?);
         let fov_end_on = fov_end > 0.0 && fov_end != fov;
-        Ok(PxrCamera {
+        let mut camera = PxrCamera {
             half_pixel: 0.5 * (px * py).sqrt(),
             near: env.clipping_near(),
             far: env.clipping_far(),
@@ -368,7 +373,55 @@ impl PxrCamera {
             shutter,
             extra: shutter.is_some() || fov_end_on || chromatic || natural > 0.0 || optical > 0.0,
             reported_dof,
-        })
+            field_of_view: fov,
+        };
+        camera.field_of_view = camera.measured_field_of_view();
+        Ok(camera)
+    }
+
+    /// The angle the image actually spans across the `[−1, 1]` square: between the green chief rays
+    /// (no lens, no enhance) at screen `(−1, 0)` and `(1, 0)`, and at `(0, −1)` and `(0, 1)`, the
+    /// narrower of the two, at the narrower end of a zoom. It is `fov` unless distortion, shift or the
+    /// green channel's `transverse` magnification reshape the image; a pair with an end beyond the
+    /// distortion's fold is left out (and with both left out, `fov` stands).
+    fn measured_field_of_view(&self) -> f32 {
+        let narrower = self.fov_end.map_or(self.fov, |e| e.min(self.fov));
+        let inv_m = f64::from(self.inv_magnification[GREEN]);
+        if self.distortion.is_none() && self.shift == (0.0, 0.0) && inv_m == 1.0 {
+            return narrower;
+        }
+        let chief = |s: [f64; 2], d: f64| -> Option<[f64; 3]> {
+            let p = [
+                (s[0] + f64::from(self.shift.0)) * inv_m,
+                (s[1] + f64::from(self.shift.1)) * inv_m,
+            ];
+            let u = match &self.distortion {
+                Some(dist) => dist.ideal(p)?,
+                None => p,
+            };
+            let l = (u[0] * u[0] + u[1] * u[1] + d * d).sqrt();
+            Some([u[0] / l, u[1] / l, d / l])
+        };
+        let angle = |a: [f64; 3], b: [f64; 3]| {
+            let c = [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ];
+            let sin = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
+            let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+            sin.atan2(cos).to_degrees()
+        };
+        let extent = |fov: f32| -> f32 {
+            let d = f64::from(screen_distance(fov));
+            [([-1.0, 0.0], [1.0, 0.0]), ([0.0, -1.0], [0.0, 1.0])]
+                .into_iter()
+                .filter_map(|(a, b)| Some(angle(chief(a, d)?, chief(b, d)?)))
+                .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.min(e))))
+                .map_or(fov, |e| e as f32)
+        };
+        let start = extent(self.fov);
+        self.fov_end.map_or(start, |end| start.min(extent(end)))
     }
 
     /// True when the thin lens is on.
@@ -539,9 +592,7 @@ impl Projection for PxrCamera {
         match property {
             ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Perspective)),
             ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(
-                self.fov_end.map_or(self.fov, |e| e.min(self.fov)),
-            )),
+            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.field_of_view)),
             ProjectionProperty::FStop
             | ProjectionProperty::FocalLength
             | ProjectionProperty::FocalDistance
@@ -1057,8 +1108,42 @@ mod tests {
         // Dicing is that of the un-enhanced camera.
         assert_eq!(
             a.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(70.0))
+            b.property(ProjectionProperty::FieldOfView)
         );
+    }
+
+    #[test]
+    fn field_of_view_is_the_angle_the_rays_span() {
+        let format = Format::new(64, 48);
+        let fov =
+            |params: &[(&str, &str)]| match make(params, format).property(ProjectionProperty::FieldOfView) {
+                Some(PropertyValue::Float(f)) => f64::from(f),
+                other => panic!("{other:?}"),
+            };
+        let half = (35f64).to_radians().tan();
+        // Radial distortion: the square's edge (radius 1) is imaged from ideal radius 1/(1 + k1 + k2).
+        for (k1, k2) in [(-0.2, 0.0), (0.15, 0.0), (0.05, -0.02)] {
+            let want = 2.0 * (half / (1.0 + k1 + k2)).atan().to_degrees();
+            let got = fov(&[
+                ("float fov", "70"),
+                ("float radial1", &k1.to_string()),
+                ("float radial2", &k2.to_string()),
+            ]);
+            assert!((got - want).abs() < 1e-3, "k1 {k1} k2 {k2}: {got} vs {want}");
+        }
+        // Shift: the angle between the rays through (−1 + s, 0) and (1 + s, 0) on the plane at 1/half.
+        let s = 0.4;
+        let want = ((1.0 + s) * half).atan().to_degrees() - ((-1.0 + s) * half).atan().to_degrees();
+        let got = fov(&[("float fov", "70"), ("float shiftX", "0.4")]);
+        assert!((got - want).abs() < 1e-3, "{got} vs {want}");
+        // The x axis alone is distorted: the undistorted y pair is the narrower.
+        assert!((fov(&[("float fov", "70"), ("float assymX", "-0.3")]) - 70.0).abs() < 1e-3);
+        // Green magnified by 1.1: the square sees 1/1.1 of the ideal plane.
+        let want = 2.0 * (half / 1.1).atan().to_degrees();
+        let got = fov(&[("float fov", "70"), ("color transverse", "1 1.1 1")]);
+        assert!((got - want).abs() < 1e-3, "{got} vs {want}");
+        // Without any of those, exactly fov (the narrower end of a zoom).
+        assert_eq!(fov(&[("float fov", "70"), ("float fovEnd", "60")]), 60.0);
     }
 
     #[test]
