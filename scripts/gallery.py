@@ -68,11 +68,18 @@ TILES: dict[str, list[Tile]] = {
     "PxrCylinderCamera": [Tile("360 x 90", ["hsweep=360", "vsweep=90"], 2.0)],
     "PxrPanini": [Tile("fov 150, compression 1", ["fov=150", "compression=1"], 2.0)],
     "OmnidirectionalStereo": [Tile("left eye, 360 x 180", ["eye=left"], 2.0)],
-    "PxrRollingShutter": [Tile("sweep down", ["sweep=down", "duration=1"])],
+    # The sweep rewrites only each ray's time, so a still scene looks as through PxrPerspective.
+    "PxrRollingShutter": [Tile("sweep down over half the shutter (still scene)", ["sweep=down", "duration=0.5"])],
     "Fisheye": [
         Tile("equidistant 180", ["mapping=equidistant", "fov=180"], 1.0),
         Tile("stereographic 220", ["mapping=stereographic", "fov=220"], 1.0),
         Tile("equisolid 10.5 mm on 36 mm", ["mapping=equisolid"], 1.5),
+        Tile("orthographic 180", ["mapping=orthographic", "fov=180"], 1.0),
+        Tile(
+            "polynomial (Cycles' k0..k4), 200",
+            ["mapping=polynomial", "polynomial=0,-0.1,0,-0.0001,0", "fov=200"],
+            1.0,
+        ),
     ],
     "MirrorBall": [Tile("", [], 1.0)],
     "EquiangularCubemapFace": [Tile("front face", [], 1.0)],

@@ -3,7 +3,6 @@
 //! Argument handling and printing only; the checks are `obscura_sdk::contract`.
 
 use clap::Args;
-use obscura_host::cli_params::push_param_arg;
 use obscura_host::plugins::{PluginSearch, ensure};
 use obscura_projections::builtin_registry;
 use obscura_sdk::contract::{CheckOptions, check_registered};
@@ -14,16 +13,26 @@ use obscura_sdk::{Format, ParamList, ScreenWindow};
 pub struct CheckArgs {
     /// The projection: a registered name (PxrPerspective), a plugin name found along the plugin path,
     /// or the path of a plugin library.
-    pub projection: String,
+    #[arg(required_unless_present = "calibration", conflicts_with = "calibration")]
+    pub projection: Option<String>,
+    /// Check the camera of a calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
+    /// camchain.yaml, OCamCalib calib_results.txt) as CalibratedCamera; --param adds to or replaces
+    /// its parameters.
+    #[arg(long, value_name = "FILE")]
+    pub calibration: Option<std::path::PathBuf>,
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    #[arg(long, value_name = "ID", requires = "calibration")]
+    pub camera: Option<String>,
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
     #[arg(long = "param", value_name = "PARAM")]
     pub params: Vec<String>,
     /// Print the report as JSON (same content) instead of text.
     #[arg(long)]
     pub json: bool,
-    /// Image size sampled, WIDTHxHEIGHT: every pixel centre plus a margin around the window.
-    #[arg(long, default_value = "96x72", value_parser = parse_format)]
-    pub format: (u32, u32),
+    /// Image size sampled, WIDTHxHEIGHT: every pixel centre plus a margin around the window
+    /// [default: 96x72; with --calibration, 96 wide in the calibration image's aspect].
+    #[arg(long, value_parser = parse_format)]
+    pub format: Option<(u32, u32)>,
     /// Pixel aspect ratio (pixel width / height).
     #[arg(long, default_value_t = 1.0)]
     pub pixel_aspect: f32,
@@ -60,8 +69,8 @@ fn parse_format(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
-/// The options the arguments describe, checked.
-fn options(a: &CheckArgs) -> Result<CheckOptions, String> {
+/// The options the arguments describe, checked; `calibrated` is the calibration image's size, if any.
+fn options(a: &CheckArgs, calibrated: Option<(u32, u32)>) -> Result<CheckOptions, String> {
     if !(a.pixel_aspect.is_finite() && a.pixel_aspect > 0.0) {
         return Err(format!(
             "--pixel-aspect {}: expected a positive number",
@@ -80,10 +89,14 @@ fn options(a: &CheckArgs) -> Result<CheckOptions, String> {
         }
         Some(other) => return Err(format!("--screen-window: expected 4 numbers, got {other:?}")),
     };
+    let (width, height) = a.format.unwrap_or(match calibrated {
+        Some((w, h)) => (96, ((96.0 * f64::from(h) / f64::from(w)).round() as u32).max(1)),
+        None => (96, 72),
+    });
     let mut opts = CheckOptions {
         format: Format {
-            width: a.format.0,
-            height: a.format.1,
+            width,
+            height,
             pixel_aspect: a.pixel_aspect,
         },
         screen_window,
@@ -108,16 +121,24 @@ fn options(a: &CheckArgs) -> Result<CheckOptions, String> {
 /// Runs `obscura check`: prints the report (text or JSON) on stdout; `Err` when the projection cannot
 /// be found or created, or when any check failed (so the exit code is 0 only when clean).
 pub fn run(a: &CheckArgs, search: &PluginSearch) -> Result<(), String> {
-    let opts = options(a)?;
     let mut registry = builtin_registry();
-    // A registered name is used as is; a path, or a name found as <Name>.so along --plugin-path and
-    // OBSCURA_PLUGIN_PATH, is loaded into the registry first.
-    let name = ensure(&mut registry, &a.projection, search).map_err(|e| e.to_string())?;
+    let (name, mut params, calibrated) = match (&a.calibration, &a.projection) {
+        (Some(path), _) => {
+            let (c, list) = crate::load_calibration(path, a.camera.as_deref(), a.json)?;
+            (crate::CALIBRATED.to_string(), list, Some((c.width, c.height)))
+        }
+        // A registered name is used as is; a path, or a name found as <Name>.so along
+        // --plugin-path and OBSCURA_PLUGIN_PATH, is loaded into the registry first.
+        (None, Some(projection)) => (
+            ensure(&mut registry, projection, search).map_err(|e| e.to_string())?,
+            ParamList::new(),
+            None,
+        ),
+        (None, None) => return Err("expected a projection or --calibration FILE".into()),
+    };
+    let opts = options(a, calibrated)?;
     let factory = registry.find(&name).map_err(|e| e.to_string())?;
-    let mut params = ParamList::new();
-    for p in &a.params {
-        push_param_arg(&mut params, p, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
-    }
+    crate::merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
     // Panics are caught and reported by the checker; the default hook would print each one as well.
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));

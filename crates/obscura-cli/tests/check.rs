@@ -141,3 +141,61 @@ fn bad_sampling_options_are_refused() {
         assert!(!text(&run.stderr).is_empty(), "{args:?}");
     }
 }
+
+fn fixture(name: &str) -> String {
+    concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../obscura-calibration/tests/fixtures/"
+    )
+    .to_string()
+        + name
+}
+
+/// Every camera of every calibration fixture keeps the contract (its fold regions culled, its
+/// properties honest), checked straight from the file, sampled in the calibration image's aspect.
+#[test]
+fn every_fixture_calibration_passes_from_its_file() {
+    let cases: [(&str, &[&str]); 5] = [
+        ("cameras.txt", &["1", "2", "3", "7"]),
+        ("camchain.yaml", &["cam0", "cam1", "cam2", "cam3", "cam4"]),
+        ("opencv_calibration.yml", &[""]),
+        ("opencv_calibration.json", &[""]),
+        ("calib_results.txt", &[""]),
+    ];
+    for (file, cameras) in cases {
+        for camera in cameras.iter().copied() {
+            let path = fixture(file);
+            let mut args = vec!["check", "--calibration", &path, "--samples", "1"];
+            if !camera.is_empty() {
+                args.extend(["--camera", camera]);
+            }
+            let run = obscura(&args);
+            let (out, err) = (text(&run.stdout), text(&run.stderr));
+            assert_eq!(run.status.code(), Some(0), "{file} {camera}:\n{out}\n{err}");
+            assert!(out.starts_with("obscura check CalibratedCamera: 96x"), "{out}");
+            assert!(out.trim_end().ends_with("clean: no check failed"), "{out}");
+        }
+    }
+    // 1600x1200 (COLMAP camera 2) is sampled 96x72; a 752x480 one 96x61.
+    let run = obscura(&["check", "--calibration", &fixture("cameras.txt"), "--camera", "2"]);
+    assert!(text(&run.stdout).contains(": 96x72 pixels"));
+    let run = obscura(&[
+        "check",
+        "--calibration",
+        &fixture("camchain.yaml"),
+        "--camera",
+        "cam0",
+    ]);
+    assert!(text(&run.stdout).contains(": 96x61 pixels"));
+    // A missing file names itself; a projection and a calibration together are refused.
+    let run = obscura(&["check", "--calibration", &fixture("nope.yml")]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(text(&run.stderr).contains("nope.yml"), "{}", text(&run.stderr));
+    let run = obscura(&[
+        "check",
+        "PxrPerspective",
+        "--calibration",
+        &fixture("cameras.txt"),
+    ]);
+    assert!(!run.status.success());
+}

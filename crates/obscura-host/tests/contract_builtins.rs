@@ -117,6 +117,29 @@ fn pxrcamera_distortion_shift_and_lens_keep_the_contract() {
     }
 }
 
+/// Regression: PxrRollingShutter took fov up to 180 while the host's default rays stop at 179°, so
+/// its `unproject` inverted a camera the rays did not come from (20 pixels off at 179.5).
+#[test]
+fn the_rolling_shutter_base_stops_where_the_hosts_pinhole_does() {
+    let mut registry = builtin_registry();
+    let p = params(&[
+        ("float fov", "179"),
+        ("string sweep", "left"),
+        ("float duration", "0.5"),
+    ]);
+    let report = check_registered(&mut registry, "PxrRollingShutter", &p, &options()).unwrap();
+    assert!(report.is_clean(), "{report}");
+    let err = check_registered(
+        &mut registry,
+        "PxrRollingShutter",
+        &params(&[("float fov", "179.5")]),
+        &options(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("\"fov\"") && err.contains("179"), "{err}");
+}
+
 #[test]
 fn a_zoom_passes_with_the_narrower_field_of_view_either_way_round() {
     let mut registry = builtin_registry();

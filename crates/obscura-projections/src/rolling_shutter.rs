@@ -223,9 +223,16 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
             .doc("the default camera the host makes the rays with; only their time is rewritten"),
     );
     table.push(
+        // The host's default pinhole stops at 179° (a pinhole cannot show 180°): a wider base would
+        // describe rays the host does not make, and `unproject` would invert the wrong camera.
         ParamDecl::float("fov", 90.0)
-            .range(ValueRange::open(0.0, 180.0))
-            .doc("perspective base: field of view in degrees across the screen window's [-1, 1] square"),
+            .range(ValueRange {
+                min: 0.0,
+                max: 179.0,
+                min_inclusive: false,
+                max_inclusive: true,
+            })
+            .doc("perspective base: field of view in degrees across the screen window's [-1, 1] square (at most 179, the host's default pinhole)"),
     );
     table.extend(dof::params());
     table
