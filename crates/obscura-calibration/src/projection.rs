@@ -107,7 +107,7 @@ use obscura_sdk::{
 };
 
 use crate::NAME;
-use crate::models::{CHUNK, CameraModel, LaneRay, MODEL_NAMES, PixelConvention, PixelRay, RayKernel};
+use crate::models::{CHUNK, CameraModel, LaneRay, MODEL_NAMES, MODELS, PixelConvention, PixelRay, RayKernel};
 
 /// The default camera: a 90° (horizontal) pinhole on a 640×480 image.
 const DEFAULT_PARAMS: [f32; 4] = [320.0, 320.0, 320.0, 240.0];
@@ -154,6 +154,34 @@ impl ProjectionFactory for CalibratedCameraFactory {
 
     fn param_table(&self) -> &[ParamDecl] {
         &TABLE
+    }
+
+    /// Each model's `params`, by name and in order, and the pixel convention "auto" picks for it.
+    fn listing_notes(&self) -> Vec<String> {
+        let width = MODELS.iter().map(|m| m.name.len()).max().unwrap_or(0);
+        let mut lines = vec!["params of each model (in order; [ ] = optional tail):".to_string()];
+        lines.extend(MODELS.iter().enumerate().map(|(i, m)| {
+            let id = if i < 18 {
+                format!("COLMAP {i:>2}")
+            } else {
+                "         ".to_string()
+            };
+            let extra = if m.polynomials {
+                " + polynomial, inversePolynomial"
+            } else {
+                ""
+            };
+            let convention = match m.convention {
+                PixelConvention::Colmap => "colmap",
+                PixelConvention::OpenCv => "opencv",
+                PixelConvention::Matlab => "matlab",
+            };
+            format!(
+                "  {:width$}  {id}  pixels {convention:6}  {}{extra}",
+                m.name, m.params
+            )
+        }));
+        lines
     }
 
     fn create_projection(

@@ -694,3 +694,26 @@ fn the_malformed_fixture_names_its_line() {
         "{e}"
     );
 }
+
+/// Regression: values out of a model's range (not just malformed text) were reported by the
+/// projection later, without the file or the line.
+#[test]
+fn values_out_of_range_name_the_file_and_line() {
+    let colmap = "# cameras\n\n1 PINHOLE 640 480 -500 500 320 240\n2 FOV 640 480 500 500 320 240 4.0\n";
+    for (camera, words) in [
+        ("1", &["PINHOLE", "fx", "-500"][..]),
+        ("2", &["FOV", "omega", "4"][..]),
+    ] {
+        let c = parse(colmap, "cameras.txt", Some(camera)).unwrap();
+        let e = c.param_list().unwrap_err();
+        let line = if camera == "1" { 3 } else { 4 };
+        assert_error(&e, "cameras.txt", line, words);
+    }
+    let kalibr = "cam0:\n  camera_model: ds\n  distortion_coeffs: []\n  distortion_model: none\n  \
+                  intrinsics: [-1.5, 0.59, 158.3, 158.2, 254.9, 256.9]\n  resolution: [512, 512]\n";
+    let e = parse(kalibr, "camchain.yaml", None)
+        .unwrap()
+        .param_list()
+        .unwrap_err();
+    assert_error(&e, "camchain.yaml", 5, &["DOUBLE_SPHERE", "xi", "-1.5"]);
+}

@@ -406,3 +406,23 @@ fn every_ray_matches_opencvs_own_undistortion() {
         assert!(text.contains("19200 rays"), "{name}: {text}");
     }
 }
+
+/// `obscura plugins CalibratedCamera` names every model's parameters in order, not just the list's
+/// type: a user reads there what `params` holds for the model they chose.
+#[test]
+fn the_listing_names_every_models_parameters() {
+    let run = Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(["plugins", "CalibratedCamera"])
+        .output()
+        .unwrap();
+    assert!(run.status.success());
+    let out = String::from_utf8_lossy(&run.stdout);
+    for (i, m) in obscura_calibration::MODELS.iter().enumerate() {
+        let line = out
+            .lines()
+            .find(|l| l.split_whitespace().next() == Some(m.name))
+            .unwrap_or_else(|| panic!("no line for {} in\n{out}", m.name));
+        assert!(line.contains(m.params), "{line}");
+        assert_eq!(line.contains(&format!("COLMAP {i:>2}")), i < 18, "{line}");
+    }
+}

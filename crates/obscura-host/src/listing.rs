@@ -36,6 +36,9 @@ pub fn describe(factory: &dyn ProjectionFactory) -> String {
             p2 = w2 - allowed.chars().count(),
         ));
     }
+    for line in factory.listing_notes() {
+        out.push_str(&format!("    {line}\n"));
+    }
     out
 }
 

@@ -109,6 +109,13 @@ pub trait ProjectionFactory: Send + Sync {
     /// One line saying what the projection is, for `obscura plugins`.
     fn summary(&self) -> &str;
 
+    /// Further lines `obscura plugins` prints after the parameter table, for what one line per
+    /// parameter cannot say (e.g. which values a list parameter holds for each choice of another).
+    /// None by default.
+    fn listing_notes(&self) -> Vec<String> {
+        Vec::new()
+    }
+
     /// The parameter table (`GetParamTable`): every parameter the projection takes.
     fn param_table(&self) -> &[ParamDecl];
 

@@ -159,6 +159,23 @@ impl Calibration {
             Some(self.source.clone()),
         )
         .map_err(|e| err(entry_line, e))?;
+        // The values themselves (a focal length ≤ 0, ξ out of range, …) are checked here, where the
+        // line they came from is known, exactly as the projection will check them (f32 as stored).
+        let values =
+            |numbers: &[Number]| -> Vec<f64> { numbers.iter().map(|n| f64::from(n.value as f32)).collect() };
+        crate::models::CameraModel::new(
+            &self.model,
+            &values(&self.params),
+            &values(&self.polynomial),
+            &values(&self.inverse_polynomial),
+            f64::from(self.width),
+            f64::from(self.height),
+        )
+        .map_err(|message| CalibrationFileError {
+            file: self.file.clone(),
+            line: Some(entry_line),
+            message,
+        })?;
         Ok(list)
     }
 
