@@ -32,9 +32,9 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, PoisonError};
 
 use obscura_sdk::abi::{
-    self, ABI_VERSION, CreateFn, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NUL, EntryFn, FinalizeFn, InitFn,
-    OwnedEnvironment, OwnedParamList, ProjectFn, ProjectionDescriptor, PropertyFn, RawContext,
-    RawPropertyValue, SynchronizeFn, UndecodableProperty, UnprojectFn, collect_message,
+    self, ABI_VERSION, CreateFn, DESCRIPTOR_V1_SIZE, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NUL, EntryFn,
+    FinalizeFn, InitFn, OwnedEnvironment, OwnedParamList, ProjectFn, ProjectionDescriptor, PropertyFn,
+    RawContext, RawPropertyValue, SynchronizeFn, UndecodableProperty, UnprojectFn, collect_message,
 };
 use obscura_sdk::{
     ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
@@ -417,16 +417,26 @@ fn check_descriptor(path: &Path, d: *const ProjectionDescriptor) -> Result<Loade
             expected: ABI_VERSION,
         });
     }
-    if (size as usize) < size_of::<ProjectionDescriptor>() {
+    if (size as usize) < DESCRIPTOR_V1_SIZE {
         return Err(PluginLoadError::Size {
             path,
             found: size,
-            minimum: size_of::<ProjectionDescriptor>(),
+            minimum: DESCRIPTOR_V1_SIZE,
             version,
         });
     }
-    // SAFETY: the plugin promises `size` bytes, at least the whole current layout.
-    let desc = unsafe { d.read() };
+    // A plugin built with an older header of this generation has a shorter descriptor: copy what it
+    // has into a zeroed one, so fields appended since read as absent (NULL, no function).
+    let desc = {
+        let mut out = std::mem::MaybeUninit::<ProjectionDescriptor>::zeroed();
+        let n = (size as usize).min(size_of::<ProjectionDescriptor>());
+        // SAFETY: the plugin promises `size` readable bytes at `d`; `out` has room for `n`. All-zero
+        // is a valid ProjectionDescriptor (integers, raw pointers and Option<fn> only).
+        unsafe {
+            std::ptr::copy_nonoverlapping(d.cast::<u8>(), out.as_mut_ptr().cast::<u8>(), n);
+            out.assume_init()
+        }
+    };
     let invalid = |reason: String| PluginLoadError::Invalid {
         path: path.clone(),
         reason,

@@ -112,10 +112,20 @@ fn a_descriptor_smaller_than_its_layout_is_refused() {
     let e = load_err(&p);
     let want = std::mem::size_of::<ProjectionDescriptor>();
     assert!(
-        matches!(e, PluginLoadError::Size { found, minimum, .. } if found as usize == want - 8 && minimum == want),
+        matches!(e, PluginLoadError::Size { found, minimum, .. }
+            if found as usize == want - 8 && minimum == obscura_sdk::abi::DESCRIPTOR_V1_SIZE),
         "{e:?}"
     );
     assert!(e.to_string().contains("mismatched header"), "{e}");
+}
+
+/// The smallest descriptor the host accepts is generation 1's first layout, pinned: appending a field
+/// to the descriptor must not raise it (plugins built before the append keep loading).
+#[test]
+fn the_first_layouts_size_is_pinned() {
+    #[cfg(target_pointer_width = "64")]
+    assert_eq!(obscura_sdk::abi::DESCRIPTOR_V1_SIZE, 104);
+    assert!(std::mem::size_of::<ProjectionDescriptor>() >= obscura_sdk::abi::DESCRIPTOR_V1_SIZE);
 }
 
 #[test]
@@ -140,6 +150,12 @@ fn null_pointers_in_the_descriptor_are_refused_before_any_call() {
             "BAD_DEFAULT",
             "parameter table row 0: parameter \"scale\": the default 1 is outside its own range",
         ),
+        // Regression: the counts were used to read memory before they were checked.
+        (
+            "SIZEOF_DEFAULT",
+            "parameter \"scale\": default_count 4 but a float default has 1 scalar(s)",
+        ),
+        ("HUGE_CHOICES", "parameter \"scale\": num_choices"),
     ] {
         let (_d, p) = broken(defect);
         let msg = load_err(&p).to_string();

@@ -307,6 +307,15 @@ pub struct ProjectionDescriptor {
     pub unproject: Option<UnprojectFn>,
 }
 
+/// The size of generation 1's first descriptor layout (64-bit targets: through `unproject`), the
+/// smallest `struct_size` the host accepts. Fields appended within the generation lie beyond it; a
+/// descriptor built with an older header is read up to its own `struct_size` and the rest is taken
+/// as absent (zero: NULL pointers, no function). Pinned: it never changes within a generation.
+pub const DESCRIPTOR_V1_SIZE: usize = 13 * size_of::<usize>();
+
+// Every Option<fn> and pointer field is valid all-zero, which is what an absent appended field reads as.
+const _: () = assert!(size_of::<ProjectionDescriptor>() >= DESCRIPTOR_V1_SIZE);
+
 // ------------------------------------------------------------------------------------------------
 // Enumerations.
 
@@ -561,6 +570,12 @@ unsafe fn read_value(
     }
 }
 
+/// Most scalars a `float[]` parameter's default may hold: more is taken for a corrupt count.
+pub const MAX_LIST_DEFAULT: usize = 1 << 16;
+
+/// Most choices a string parameter may offer: more is taken for a corrupt count.
+pub const MAX_CHOICES: usize = 1024;
+
 /// Reads one row of a plugin's parameter table, checking it: a name, a known type, a consistent
 /// array length and default, a well-formed range that holds the default, choices only on strings.
 ///
@@ -582,13 +597,42 @@ pub unsafe fn decl_from_raw(d: &RawParamDecl) -> Result<ParamDecl, String> {
         ARRAY_SINGLE => (None, false),
         ARRAY_VARIABLE if ty == ParamType::Float => (None, true),
         ARRAY_VARIABLE => return Err(bad(format!("only float[] may have variable length, not {ty}[]"))),
-        n if n > 0 => (Some(n as usize), false),
+        n if n > 0 && n as usize <= MAX_LIST_DEFAULT => (Some(n as usize), false),
+        n if n > 0 => {
+            return Err(bad(format!("array length {n} (at most {MAX_LIST_DEFAULT})")));
+        }
         n => {
             return Err(bad(format!(
                 "array length {n} (expected 0, -1 or a positive length)"
             )));
         }
     };
+    // The counts are checked before anything is read through them: a C author's slip (a sizeof
+    // where a length belongs) must be an error naming the parameter, not a read past the array.
+    let comps = ty.components();
+    if variable_len {
+        if d.default_count > MAX_LIST_DEFAULT || !d.default_count.is_multiple_of(comps) {
+            return Err(bad(format!(
+                "default_count {} for float[] (expected a multiple of {comps}, at most {MAX_LIST_DEFAULT})",
+                d.default_count
+            )));
+        }
+    } else {
+        let need = comps * array_len.unwrap_or(1);
+        if d.default_count != need {
+            return Err(bad(format!(
+                "default_count {} but a {ty}{} default has {need} scalar(s)",
+                d.default_count,
+                array_len.map(|n| format!("[{n}]")).unwrap_or_default()
+            )));
+        }
+    }
+    if d.num_choices > MAX_CHOICES {
+        return Err(bad(format!(
+            "num_choices {} (at most {MAX_CHOICES}; a sizeof where a count belongs?)",
+            d.num_choices
+        )));
+    }
     // SAFETY: see above.
     let default = unsafe {
         read_value(
@@ -643,7 +687,6 @@ pub unsafe fn decl_from_raw(d: &RawParamDecl) -> Result<ParamDecl, String> {
         choices: choices.into_iter().map(Cow::Owned).collect(),
         doc: Cow::Owned(doc),
     };
-    let comps = ty.components();
     let count_ok = if variable_len {
         decl.default.len().is_multiple_of(comps)
     } else {
@@ -1490,7 +1533,11 @@ mod tests {
         let mut row = raw.rows()[0];
         row.default_count = 2;
         let e = unsafe { decl_from_raw(&row) }.unwrap_err();
-        assert!(e.contains("parameter \"fov\"") && e.contains("needs 1"), "{e}");
+        assert!(
+            e.contains("parameter \"fov\"")
+                && e.contains("default_count 2 but a float default has 1 scalar(s)"),
+            "{e}"
+        );
         let mut row = raw.rows()[0];
         row.range_max = 10.0;
         assert!(

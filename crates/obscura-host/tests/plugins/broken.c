@@ -19,6 +19,8 @@
  *   BAD_DEEP_METRIC   create_projection writes deep metric 7 into the environment
  *   NAN_OUTPUT        project writes NaN directions right of the screen centre
  *   PROJECT_ERROR     project returns OBSCURA_ERROR with a message on every batch
+ *   SIZEOF_DEFAULT    default_count is sizeof the default array (4) instead of its length (1)
+ *   HUGE_CHOICES      num_choices is absurd (and choices NULL): refused before anything is read
  */
 #include <math.h>
 #include <stddef.h>
@@ -34,7 +36,11 @@ static const ObscuraParamDecl PARAMS[] = {
         .name = "scale",
         .doc = "unused",
         .default_floats = SCALE_DEFAULT,
+#ifdef SIZEOF_DEFAULT
+        .default_count = sizeof(SCALE_DEFAULT), /* a C slip: bytes, not values */
+#else
         .default_count = 1,
+#endif
 #ifdef BAD_DEFAULT
         .range_min = 2.0,
 #else
@@ -44,6 +50,9 @@ static const ObscuraParamDecl PARAMS[] = {
         .type = OBSCURA_PARAM_FLOAT,
         .array_len = OBSCURA_ARRAY_SINGLE,
         .range_flags = OBSCURA_RANGE_LIMITED | OBSCURA_RANGE_MIN_INCLUSIVE | OBSCURA_RANGE_MAX_INCLUSIVE,
+#ifdef HUGE_CHOICES
+        .num_choices = (size_t)-1 / 2, /* never read: refused before the (NULL) array is touched */
+#endif
     },
 };
 
