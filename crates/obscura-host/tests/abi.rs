@@ -444,7 +444,8 @@ fn a_path_loads_directly_and_a_second_load_of_the_name_is_a_duplicate() {
 
 /// Every struct, field offset and constant of `projection.h`, with the values the Rust side has.
 type Sizes = Vec<(&'static str, usize)>;
-type Offsets = Vec<(&'static str, &'static str, usize)>;
+/// (C struct, C field, offset, the field's C type spelled from its Rust type).
+type Offsets = Vec<(&'static str, &'static str, usize, String)>;
 type Constants = Vec<(&'static str, i64)>;
 
 fn header_facts() -> (Sizes, Offsets, Constants) {
@@ -468,13 +469,19 @@ fn header_facts() -> (Sizes, Offsets, Constants) {
     ];
     macro_rules! fields {
         ($c:literal, $r:ty: $($cf:ident => $rf:ident),* $(,)?) => {
-            vec![$(($c, stringify!($cf), offset_of!($r, $rf))),*]
+            vec![$(($c, stringify!($cf), offset_of!($r, $rf), c_type_of(|s: &$r| &s.$rf))),*]
         };
     }
     let mut offsets = Vec::new();
     offsets.extend(fields!("ObscuraPoint2", Point2: x => x, y => y));
     offsets.extend(fields!("ObscuraVec3", Vec3: x => x, y => y, z => z));
     offsets.extend(fields!("ObscuraRgb", obscura_sdk::Rgb: r => r, g => g, b => b));
+    offsets.push((
+        "ObscuraMatrix4",
+        "m",
+        0,
+        c_type_of(|s: &obscura_sdk::Matrix4| &s.0),
+    ));
     offsets.extend(fields!("ObscuraRayGeometry", RayGeometry:
         origin => origin, origin_radius => origin_radius, direction => direction,
         ray_spread => ray_spread, min_dist => min_dist, max_dist => max_dist));
@@ -569,6 +576,126 @@ fn header_facts() -> (Sizes, Offsets, Constants) {
     (sizes, offsets, constants)
 }
 
+/// The C spelling (a C++ type-id) of a Rust type that crosses the ABI.
+trait CType {
+    fn c() -> String;
+}
+
+macro_rules! c_types {
+    ($($t:ty => $s:literal),* $(,)?) => { $(impl CType for $t { fn c() -> String { $s.into() } })* };
+}
+
+c_types!(
+    () => "void", f32 => "float", f64 => "double", i32 => "int32_t", u32 => "uint32_t", usize => "size_t",
+    std::ffi::c_char => "char", std::ffi::c_void => "void",
+    Point2 => "ObscuraPoint2", Vec3 => "ObscuraVec3", obscura_sdk::Rgb => "ObscuraRgb",
+    obscura_sdk::Matrix4 => "ObscuraMatrix4", RayGeometry => "ObscuraRayGeometry",
+    abi::ErrorSink => "ObscuraErrorSink", RawParamDecl => "ObscuraParamDecl", RawParam => "ObscuraParam",
+    RawParamList => "ObscuraParamList", RawMotionSample => "ObscuraMotionSample",
+    RawEnvironment => "ObscuraEnvironment", RawContext => "ObscuraProjectionContext",
+    RawPropertyValue => "ObscuraPropertyValue", ProjectionDescriptor => "ObscuraProjectionDescriptor",
+);
+
+impl<T: CType> CType for *const T {
+    fn c() -> String {
+        format!("{} const *", T::c())
+    }
+}
+
+impl<T: CType> CType for *mut T {
+    fn c() -> String {
+        format!("{} *", T::c())
+    }
+}
+
+impl<T: CType, const N: usize> CType for [T; N] {
+    fn c() -> String {
+        // float[4] inside [_; 4] is float[4][4]: the new extent goes before the inner ones.
+        let inner = T::c();
+        match inner.find('[') {
+            Some(i) => format!("{}[{N}]{}", &inner[..i], &inner[i..]),
+            None => format!("{inner}[{N}]"),
+        }
+    }
+}
+
+macro_rules! c_fn_types {
+    ($($a:ident),+) => {
+        impl<R: CType, $($a: CType),+> CType for unsafe extern "C" fn($($a),+) -> R {
+            fn c() -> String {
+                format!("{} (*)({})", R::c(), [$($a::c()),+].join(", "))
+            }
+        }
+        impl<R: CType, $($a: CType),+> CType for Option<unsafe extern "C" fn($($a),+) -> R> {
+            fn c() -> String {
+                <unsafe extern "C" fn($($a),+) -> R as CType>::c()
+            }
+        }
+    };
+}
+
+c_fn_types!(A);
+c_fn_types!(A, B);
+c_fn_types!(A, B, C);
+c_fn_types!(A, B, C, D);
+c_fn_types!(A, B, C, D, E);
+
+/// The C type of the field `get` reads, inferred from its Rust type.
+fn c_type_of<S, T: CType>(_get: fn(&S) -> &T) -> String {
+    T::c()
+}
+
+/// Every struct body in a C header, with its member names in order (comments stripped; a function
+/// pointer member is named by its `(*name)`).
+fn header_members(header: &str) -> Vec<(String, Vec<String>)> {
+    let mut text = String::new();
+    let mut rest = header;
+    while let Some(i) = rest.find("/*") {
+        text.push_str(&rest[..i]);
+        rest = rest[i..].find("*/").map_or("", |j| &rest[i + j + 2..]);
+    }
+    text.push_str(rest);
+    let text: String = text
+        .lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let mut out = Vec::new();
+    let mut rest = text.as_str();
+    while let Some(i) = rest.find("struct ") {
+        let after = &rest[i + 7..];
+        let name: String = after
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let tail = after[name.len()..].trim_start();
+        rest = after;
+        let Some(body) = tail.strip_prefix('{') else {
+            continue;
+        };
+        let end = body.find('}').expect("a closed struct body");
+        let declarator = |d: &str| {
+            let d = d.split('[').next().unwrap().trim();
+            d.rsplit(|c: char| c.is_whitespace() || c == '*')
+                .next()
+                .unwrap()
+                .to_string()
+        };
+        let members = body[..end]
+            .split(';')
+            .map(str::trim)
+            .filter(|d| !d.is_empty())
+            .flat_map(|d| match d.find("(*") {
+                Some(p) => vec![d[p + 2..].split(')').next().unwrap().trim().to_string()],
+                // `float x, y;` declares two members.
+                None => d.split(',').map(declarator).collect(),
+            })
+            .collect();
+        out.push((name, members));
+    }
+    out
+}
+
 /// A C translation unit that includes the header and asserts every fact at compile time.
 fn static_asserts(tamper: bool) -> String {
     let (sizes, offsets, constants) = header_facts();
@@ -580,11 +707,23 @@ fn static_asserts(tamper: bool) -> String {
         let size = if tamper && i == 4 { size + 4 } else { *size };
         c.push_str(&format!("OBSCURA_SA(sizeof({ty}) == {size}, \"sizeof {ty}\");\n"));
     }
-    for (ty, field, off) in offsets {
+    for (ty, field, off, _) in &offsets {
         c.push_str(&format!(
             "OBSCURA_SA(offsetof({ty}, {field}) == {off}, \"offset of {ty}.{field}\");\n"
         ));
     }
+    // C++ can name a field's type: each must be exactly the one the Rust field's type spells
+    // (function pointers with their whole signature, enumerations as int32_t).
+    c.push_str("#ifdef __cplusplus\n#include <type_traits>\n");
+    for (ty, field, _, c_type) in &offsets {
+        c.push_str(&format!(
+            "static_assert(std::is_same<decltype({ty}::{field}), {c_type}>::value, \"type of {ty}.{field}\");\n"
+        ));
+    }
+    c.push_str(&format!(
+        "static_assert(std::is_same<ObscuraProjectionEntry, {}>::value, \"ObscuraProjectionEntry\");\n#endif\n",
+        <abi::EntryFn as CType>::c()
+    ));
     for (name, value) in constants {
         c.push_str(&format!("OBSCURA_SA(({name}) == {value}, \"{name}\");\n"));
     }
@@ -620,14 +759,47 @@ fn the_header_and_the_rust_types_cannot_drift_apart() {
         "projection.h disagrees with the Rust #[repr(C)] types:\n{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    // The same facts hold for C++ authors, when a C++ compiler is at hand.
+    // The same facts hold for C++ authors, and C++ checks every field's type and every function
+    // pointer's signature too (CI installs g++; elsewhere a missing C++ compiler skips this part).
     let cxx = std::env::var("CXX").unwrap_or_else(|_| "c++".into());
     if Command::new(&cxx).arg("--version").output().is_ok() {
         let cpp = dir.path().join("layout.cpp");
         std::fs::write(&cpp, static_asserts(false)).unwrap();
         let out = compile_object(&cpp, &cxx, &["-std=c++11", "-Wall", "-Wextra", "-Werror"]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    } else {
+        eprintln!("no C++ compiler ({cxx}): field types not checked");
     }
+    // Every struct has exactly the fields the Rust side knows, in order: a field appended into
+    // tail padding (same size, same offsets) is caught here.
+    let header = std::fs::read_to_string(workspace().join("include/obscura/projection.h")).unwrap();
+    let (_, offsets, _) = header_facts();
+    let members = header_members(&header);
+    let mut structs: Vec<&str> = offsets.iter().map(|o| o.0).collect();
+    structs.dedup();
+    for name in &structs {
+        let want: Vec<&str> = offsets.iter().filter(|o| o.0 == *name).map(|o| o.1).collect();
+        let got = members
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, m)| m.iter().map(String::as_str).collect::<Vec<_>>())
+            .unwrap_or_else(|| panic!("no struct {name} in projection.h"));
+        assert_eq!(got, want, "the fields of {name} in projection.h");
+    }
+    let header_structs: Vec<&str> = members.iter().map(|(n, _)| n.as_str()).collect();
+    for name in &header_structs {
+        assert!(
+            structs.contains(name),
+            "projection.h has struct {name}, the Rust side does not"
+        );
+    }
+    // The parser sees an appended field.
+    let grown = header.replace(
+        "    float float_value;\n",
+        "    float float_value;\n    int32_t flags;\n",
+    );
+    assert_ne!(grown, header);
+    assert_ne!(header_members(&grown), members);
     // And the check itself can fail: one wrong size is a compile error naming the struct.
     let bad = dir.path().join("tampered.c");
     std::fs::write(&bad, static_asserts(true)).unwrap();
