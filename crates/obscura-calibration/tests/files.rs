@@ -582,10 +582,13 @@ fn ocamcalib_calib_results() {
 #[test]
 fn ocamcalib_errors_name_the_line_and_field() {
     let good = std::fs::read_to_string(fixture("calib_results.txt")).unwrap();
+    // Regression: a wrong length used to shift every later number and blame a later line.
     let e = error(&good.replace("13 324.287521", "14 324.287521"), "r.txt", None);
-    // With one coefficient too many announced, the centre's xc is read as invpol and all shifts left
-    // until the file ends before the image width.
-    assert!(e.message.contains("ends before the image width"), "{e}");
+    assert_error(&e, "r.txt", 7, &["invpol", "says 14", "holds 13"]);
+    let e = error(&good.replace("13 324.287521", "12 324.287521"), "r.txt", None);
+    assert_error(&e, "r.txt", 7, &["invpol", "says 12", "holds 13"]);
+    let e = error(&good.replace("5 -2.000000e+02", "6 -2.000000e+02"), "r.txt", None);
+    assert_error(&e, "r.txt", 3, &["pol", "says 6", "holds 5"]);
     let e = error(&good.replace("5 -2.000000e+02", "x -2.000000e+02"), "r.txt", None);
     assert_error(&e, "r.txt", 3, &["pol", "number of coefficients", "\"x\""]);
     let e = error(&good.replace("1.000165", "1,000165"), "r.txt", None);

@@ -118,9 +118,48 @@ fn options(a: &CheckArgs, calibrated: Option<(u32, u32)>) -> Result<CheckOptions
     Ok(opts)
 }
 
-/// Runs `obscura check`: prints the report (text or JSON) on stdout; `Err` when the projection cannot
-/// be found or created, or when any check failed (so the exit code is 0 only when clean).
-pub fn run(a: &CheckArgs, search: &PluginSearch) -> Result<(), String> {
+/// What `obscura check` ended with, for its exit code.
+pub enum Outcome {
+    /// Every check passed (exit 0).
+    Clean,
+    /// The report was printed and some check failed (exit 1); the message names them.
+    Broken(String),
+    /// The check could not run: the projection could not be found, loaded or created, or an option
+    /// was refused (exit 2; with --json the message is also printed as `{"error": …}` on stdout).
+    CouldNotRun(String),
+}
+
+/// Runs `obscura check` and says how it ended (see [`Outcome`]).
+pub fn run(a: &CheckArgs, search: &PluginSearch) -> Outcome {
+    match run_report(a, search) {
+        Ok(None) => Outcome::Clean,
+        Ok(Some(failed)) => Outcome::Broken(failed),
+        Err(e) => {
+            if a.json {
+                println!("{{\"error\": {}}}", json_string(&e));
+            }
+            Outcome::CouldNotRun(e)
+        }
+    }
+}
+
+/// `s` as a JSON string literal.
+fn json_string(s: &str) -> String {
+    let mut out = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            c if (c as u32) < 0x20 => out.push_str(&format!("\\u{:04x}", c as u32)),
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// Prints the report; `Ok(Some(message))` when a check failed, `Err` when the check could not run.
+fn run_report(a: &CheckArgs, search: &PluginSearch) -> Result<Option<String>, String> {
     let mut registry = builtin_registry();
     let (name, mut params, calibrated) = match (&a.calibration, &a.projection) {
         (Some(path), _) => {
@@ -152,21 +191,26 @@ pub fn run(a: &CheckArgs, search: &PluginSearch) -> Result<(), String> {
     }
     let failed = report.failed();
     if failed.is_empty() {
-        Ok(())
+        Ok(None)
     } else {
         let names: Vec<&str> = failed.iter().map(|k| k.id()).collect();
-        Err(format!(
+        Ok(Some(format!(
             "projection {name} broke the projection contract: {} check{} failed ({})",
             failed.len(),
             if failed.len() == 1 { "" } else { "s" },
             names.join(", ")
-        ))
+        )))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn error_messages_become_json_strings() {
+        assert_eq!(json_string("a \"b\"\\c\nd"), "\"a \\\"b\\\"\\\\c\\u000ad\"");
+    }
 
     #[test]
     fn formats_are_read_and_bad_ones_refused() {

@@ -50,7 +50,7 @@ enum Command {
     /// Write the ST-map (Nuke's STMap convention) that turns images of one projection into another.
     Stmap(Box<stmap::StmapArgs>),
     /// Check a projection against the contract (directions, times, spread, field of view, deep metric,
-    /// dicing hint, unproject, determinism, thread safety, property types); exit 0 only when clean.
+    /// dicing hint, unproject, determinism, thread safety, property types); exit 0 when clean, 1 when a check failed, 2 when it could not run.
     Check(Box<check::CheckArgs>),
 }
 
@@ -527,7 +527,14 @@ fn main() -> ExitCode {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
-        Command::Check(a) => check::run(a, &search),
+        Command::Check(a) => match check::run(a, &search) {
+            check::Outcome::Clean => Ok(()),
+            check::Outcome::Broken(e) => Err(e),
+            check::Outcome::CouldNotRun(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(2);
+            }
+        },
         Command::Plugins { name, names } => plugins(name.as_deref(), *names, &search),
     };
     match result {

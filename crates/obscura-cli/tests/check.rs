@@ -106,9 +106,10 @@ fn json_output_parses_and_says_the_same() {
 
 #[test]
 fn a_bad_param_is_a_clear_error() {
+    // Exit 2: the check could not run (1 is kept for a projection that broke the contract).
     let run = obscura(&["check", "PxrPerspective", "--param", "fvo=60"]);
     let err = text(&run.stderr);
-    assert_eq!(run.status.code(), Some(1));
+    assert_eq!(run.status.code(), Some(2));
     assert!(run.stdout.is_empty(), "{}", text(&run.stdout));
     assert!(
         err.contains("--param 'fvo=60': PxrPerspective has no parameter \"fvo\" (did you mean \"fov\"?)"),
@@ -116,15 +117,23 @@ fn a_bad_param_is_a_clear_error() {
     );
     let run = obscura(&["check", "PxrPerspective", "--param", "fov=200"]);
     let err = text(&run.stderr);
-    assert_eq!(run.status.code(), Some(1));
+    assert_eq!(run.status.code(), Some(2));
     assert!(err.contains("\"fov\"") && err.contains("out of range"), "{err}");
+    // With --json, a script reads the reason from stdout too.
+    let run = obscura(&["check", "PxrPerspective", "--param", "fov=200", "--json"]);
+    assert_eq!(run.status.code(), Some(2));
+    let out = text(&run.stdout);
+    assert!(
+        out.starts_with("{\"error\": \"") && out.contains("out of range"),
+        "{out}"
+    );
 }
 
 #[test]
 fn an_unknown_projection_is_a_clear_error() {
     let run = obscura(&["check", "PxrPerspectve"]);
     let err = text(&run.stderr);
-    assert_eq!(run.status.code(), Some(1));
+    assert_eq!(run.status.code(), Some(2));
     assert!(err.contains("did you mean \"PxrPerspective\""), "{err}");
 }
 
@@ -189,7 +198,7 @@ fn every_fixture_calibration_passes_from_its_file() {
     assert!(text(&run.stdout).contains(": 96x61 pixels"));
     // A missing file names itself; a projection and a calibration together are refused.
     let run = obscura(&["check", "--calibration", &fixture("nope.yml")]);
-    assert_eq!(run.status.code(), Some(1));
+    assert_eq!(run.status.code(), Some(2));
     assert!(text(&run.stderr).contains("nope.yml"), "{}", text(&run.stderr));
     let run = obscura(&[
         "check",

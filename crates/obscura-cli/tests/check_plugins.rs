@@ -344,8 +344,9 @@ fn measure(d: &Defect, c: &Entry, all: &[Entry]) -> Result<(), String> {
 /// What is wrong with the run of one broken build (empty when it failed exactly as it should).
 fn verdict(d: &Defect, run: &Output, out: &str, err: &str) -> Vec<String> {
     let id = d.kind.id();
-    if run.status.success() {
-        return vec!["exit code 0".into()];
+    // 1: the plugin ran and broke the contract (2 would mean the check could not run at all).
+    if run.status.code() != Some(1) {
+        return vec![format!("exit code {:?}, expected 1", run.status.code())];
     }
     let mut why = Vec::new();
     // The command's own summary names exactly the one check.

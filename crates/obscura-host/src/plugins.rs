@@ -67,7 +67,7 @@ pub enum PluginLoadError {
         reason: String,
     },
     /// The entry point returned a null descriptor.
-    #[error("{}: `{}` returned NULL: the plugin refused this host (projection ABI version {host})", path.display(), ENTRY_SYMBOL)]
+    #[error("{}: `{}` returned NULL: the plugin refused this host (projection ABI version {host}) or could not build its descriptor (see any message it printed above)", path.display(), ENTRY_SYMBOL)]
     NullDescriptor {
         /// The file.
         path: PathBuf,

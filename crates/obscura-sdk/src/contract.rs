@@ -64,7 +64,7 @@
 //! | [`CheckKind::Unproject`] | `unproject(O + D·t)` of a lens-centre ray misses its screen sample by more than 10⁻³ pixel, or is `None` |
 //! | [`CheckKind::Determinism`] | the same batches, run twice in order, give outputs that differ in any bit |
 //! | [`CheckKind::Threads`] | the same batches, run on several threads at once, give outputs that differ in any bit from the sequential run |
-//! | [`CheckKind::PropertyType`] | a property is answered with a value of another property's type |
+//! | [`CheckKind::PropertyType`] | a property is answered with a value of another property's type, or an FStop, FocalLength or FocalDistance that is NaN, zero or negative (or an infinite focal length) |
 //!
 //! A ray that breaks several per-ray rules counts once, under the first in the table's order (a NaN
 //! direction is not also a non-unit one). Only rays that pass every per-ray check (and are not culled)
@@ -317,7 +317,7 @@ impl CheckKind {
             CheckKind::Unproject => "unproject inverts project",
             CheckKind::Determinism => "same inputs, same outputs",
             CheckKind::Threads => "same outputs on several threads at once",
-            CheckKind::PropertyType => "property values of the right type",
+            CheckKind::PropertyType => "property values of the right type and range",
         }
     }
 
@@ -1270,6 +1270,13 @@ impl<'a> Checker<'a> {
                     got: format!("{v:?}"),
                     severity: 0.0,
                 }),
+                Some(PropertyValue::Float(x)) if !value_in_domain(prop, x) => types.fail(1.0, || Case {
+                    sample: None,
+                    what: prop.renderman_name().into(),
+                    expected: value_domain(prop).into(),
+                    got: format!("{x}"),
+                    severity: 0.0,
+                }),
                 Some(v) => accepted.push((prop, v)),
                 None => {}
             }
@@ -2119,6 +2126,24 @@ fn count(n: u64, unit: &str) -> String {
     }
 }
 
+/// Whether a float property's value means anything: the depth-of-field triple is positive (an
+/// f-stop or focal distance of ∞ is a pinhole or focus at infinity), a focal length finite too.
+/// FieldOfView's value is checked against the rays by its own check.
+fn value_in_domain(p: ProjectionProperty, x: f32) -> bool {
+    match p {
+        ProjectionProperty::FStop | ProjectionProperty::FocalDistance => x > 0.0,
+        ProjectionProperty::FocalLength => x > 0.0 && x.is_finite(),
+        _ => true,
+    }
+}
+
+fn value_domain(p: ProjectionProperty) -> &'static str {
+    match p {
+        ProjectionProperty::FocalLength => "a positive, finite length",
+        _ => "a positive value (∞ allowed), not NaN",
+    }
+}
+
 fn expected_type(p: ProjectionProperty) -> &'static str {
     match p {
         ProjectionProperty::DicingHint => "PropertyValue::DicingHint",
@@ -2222,6 +2247,7 @@ mod tests {
         Counter(AtomicU64),
         ThreadDependent(ThreadId),
         WrongPropertyType,
+        NanFStop,
         PanicInProject,
         PanicInUnproject,
         PanicInProperty,
@@ -2265,6 +2291,7 @@ mod tests {
                     panic!("deliberate property panic")
                 }
                 (ProjectionProperty::FieldOfView, _) => Some(PropertyValue::Float(90.0)),
+                (ProjectionProperty::FStop, Flaw::NanFStop) => Some(PropertyValue::Float(f32::NAN)),
                 _ => None,
             }
         }
@@ -2529,6 +2556,26 @@ mod tests {
         let w = r.get(CheckKind::PropertyType).worst.clone().unwrap();
         assert_eq!(w.what, "k_FieldOfView");
         assert!(w.expected.starts_with("PropertyValue::Float"), "{w:?}");
+    }
+
+    /// Regression: a NaN (or negative) f-stop passed, only its type was checked.
+    #[test]
+    fn a_nan_fstop_is_caught() {
+        let r = check(Flaw::NanFStop);
+        assert_only(&r, CheckKind::PropertyType);
+        let w = r.get(CheckKind::PropertyType).worst.clone().unwrap();
+        assert_eq!(w.what, "k_FStop");
+        assert_eq!(w.got, "NaN");
+        for (p, x, ok) in [
+            (ProjectionProperty::FStop, f32::INFINITY, true),
+            (ProjectionProperty::FStop, 0.0, false),
+            (ProjectionProperty::FocalDistance, f32::INFINITY, true),
+            (ProjectionProperty::FocalDistance, -1.0, false),
+            (ProjectionProperty::FocalLength, f32::INFINITY, false),
+            (ProjectionProperty::FocalLength, 0.05, true),
+        ] {
+            assert_eq!(value_in_domain(p, x), ok, "{p:?} {x}");
+        }
     }
 
     #[test]

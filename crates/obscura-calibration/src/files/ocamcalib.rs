@@ -10,8 +10,10 @@
 //! ```
 //!
 //! Read as `OCAMCALIB` with `params` `xc yc c d e` exactly as written (xc is OCamCalib's row
-//! coordinate), `polynomial` a0..a(N-1) and `inversePolynomial` b0..b(M-1). Like the C reader, numbers
-//! are read in sequence whatever the line breaks. The C functions take the centre in 0-based pixel
+//! coordinate), `polynomial` a0..a(N-1) and `inversePolynomial` b0..b(M-1). Each polynomial's length
+//! must match the coefficients on its line (as `export_data` writes them), so a wrong length is
+//! reported at its own line rather than shifting every later number; the remaining numbers are read
+//! in sequence whatever the line breaks, like the C reader. The C functions take the centre in 0-based pixel
 //! indices (they feed `cvRemap` directly), so `pixelConvention` is `opencv`; the MATLAB toolbox that
 //! calibrated counts pixels from 1, an offset the file format itself carries.
 
@@ -58,6 +60,17 @@ impl<'a> Tokens<'a> {
                     format!("{name}: expected the number of coefficients (1 to 64) first, got \"{t}\""),
                 )
             })?;
+        // export_data writes a polynomial's length and coefficients on one line: a length that
+        // disagrees with its own line is the error to report, not whatever it would shift further on.
+        let on_line = self.items.iter().filter(|t| t.1 == line).count() - 1;
+        if on_line != n {
+            return Err(src.err(
+                line,
+                format!(
+                    "{name}: the length says {n} coefficients but its line holds {on_line}                      (OCamCalib writes the length and the coefficients on one line)"
+                ),
+            ));
+        }
         (0..n)
             .map(|i| self.number(src, &format!("{name} coefficient {i} (of {n})")))
             .collect()
