@@ -14,20 +14,8 @@ mod solve;
 #[cfg(test)]
 mod tests;
 
-use obscura_sdk::Registry;
-
 pub use models::{CameraModel, MODEL_NAMES, MODELS, ModelInfo, PixelConvention, PixelRay, model_info};
 pub use projection::{CalibratedCamera, CalibratedCameraFactory};
 
 /// The name scenes use for the calibrated-camera projection.
 pub const NAME: &str = "CalibratedCamera";
-
-/// Adds `CalibratedCamera` to `registry`.
-///
-/// # Panics
-/// When `registry` already holds a projection named [`NAME`].
-pub fn register(registry: &mut Registry) {
-    registry
-        .register(Box::new(CalibratedCameraFactory), "")
-        .expect("CalibratedCamera is registered once");
-}

@@ -982,7 +982,7 @@ fn bad_parameters_get_clear_errors() {
 
 #[test]
 fn the_shared_contract_checker_passes_every_model() {
-    use obscura_sdk::contract::{CheckOptions, check_factory};
+    use obscura_check::{CheckOptions, check_factory};
     // The default camera at the checker's default format (another aspect: the resized camera).
     let report = check_factory(
         &CalibratedCameraFactory,

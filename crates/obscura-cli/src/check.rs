@@ -3,9 +3,9 @@
 //! Argument handling and printing only; the checks are `obscura_sdk::contract`.
 
 use clap::Args;
-use obscura_host::plugins::{PluginSearch, ensure};
-use obscura_projections::builtin_registry;
-use obscura_sdk::contract::{CheckOptions, check_registered};
+use obscura_check::{CheckOptions, check_registered};
+use obscura_plugins::builtin_registry;
+use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 /// `obscura check <name or path> [--param ...] [--json]`.

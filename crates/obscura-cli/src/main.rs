@@ -4,20 +4,22 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+use crate::params::push_param_arg;
 use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
-use obscura_host::cli_params::push_param_arg;
-use obscura_host::plugins::{PluginSearch, ensure, load_all};
-use obscura_host::raymap::{trace_ray_map, write_exr};
 use obscura_host::shutter::ShutterDesc;
-use obscura_host::{CameraDesc, CameraStage, CropWindow, listing};
-use obscura_projections::builtin_registry;
+use obscura_host::{CameraDesc, CameraStage, CropWindow};
+use obscura_plugins::builtin_registry;
+use obscura_plugins::listing;
+use obscura_plugins::loader::{PluginSearch, ensure, load_all};
 use obscura_render::integrator::PathOptions;
 use obscura_render::job;
+use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 mod check;
+mod params;
 mod stmap;
 
 /// Obscura: RenderMan-style camera projection plugins, and the host that drives them.

@@ -1,12 +1,12 @@
 //! `obscura stmap`: the ST-map between two projections (arguments only; the work is
-//! [`obscura_host::stmap`]).
+//! [`obscura_render::stmap`]).
 
 use std::path::{Path, PathBuf};
 
+use crate::params::push_param_arg;
 use clap::Args;
-use obscura_host::cli_params::push_param_arg;
-use obscura_host::plugins::{PluginSearch, ensure};
-use obscura_host::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
+use obscura_plugins::loader::{PluginSearch, ensure};
+use obscura_render::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
 use obscura_sdk::{Format, ParamList, Registry};
 
 /// Arguments of `obscura stmap`.

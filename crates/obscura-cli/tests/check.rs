@@ -24,6 +24,8 @@ fn a_builtin_passes_with_exit_code_zero_and_an_ok_line_per_check() {
     );
     for line in [
         "ok           finite directions: ",
+        "ok           no errors returned by project: ",
+        "ok           min_dist/max_dist at the clipping planes (CameraZ) or spheres (RayLength): ",
         "ok           ray_spread is half the angle between neighbouring pixels: 1728 pixels",
         "ok           FieldOfView matches the measured extent: 1 property",
         "ok           unproject inverts project: ",
@@ -31,7 +33,7 @@ fn a_builtin_passes_with_exit_code_zero_and_an_ok_line_per_check() {
     ] {
         assert!(out.contains(line), "missing {line:?} in\n{out}");
     }
-    assert_eq!(out.lines().filter(|l| l.starts_with("ok ")).count(), 16, "{out}");
+    assert_eq!(out.lines().filter(|l| l.starts_with("ok ")).count(), 18, "{out}");
     assert!(out.trim_end().ends_with("clean: no check failed"), "{out}");
     assert!(err.is_empty(), "{err}");
 }
@@ -76,7 +78,7 @@ fn json_output_parses_and_says_the_same() {
              assert d['format'] == {'width': 32, 'height': 24, 'pixel_aspect': 1}, d['format']\n\
              assert d['seed'] == 7\n\
              ids = [c['check'] for c in d['checks']]\n\
-             assert len(ids) == 16 and ids[0] == 'panic' and 'ray_spread' in ids, ids\n\
+             assert len(ids) == 18 and ids[:2] == ['panic', 'error'] and 'ray_spread' in ids and 'clipping' in ids, ids\n\
              fov = [c for c in d['checks'] if c['check'] == 'field_of_view'][0]\n\
              assert fov['status'] == 'not_checked' and fov['notes'] == ['FieldOfView not answered'], fov\n\
              assert all(c['failures'] == 0 and c['worst'] is None for c in d['checks'])\n\

@@ -16,9 +16,9 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use obscura_sdk::contract::CheckKind;
+use obscura_check::CheckKind;
 
-#[path = "../../obscura-host/tests/support/plugin_build.rs"]
+#[path = "../../obscura-plugins/tests/support/plugin_build.rs"]
 mod plugin_build;
 
 use plugin_build::{compile_c, compile_c_fisheye, copy_rust_plugin, workspace};

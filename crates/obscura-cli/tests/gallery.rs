@@ -31,7 +31,7 @@ fn every_registered_projection_has_a_gallery_tile() {
         )
     });
     let shown = tiles(&manifest);
-    let missing: Vec<String> = obscura_projections::builtin_registry()
+    let missing: Vec<String> = obscura_plugins::builtin_registry()
         .names()
         .into_iter()
         .filter(|n| !shown.contains(&n.as_str()))

@@ -11,7 +11,7 @@ use std::process::{Command, Output};
 
 use exr::prelude::read_all_flat_layers_from_file;
 
-#[path = "../../obscura-host/tests/support/plugin_build.rs"]
+#[path = "../../obscura-plugins/tests/support/plugin_build.rs"]
 mod plugin_build;
 
 use plugin_build::{compile_c_fisheye, copy_rust_plugin, lib_name};
@@ -345,7 +345,7 @@ fn plugins_lists_every_library_on_the_plugin_path_and_warns_about_broken_ones() 
     let renamed = work.path().join(lib_name("planet_v2"));
     std::fs::copy(plugins.path().join(lib_name("TinyPlanet")), &renamed).unwrap();
     let dirs = format!("{}:{}", plugins.path().display(), work.path().display());
-    let builtins = obscura_projections::builtin_registry().names();
+    let builtins = obscura_plugins::builtin_registry().names();
     let r = obscura(&["plugins", "--names"], work.path(), Some(Path::new(&dirs)));
     assert!(r.status.success());
     let names: Vec<String> = String::from_utf8_lossy(&r.stdout)

@@ -252,7 +252,7 @@ fn plugins_names_lists_every_registered_projection_one_per_line() {
         .lines()
         .map(str::to_string)
         .collect();
-    assert_eq!(listed, obscura_projections::builtin_registry().names());
+    assert_eq!(listed, obscura_plugins::builtin_registry().names());
 }
 
 /// Reads an identity map with OpenEXR's own library through its Python binding (CI installs it and

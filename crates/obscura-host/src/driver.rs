@@ -4,26 +4,23 @@
 //!
 //! 1. warps the canonical lens samples into aperture samples ([`crate::aperture`]) and the canonical
 //!    time samples through the shutter-opening curve ([`crate::shutter`]);
-//! 2. pre-fills every ray with the renderer's **default camera ray** — orthographic when the projection's
-//!    DicingHint is Orthographic, else a pinhole at the projection's FieldOfView (90° when it reports
-//!    none), through a thin lens when it reports FStop, FocalLength and FocalDistance (the document: the
-//!    renderer uses them "as part of the computation for the initial ray directions supplied to the
-//!    projection plugin") — and every tint with white, so a projection may be a *modifier* that only
-//!    rewrites time or tint (RenderMan's PxrRollingShutter);
-//! 3. calls `project`, catching a panic;
-//! 4. validates every ray: origin finite; direction finite and unit length (within 10⁻³) or exactly
-//!    zero; time in `[0, 1)`; radius and spread finite and ≥ 0; `0 ≤ min_dist ≤ max_dist`; tint finite.
-//!    A ray that breaks the contract is culled (its direction set to zero) and counted by kind, with
-//!    the first offending sample kept for the message; rays the projection culled itself are counted
-//!    apart. Nothing invalid reaches the tracer and nothing is dropped silently.
+//! 2. pre-fills every ray with the renderer's **default camera ray** ([`DefaultRays`]) and every tint
+//!    with white, so a projection may be a *modifier* that only rewrites time or tint (RenderMan's
+//!    PxrRollingShutter);
+//! 3. calls `project` ([`call_project`]: a panic or a reported error loses the batch, counted);
+//! 4. validates every ray by the contract's rules ([`check_ray`]). A ray that breaks the contract is
+//!    culled (its direction set to zero) and counted by kind, with the first offending sample kept for
+//!    the message; rays the projection culled itself are counted apart. Nothing invalid reaches the
+//!    tracer and nothing is dropped silently.
+//!
+//! The rules, the properties' defaults and the default rays are [`obscura_sdk::contract`]'s, the same
+//! that `obscura check` applies.
 
-use std::panic::{AssertUnwindSafe, catch_unwind};
-
-use obscura_sdk::abi::{UndecodableProperty, panic_message};
-use obscura_sdk::optics::{OrthographicRays, PerspectiveRays, screen_distance};
+use obscura_sdk::contract::{DefaultRays, call_project, check_ray};
+pub use obscura_sdk::contract::{Properties, Violation};
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamList, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, Registry, Rgb, Vec3,
+    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry,
+    Registry, Rgb, Vec3,
 };
 
 use crate::aperture::ApertureWarp;
@@ -103,81 +100,6 @@ impl Batch {
     }
 }
 
-/// The properties a projection answered at render start, with the host's defaults filled in.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Properties {
-    /// How to dice geometry (default Perspective).
-    pub dicing_hint: DicingHint,
-    /// How to measure depth: the property when answered, else the environment's deep metric.
-    pub deep_metric: DeepMetric,
-    /// Field of view in degrees, if answered.
-    pub field_of_view: Option<f32>,
-    /// f-stop, if answered.
-    pub f_stop: Option<f32>,
-    /// Focal length, if answered.
-    pub focal_length: Option<f32>,
-    /// Focal distance, if answered.
-    pub focal_distance: Option<f32>,
-}
-
-/// A way a ray can break the projection contract.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Violation {
-    /// `project` panicked: the whole batch is culled.
-    Panicked,
-    /// An origin component is NaN or infinite.
-    NonFiniteOrigin,
-    /// A direction component is NaN or infinite.
-    NonFiniteDirection,
-    /// The direction is neither unit length nor exactly zero.
-    NonUnitDirection,
-    /// The time is outside `[0, 1)`.
-    TimeOutOfRange,
-    /// `origin_radius` is negative or not finite.
-    BadOriginRadius,
-    /// `ray_spread` is negative or not finite.
-    BadRaySpread,
-    /// Not `0 ≤ min_dist ≤ max_dist` (or NaN).
-    BadDistances,
-    /// A tint channel is NaN or infinite.
-    NonFiniteTint,
-}
-
-impl Violation {
-    /// Every violation, in report order.
-    pub const ALL: [Violation; 9] = [
-        Violation::Panicked,
-        Violation::NonFiniteOrigin,
-        Violation::NonFiniteDirection,
-        Violation::NonUnitDirection,
-        Violation::TimeOutOfRange,
-        Violation::BadOriginRadius,
-        Violation::BadRaySpread,
-        Violation::BadDistances,
-        Violation::NonFiniteTint,
-    ];
-
-    /// What the contract expects, for messages.
-    #[must_use]
-    pub fn describe(self) -> &'static str {
-        match self {
-            Violation::Panicked => "samples lost to a panic in project",
-            Violation::NonFiniteOrigin => "non-finite origins",
-            Violation::NonFiniteDirection => "non-finite directions",
-            Violation::NonUnitDirection => "directions neither unit length nor zero",
-            Violation::TimeOutOfRange => "times outside [0, 1)",
-            Violation::BadOriginRadius => "negative or non-finite origin radii",
-            Violation::BadRaySpread => "negative or non-finite ray spreads",
-            Violation::BadDistances => "min/max distances not 0 <= min <= max",
-            Violation::NonFiniteTint => "non-finite tints",
-        }
-    }
-
-    fn index(self) -> usize {
-        Violation::ALL.iter().position(|v| *v == self).unwrap_or(0)
-    }
-}
-
 /// The first offending sample of one violation kind.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Example {
@@ -194,8 +116,8 @@ pub struct ContractReport {
     pub samples: u64,
     /// Samples the projection culled itself (zero direction): legitimate, contributing nothing.
     pub culled: u64,
-    counts: [u64; 9],
-    examples: [Option<Example>; 9],
+    counts: [u64; Violation::ALL.len()],
+    examples: [Option<Example>; Violation::ALL.len()],
 }
 
 impl ContractReport {
@@ -274,13 +196,6 @@ impl ContractReport {
     }
 }
 
-/// The host's own camera ray, used to pre-fill every batch.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum DefaultRays {
-    Perspective { rays: PerspectiveRays, d: f32 },
-    Orthographic(OrthographicRays),
-}
-
 /// One projection, ready to turn batches of samples into validated rays. Shareable across threads:
 /// [`CameraStage::run`] takes `&self`.
 pub struct CameraStage {
@@ -303,9 +218,6 @@ impl std::fmt::Debug for CameraStage {
             .finish_non_exhaustive()
     }
 }
-
-/// A unit direction may be off by this much in length (f32 normalisation is good to ~1e-7).
-const UNIT_TOLERANCE: f32 = 1e-3;
 
 impl CameraStage {
     /// Validates `camera`, creates the projection `name` from `registry` with `params`, and reads its
@@ -336,9 +248,12 @@ impl CameraStage {
         camera: &CameraDesc,
     ) -> Result<Self, HostError> {
         camera.validate()?;
-        let mut setup_warnings = Vec::new();
-        let properties = read_properties(name, projection.as_ref(), &env, &mut setup_warnings);
-        let defaults = default_rays(&properties, &env);
+        let (properties, answers) = Properties::read(projection.as_ref(), &env);
+        let setup_warnings = answers
+            .iter()
+            .filter_map(|(p, a)| a.as_ref().err().map(|e| e.warning(name, *p)))
+            .collect();
+        let defaults = DefaultRays::new(&properties, &env);
         Ok(CameraStage {
             name: name.to_string(),
             projection,
@@ -410,10 +325,7 @@ impl CameraStage {
                 .screen
                 .iter()
                 .zip(&batch.aperture)
-                .map(|(s, a)| match &self.defaults {
-                    DefaultRays::Perspective { rays, d } => rays.ray(*s, *a, *d),
-                    DefaultRays::Orthographic(rays) => rays.ray(*s, *a),
-                }),
+                .map(|(s, a)| self.defaults.ray(*s, *a)),
         );
         batch.tint.clear();
         batch.tint.resize(n, Rgb::WHITE);
@@ -422,23 +334,20 @@ impl CameraStage {
             samples: n as u64,
             ..ContractReport::default()
         };
-        let outcome = catch_unwind(AssertUnwindSafe(|| {
-            let mut ctx = ProjectionContext::new(
-                &batch.screen,
-                &batch.lens,
-                &batch.aperture,
-                &mut batch.time,
-                &mut batch.rays,
-                &mut batch.tint,
-            )
-            .expect("the batch's arrays were sized alike just above");
-            self.projection.project(&mut ctx);
-        }));
-        if let Err(payload) = outcome {
-            let why = panic_message(payload.as_ref());
+        let mut ctx = ProjectionContext::new(
+            &batch.screen,
+            &batch.lens,
+            &batch.aperture,
+            &mut batch.time,
+            &mut batch.rays,
+            &mut batch.tint,
+        )
+        .expect("the batch's arrays were sized alike just above");
+        if let Err(loss) = call_project(self.projection.as_ref(), &mut ctx) {
+            let why = loss.detail();
             for (r, s) in batch.rays.iter_mut().zip(&batch.screen) {
                 r.direction = Vec3::ZERO;
-                report.record(Violation::Panicked, *s, || format!("panicked: {why}"));
+                report.record(loss.violation(), *s, || why.clone());
             }
             return report;
         }
@@ -449,41 +358,11 @@ impl CameraStage {
 
 fn validate(batch: &mut Batch, report: &mut ContractReport) {
     for i in 0..batch.rays.len() {
-        let s = batch.screen[i];
-        let r = batch.rays[i];
-        let t = batch.time[i];
-        let mut bad = None;
-        let len = r.direction.length();
-        if !r.origin.is_finite() {
-            bad = Some((Violation::NonFiniteOrigin, format!("origin {:?}", r.origin)));
-        } else if !r.direction.is_finite() {
-            bad = Some((
-                Violation::NonFiniteDirection,
-                format!("direction {:?}", r.direction),
-            ));
-        } else if r.direction != Vec3::ZERO && (len - 1.0).abs() > UNIT_TOLERANCE {
-            bad = Some((Violation::NonUnitDirection, format!("|direction| = {len}")));
-        } else if !(0.0..1.0).contains(&t) {
-            bad = Some((Violation::TimeOutOfRange, format!("time {t}")));
-        } else if !(r.origin_radius >= 0.0 && r.origin_radius.is_finite()) {
-            bad = Some((
-                Violation::BadOriginRadius,
-                format!("origin_radius {}", r.origin_radius),
-            ));
-        } else if !(r.ray_spread >= 0.0 && r.ray_spread.is_finite()) {
-            bad = Some((Violation::BadRaySpread, format!("ray_spread {}", r.ray_spread)));
-        } else if !(r.min_dist >= 0.0 && r.min_dist <= r.max_dist) {
-            bad = Some((
-                Violation::BadDistances,
-                format!("min_dist {} max_dist {}", r.min_dist, r.max_dist),
-            ));
-        } else if !batch.tint[i].is_finite() {
-            bad = Some((Violation::NonFiniteTint, format!("tint {:?}", batch.tint[i])));
-        }
-        match bad {
-            Some((v, detail)) => {
-                batch.rays[i].direction = Vec3::ZERO;
-                report.record(v, s, || detail);
+        let r = &mut batch.rays[i];
+        match check_ray(r, batch.time[i], batch.tint[i]) {
+            Some(breach) => {
+                r.direction = Vec3::ZERO;
+                report.record(breach.violation, batch.screen[i], || breach.detail());
             }
             None if r.direction == Vec3::ZERO => report.culled += 1,
             None => {}
@@ -491,95 +370,21 @@ fn validate(batch: &mut Batch, report: &mut ContractReport) {
     }
 }
 
-fn read_properties(
-    name: &str,
-    p: &dyn Projection,
-    env: &ProjectionEnvironment,
-    warnings: &mut Vec<String>,
-) -> Properties {
-    let mut ask = |prop: ProjectionProperty| -> Option<PropertyValue> {
-        // A panic here (a built-in's bug, or a plugin's failed call raised by its adapter) leaves the
-        // property unanswered with a warning; the render goes on.
-        let v = match catch_unwind(AssertUnwindSafe(|| p.property(prop))) {
-            Ok(v) => v?,
-            Err(payload) => {
-                warnings.push(match payload.downcast_ref::<UndecodableProperty>() {
-                    Some(bad) => format!(
-                        "warning: projection {name} answered {} with {}; ignored",
-                        bad.property, bad.reason
-                    ),
-                    None => format!(
-                        "warning: projection {name} failed to answer {}: {}; treated as unanswered",
-                        prop.renderman_name(),
-                        panic_message(payload.as_ref())
-                    ),
-                });
-                return None;
-            }
-        };
-        if prop.accepts(v) {
-            Some(v)
-        } else {
-            warnings.push(format!(
-                "warning: projection {name} answered {} with {v:?}, which is not that property's type; ignored",
-                prop.renderman_name()
-            ));
-            None
-        }
-    };
-    let float = |v: Option<PropertyValue>| match v {
-        Some(PropertyValue::Float(x)) if x.is_finite() => Some(x),
-        _ => None,
-    };
-    let dicing_hint = match ask(ProjectionProperty::DicingHint) {
-        Some(PropertyValue::DicingHint(h)) => h,
-        _ => DicingHint::Perspective,
-    };
-    let deep_metric = match ask(ProjectionProperty::DeepMetric) {
-        Some(PropertyValue::DeepMetric(m)) => m,
-        _ => env.deep_metric(),
-    };
-    Properties {
-        dicing_hint,
-        deep_metric,
-        field_of_view: float(ask(ProjectionProperty::FieldOfView)),
-        f_stop: float(ask(ProjectionProperty::FStop)),
-        focal_length: float(ask(ProjectionProperty::FocalLength)),
-        focal_distance: float(ask(ProjectionProperty::FocalDistance)),
-    }
-}
-
-fn default_rays(props: &Properties, env: &ProjectionEnvironment) -> DefaultRays {
-    let (lens_radius, focal_distance) = match (props.f_stop, props.focal_length, props.focal_distance) {
-        (Some(f), Some(fl), Some(fd)) if fd > 0.0 => (PerspectiveRays::lens_radius_for(f, fl), fd),
-        _ => (0.0, 1.0),
-    };
-    let clipping = (env.clipping_near(), env.clipping_far());
-    if props.dicing_hint == DicingHint::Orthographic {
-        return DefaultRays::Orthographic(OrthographicRays::new(
-            env.pixel_size(),
-            clipping,
-            lens_radius,
-            focal_distance,
-        ));
-    }
-    // A pinhole cannot show 180° or more; wider projections write their own rays anyway.
-    let fov = props
-        .field_of_view
-        .filter(|f| *f > 0.0)
-        .unwrap_or(90.0)
-        .min(179.0);
-    DefaultRays::Perspective {
-        rays: PerspectiveRays::new(env.pixel_size(), clipping, lens_radius, focal_distance),
-        d: screen_distance(fov),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obscura_projections::builtin_registry;
-    use obscura_sdk::Format;
+    use obscura_sdk::optics::{PerspectiveRays, screen_distance};
+    use obscura_sdk::{DeepMetric, DicingHint, Format, ProjectionProperty, PropertyValue};
+
+    /// The two built-ins the stage's own tests drive.
+    fn builtin_registry() -> Registry {
+        let mut reg = Registry::new();
+        reg.register(Box::new(obscura_projections::PerspectiveFactory), "")
+            .unwrap();
+        reg.register(Box::new(obscura_projections::OrthographicFactory), "")
+            .unwrap();
+        reg
+    }
 
     fn camera() -> CameraDesc {
         let mut c = CameraDesc::new(Format::new(64, 48));

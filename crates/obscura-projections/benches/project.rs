@@ -7,7 +7,6 @@
 use std::hint::black_box;
 
 use divan::{Bencher, counter::ItemsCount};
-use obscura_projections::builtin_registry;
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
 use obscura_sdk::{
     Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
@@ -80,7 +79,11 @@ fn projection(name: &str, params: &[(&str, &str)]) -> Box<dyn Projection> {
             .expect("valid bench parameter");
     }
     let mut env = ProjectionEnvironment::for_format(Format::new(1920, 1080));
-    builtin_registry()
+    let mut registry = obscura_sdk::Registry::new();
+    for factory in obscura_projections::factories() {
+        registry.register(factory, "").expect("built-in names are unique");
+    }
+    registry
         .create(name, &mut env, &list)
         .expect("valid bench projection")
 }

@@ -18,7 +18,8 @@
 //! | `EquiangularCubemapFace` | [`cubemap`] | Spherical | RayLength |
 //! | `Octahedral` | [`octahedral`] | Spherical | RayLength |
 //!
-//! [`register_builtins`] adds them all to a [`Registry`]; [`builtin_registry`] makes one holding them.
+//! The table of every built-in projection (these and the calibrated cameras of `obscura-calibration`)
+//! is assembled above both crates, in `obscura-plugins`.
 
 pub mod cubemap;
 pub mod cylinder;
@@ -37,7 +38,7 @@ pub mod sphere;
 #[cfg(test)]
 mod testing;
 
-use obscura_sdk::Registry;
+use obscura_sdk::ProjectionFactory;
 
 pub use cubemap::{CubemapFace, CubemapFaceFactory, Face as CubemapFaceName};
 pub use cylinder::{CylinderCamera, CylinderCameraFactory};
@@ -52,96 +53,22 @@ pub use pxrcamera::{PxrCamera, PxrCameraFactory};
 pub use rolling_shutter::{RollingShutter, RollingShutterFactory, RollingShutterModifier, Sweep};
 pub use sphere::{SphereCamera, SphereCameraFactory};
 
-/// Adds every built-in projection to `registry`.
-///
-/// # Panics
-/// When `registry` already holds a projection of a built-in's name (register built-ins first).
-pub fn register_builtins(registry: &mut Registry) {
-    obscura_calibration::register(registry);
-    registry
-        .register(Box::new(FisheyeFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(MirrorBallFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(CubemapFaceFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(OctahedralFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(PerspectiveFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(OrthographicFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(PxrCameraFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(RollingShutterFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(SphereCameraFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(CylinderCameraFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(PaniniFactory), "")
-        .expect("built-in names are unique");
-    registry
-        .register(Box::new(OmnidirectionalStereoFactory), "")
-        .expect("built-in names are unique");
-}
-
-/// A registry holding every built-in projection.
+/// A factory of every projection in this crate, for a host's table of built-ins (assembled, with the
+/// calibrated cameras, by `obscura_plugins::builtin_registry`).
 #[must_use]
-pub fn builtin_registry() -> Registry {
-    let mut r = Registry::new();
-    register_builtins(&mut r);
-    r
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use obscura_sdk::{Format, ParamList, ProjectionEnvironment};
-
-    #[test]
-    fn unknown_projection_lists_the_known_ones() {
-        let mut reg = builtin_registry();
-        let mut env = ProjectionEnvironment::for_format(Format::new(4, 4));
-        let err = reg
-            .create("PxrPerspectve", &mut env, &ParamList::new())
-            .err()
-            .unwrap()
-            .to_string();
-        assert!(err.contains("did you mean \"PxrPerspective\""), "{err}");
-        let known = format!("known projections: {}", reg.names().join(", "));
-        assert!(err.contains(&known), "{err}");
-        assert!(reg.names().len() > 2, "{err}");
-        assert!(reg.create("PxrOrthographic", &mut env, &ParamList::new()).is_ok());
-    }
-
-    #[test]
-    fn every_builtin_table_has_documented_unique_parameters() {
-        let reg = builtin_registry();
-        for name in reg.names() {
-            let f = reg.get(&name).unwrap();
-            assert!(!f.summary().is_empty(), "{name}");
-            let mut seen = std::collections::HashSet::new();
-            for d in f.param_table() {
-                assert!(!d.doc.is_empty(), "{name}.{} has no doc", d.name);
-                assert!(seen.insert(d.name.clone()), "{name}.{} declared twice", d.name);
-                assert_eq!(
-                    d.default.len(),
-                    d.scalar_count(),
-                    "{name}.{} default has the wrong size",
-                    d.name
-                );
-            }
-        }
-    }
+pub fn factories() -> Vec<Box<dyn ProjectionFactory>> {
+    vec![
+        Box::new(FisheyeFactory),
+        Box::new(MirrorBallFactory),
+        Box::new(CubemapFaceFactory),
+        Box::new(OctahedralFactory),
+        Box::new(PerspectiveFactory),
+        Box::new(OrthographicFactory),
+        Box::new(PxrCameraFactory),
+        Box::new(RollingShutterFactory),
+        Box::new(SphereCameraFactory),
+        Box::new(CylinderCameraFactory),
+        Box::new(PaniniFactory),
+        Box::new(OmnidirectionalStereoFactory),
+    ]
 }

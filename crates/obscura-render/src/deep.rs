@@ -271,8 +271,8 @@ mod tests {
     //! Python's `OpenEXR` (the reference C++ library) through `tests/deep_read.py`.
 
     use super::*;
+    use crate::raymap::temporary_sibling;
     use miniz_oxide::inflate::decompress_to_vec_zlib;
-    use obscura_host::raymap::temporary_sibling;
     use proptest::prelude::*;
     use std::collections::HashMap;
 

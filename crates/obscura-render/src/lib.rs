@@ -1,7 +1,7 @@
 //! # obscura-render
 //!
-//! Obscura's renderer: the host that drives a projection the way RenderMan's document says and turns
-//! the rays into pictures.
+//! Obscura's images from cameras: the renderer — the host that drives a projection the way RenderMan's
+//! document says and turns the rays into pictures — and the camera's own maps (ray map, ST-map).
 //!
 //! | module | job |
 //! |---|---|
@@ -12,6 +12,8 @@
 //! | [`material`], [`light`], [`integrator`] | shading: BSDFs, the four lights, the path tracer |
 //! | [`filter`], [`film`], [`output`], [`deep`] | pixel filters, AOV accumulation, EXR/PNG/deep EXR |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
+//! | [`job`] | one `obscura render` from files to files |
+//! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod bvh;
 pub mod deep;
@@ -24,5 +26,7 @@ pub mod light;
 pub mod material;
 pub mod output;
 pub mod ray;
+pub mod raymap;
 pub mod render;
 pub mod rng;
+pub mod stmap;

@@ -1,19 +1,19 @@
 //! Flat image files: OpenEXR (through the `exr` crate) and 8-bit sRGB PNG previews.
 //!
 //! Both are written to a hidden temporary file beside the target
-//! ([`obscura_host::raymap::temporary_sibling`]) and renamed into place, so a reader never sees half
+//! ([`crate::raymap::temporary_sibling`]) and renamed into place, so a reader never sees half
 //! a file and a failed write leaves nothing behind.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
+use crate::raymap::temporary_sibling;
 use exr::image::Blocks;
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Compression, Encoding, FlatSamples, Image, IntegerBounds, Layer,
     LayerAttributes, LineOrder, Text, Vec2, WritableImage, f16,
 };
-use obscura_host::raymap::temporary_sibling;
 use obscura_scene::Aov;
 
 use crate::film::{Film, SampleValues};

@@ -7,7 +7,7 @@ use std::sync::atomic::AtomicBool;
 
 use glam::{Mat4, Vec3};
 use obscura_host::CameraDesc;
-use obscura_projections::builtin_registry;
+use obscura_plugins::builtin_registry;
 use obscura_render::render::{Prepared, RenderOptions, prepare};
 use obscura_scene::{Light, Material, Mesh, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{

@@ -24,13 +24,13 @@
 //! | `ObscuraPropertyValue` | [`RawPropertyValue`] |
 //! | `ObscuraProjectionDescriptor` | [`ProjectionDescriptor`] |
 
-use std::any::Any;
 use std::borrow::Cow;
 use std::ffi::{CStr, CString, c_char, c_void};
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::sync::{OnceLock, PoisonError, RwLock};
 
 use crate::context::ProjectionContext;
+use crate::contract::panic_message;
 use crate::environment::{Format, MotionSample, ProjectionEnvironment, ScreenWindow};
 use crate::geometry::{Matrix4, Point2, Rgb, Vec3};
 use crate::param::{ParamDecl, ParamList, ParamType, ParamValue, ValueRange};
@@ -459,41 +459,6 @@ pub unsafe fn report(sink: *const ErrorSink, message: &str) {
         // SAFETY: the host's callback reads `len` bytes from a live buffer.
         unsafe { f(sink.host, message.as_ptr().cast(), message.len()) };
     }
-}
-
-/// The panic payload with which a host adapter reports a property value that does not decode (an
-/// unknown value kind or enum value sent through the ABI).
-///
-/// The adapter raises it with [`std::panic::resume_unwind`] instead of answering `None`, so nothing
-/// is lost: the host's property reader catches it and warns, and `obscura check` counts it as a
-/// property of the wrong type rather than as an unanswered one.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct UndecodableProperty {
-    /// The property asked, by RenderMan's name (`k_FieldOfView`).
-    pub property: &'static str,
-    /// What was wrong with the value (`unknown property value kind 7 (expected 0, 1 or 2)`).
-    pub reason: String,
-}
-
-impl std::fmt::Display for UndecodableProperty {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} answered with {}", self.property, self.reason)
-    }
-}
-
-/// The text of a panic payload (a `&str`, a `String` or an [`UndecodableProperty`]).
-#[must_use]
-pub fn panic_message(payload: &(dyn Any + Send)) -> String {
-    payload
-        .downcast_ref::<&str>()
-        .map(|s| (*s).to_string())
-        .or_else(|| payload.downcast_ref::<String>().cloned())
-        .or_else(|| {
-            payload
-                .downcast_ref::<UndecodableProperty>()
-                .map(ToString::to_string)
-        })
-        .unwrap_or_else(|| "a panic with a non-string payload".into())
 }
 
 // ------------------------------------------------------------------------------------------------

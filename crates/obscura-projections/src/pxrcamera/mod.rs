@@ -1398,11 +1398,4 @@ mod tests {
         ];
         assert_refused(&PxrCameraFactory, "PxrCamera", Format::new(8, 8), &cases);
     }
-
-    #[test]
-    fn the_builtin_registry_holds_it() {
-        let mut reg = crate::builtin_registry();
-        let mut env = ProjectionEnvironment::for_format(Format::new(4, 4));
-        assert!(reg.create(NAME, &mut env, &ParamList::new()).is_ok());
-    }
 }

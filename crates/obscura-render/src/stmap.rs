@@ -54,13 +54,13 @@ use std::path::Path;
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, IntegerBounds, Layer, LayerAttributes,
 };
-use obscura_sdk::abi::panic_message;
+use obscura_sdk::contract::panic_message;
 use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Registry, Vec3};
 use rayon::prelude::*;
 
-use crate::camera::CameraDesc;
-use crate::driver::{Batch, CameraStage, ContractReport, HostError};
 use crate::raymap::{ExrWriteError, add_text_attributes, write_exr_atomically};
+use obscura_host::camera::CameraDesc;
+use obscura_host::driver::{Batch, CameraStage, ContractReport, HostError};
 
 /// The default distance along B's rays of the point handed to A's inverse: far enough that scene
 /// content reads as "at infinity" for stereo and other offset-origin cameras.
@@ -464,7 +464,7 @@ pub fn write_stmap_exr(map: &StMap, attributes: &[(&str, String)], path: &Path) 
 mod tests {
     use super::*;
     use crate::raymap::temporary_sibling;
-    use obscura_projections::builtin_registry;
+    use obscura_plugins::builtin_registry;
     use obscura_sdk::{
         DeepMetric, DicingHint, Projection, ProjectionContext, ProjectionProperty, PropertyValue,
         ScreenWindow,

@@ -18,9 +18,9 @@ use exr::prelude::{
 use obscura_sdk::{Point2, RayGeometry, Rgb, Vec3};
 use rayon::prelude::*;
 
-use crate::camera::PixelRect;
-use crate::driver::{Batch, CameraStage, ContractReport};
-use crate::sampler::{MAX_SAMPLES, Sampler};
+use obscura_host::camera::PixelRect;
+use obscura_host::driver::{Batch, CameraStage, ContractReport};
+use obscura_host::sampler::{MAX_SAMPLES, Sampler};
 
 /// One layer of a ray map: one ray per pixel of the crop, row by row.
 #[derive(Debug, Clone, PartialEq)]
@@ -267,8 +267,8 @@ pub fn temporary_sibling(path: &Path) -> PathBuf {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::{CameraDesc, CropWindow};
-    use obscura_projections::builtin_registry;
+    use obscura_host::camera::{CameraDesc, CropWindow};
+    use obscura_plugins::builtin_registry;
     use obscura_sdk::{Format, ParamList};
 
     fn stage(cam: &CameraDesc, params: &[(&str, &str)]) -> CameraStage {

@@ -1,4 +1,4 @@
-//! Building the test and example plugins: shared by `obscura-host/tests/abi.rs` and
+//! Building the test and example plugins: shared by `obscura-plugins/tests/abi.rs` and
 //! `obscura-cli/tests/plugins.rs` (included with `#[path]`, so both use one copy).
 
 #![allow(dead_code)]

@@ -88,7 +88,7 @@ pub fn list(registry: &Registry, name: Option<&str>) -> Result<String, PluginErr
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obscura_projections::builtin_registry;
+    use crate::builtin_registry;
 
     #[test]
     fn perspective_listing_shows_declarations_defaults_ranges_and_docs() {

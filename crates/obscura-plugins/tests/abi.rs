@@ -9,9 +9,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use obscura_host::plugins::{PluginLoadError, PluginSearch, ensure, library_file_name, load_file};
 use obscura_host::{Batch, CameraDesc, CameraStage, Violation};
-use obscura_projections::builtin_registry;
+use obscura_plugins::builtin_registry;
+use obscura_plugins::loader::{PluginLoadError, PluginSearch, ensure, library_file_name, load_file};
 use obscura_sdk::abi::{self, ProjectionDescriptor, RawContext, RawEnvironment, RawMotionSample};
 use obscura_sdk::abi::{RawParam, RawParamDecl, RawParamList, RawPropertyValue};
 use obscura_sdk::{

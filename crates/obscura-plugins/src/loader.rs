@@ -34,8 +34,9 @@ use std::sync::{Mutex, PoisonError};
 use obscura_sdk::abi::{
     self, ABI_VERSION, CreateFn, DESCRIPTOR_V1_SIZE, DestroyFn, ENTRY_SYMBOL, ENTRY_SYMBOL_NUL, EntryFn,
     FinalizeFn, InitFn, OwnedEnvironment, OwnedParamList, ProjectFn, ProjectionDescriptor, PropertyFn,
-    RawContext, RawPropertyValue, SynchronizeFn, UndecodableProperty, UnprojectFn, collect_message,
+    RawContext, RawPropertyValue, SynchronizeFn, UnprojectFn, collect_message,
 };
+use obscura_sdk::contract::{ProjectFailed, UndecodableProperty};
 use obscura_sdk::{
     ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
     ProjectionFactory, ProjectionProperty, PropertyValue, Registry, SyncMessage, Vec3, did_you_mean,
@@ -732,17 +733,17 @@ impl Projection for PluginProjection {
             };
             // SAFETY: every array holds `num_rays` elements from `start` and is lent for the call.
             let (status, msg) = collect_message(|e| unsafe { (self.lib.project)(self.handle, &raw, e) });
-            if status != abi::OK {
-                let why = match status {
-                    abi::PANIC => msg
-                        .strip_prefix("panicked in project: ")
+            // The camera stage catches these, culls and counts the batch; `resume_unwind` skips the
+            // panic hook, which already spoke in the plugin if it was a Rust panic.
+            match status {
+                abi::OK => {}
+                abi::ERROR => resume_unwind(Box::new(ProjectFailed(or_status(msg, status)))),
+                abi::PANIC => resume_unwind(Box::new(
+                    msg.strip_prefix("panicked in project: ")
                         .map(str::to_string)
                         .unwrap_or(msg),
-                    _ => format!("project failed: {}", or_status(msg, status)),
-                };
-                // The camera stage catches this, culls and counts the batch; `resume_unwind` skips
-                // the panic hook, which already spoke in the plugin if it was a Rust panic.
-                resume_unwind(Box::new(why));
+                )),
+                _ => resume_unwind(Box::new(format!("project failed: {}", or_status(msg, status)))),
             }
             start = end;
         }
@@ -869,7 +870,7 @@ pub fn ensure(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use obscura_projections::builtin_registry;
+    use crate::builtin_registry;
 
     #[test]
     fn the_command_line_comes_before_the_environment_and_empty_entries_are_skipped() {

@@ -1,4 +1,4 @@
-//! `cargo bench -p obscura-host --bench plugin_overhead`: the cost of calling a projection through the
+//! `cargo bench -p obscura-plugins --bench plugin_overhead`: the cost of calling a projection through the
 //! plugin ABI. The same `TinyPlanet` code runs built in (the example crate linked as an rlib) and loaded
 //! from its `cdylib` through `obscura_projection_entry` (built here with `cargo build --release` into
 //! `target/plugin-bench`, the same optimisation settings as this bench), at batches of 256 samples:
@@ -16,8 +16,8 @@ use std::sync::OnceLock;
 
 use divan::{Bencher, counter::ItemsCount};
 use obscura_example_tiny_planet::TinyPlanetFactory;
-use obscura_host::plugins::{PluginSearch, ensure};
 use obscura_host::{Batch, CameraDesc, CameraStage};
+use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_sdk::{
     Format, ParamList, Point2, Projection, ProjectionContext, ProjectionFactory, RayGeometry, Registry, Rgb,
 };

@@ -3,8 +3,8 @@
 //! and the perspective and orthographic cameras keep it in their depth-of-field, zoom and non-default
 //! window variants.
 
-use obscura_projections::builtin_registry;
-use obscura_sdk::contract::{CheckKind, CheckOptions, Status, check_registered};
+use obscura_check::{CheckKind, CheckOptions, Status, check_registered};
+use obscura_plugins::builtin_registry;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 fn params(list: &[(&str, &str)]) -> ParamList {

@@ -1,0 +1,75 @@
+//! The table of built-in projections: every projection of `obscura-projections` and the calibrated
+//! camera of `obscura-calibration`, registered under their RenderMan names.
+
+use obscura_calibration::CalibratedCameraFactory;
+use obscura_sdk::Registry;
+
+/// Adds every built-in projection to `registry`.
+///
+/// # Panics
+/// When `registry` already holds a projection of a built-in's name (register built-ins first).
+pub fn register_builtins(registry: &mut Registry) {
+    let calibrated: Box<dyn obscura_sdk::ProjectionFactory> = Box::new(CalibratedCameraFactory);
+    for factory in obscura_projections::factories().into_iter().chain([calibrated]) {
+        registry.register(factory, "").expect("built-in names are unique");
+    }
+}
+
+/// A registry holding every built-in projection.
+#[must_use]
+pub fn builtin_registry() -> Registry {
+    let mut r = Registry::new();
+    register_builtins(&mut r);
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use obscura_sdk::{Format, ParamList, ProjectionEnvironment};
+
+    #[test]
+    fn unknown_projection_lists_the_known_ones() {
+        let mut reg = builtin_registry();
+        let mut env = ProjectionEnvironment::for_format(Format::new(4, 4));
+        let err = reg
+            .create("PxrPerspectve", &mut env, &ParamList::new())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("did you mean \"PxrPerspective\""), "{err}");
+        let known = format!("known projections: {}", reg.names().join(", "));
+        assert!(err.contains(&known), "{err}");
+        assert!(reg.names().len() > 2, "{err}");
+        assert!(reg.create("PxrOrthographic", &mut env, &ParamList::new()).is_ok());
+    }
+
+    #[test]
+    fn every_builtin_table_has_documented_unique_parameters() {
+        let reg = builtin_registry();
+        for name in reg.names() {
+            let f = reg.get(&name).unwrap();
+            assert!(!f.summary().is_empty(), "{name}");
+            let mut seen = std::collections::HashSet::new();
+            for d in f.param_table() {
+                assert!(!d.doc.is_empty(), "{name}.{} has no doc", d.name);
+                assert!(seen.insert(d.name.clone()), "{name}.{} declared twice", d.name);
+                assert_eq!(
+                    d.default.len(),
+                    d.scalar_count(),
+                    "{name}.{} default has the wrong size",
+                    d.name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_builtin_registry_holds_it() {
+        let mut reg = builtin_registry();
+        let mut env = ProjectionEnvironment::for_format(Format::new(4, 4));
+        for name in ["PxrCamera", obscura_calibration::NAME] {
+            assert!(reg.create(name, &mut env, &ParamList::new()).is_ok(), "{name}");
+        }
+    }
+}

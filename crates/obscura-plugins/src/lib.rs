@@ -1,0 +1,21 @@
+//! # obscura-plugins
+//!
+//! Where a host's projections come from:
+//!
+//! - [`builtins`]: the table of built-in projections, assembled from `obscura-projections` and the
+//!   calibrated cameras of `obscura-calibration` ([`builtin_registry`]);
+//! - [`loader`]: projection plugins loaded from shared libraries through the C ABI of
+//!   `include/obscura/projection.h` — the search path, the descriptor checks and the adapter that makes
+//!   a plugin an ordinary [`obscura_sdk::ProjectionFactory`];
+//! - [`listing`]: the text of `obscura plugins`.
+//!
+//! A host asks for a projection by name ([`loader::ensure`]): a registered name is used as is, an
+//! unknown one is looked up as `<Name>.so` along the plugin path and registered. From then on a plugin
+//! and a built-in go through the same [`obscura_sdk::Registry`] and the same camera stage.
+
+pub mod builtins;
+pub mod listing;
+pub mod loader;
+
+pub use builtins::{builtin_registry, register_builtins};
+pub use loader::{PluginLoadError, PluginSearch, ensure};
