@@ -215,11 +215,17 @@ struct Defect {
 }
 
 /// One breach per check, in [`CheckKind::ALL`] order.
-const DEFECTS: [Defect; 16] = [
+const DEFECTS: [Defect; 18] = [
+    Defect {
+        define: "DEFECT_PROJECT_PANIC",
+        kind: CheckKind::Panic,
+        worst: "\"what\":\"project\",\"expected\":\"no panic\",\"got\":\"panicked: \
+                ContractPinhole: deliberate exception in the top-right corner\"",
+    },
     Defect {
         define: "DEFECT_PROJECT_ERROR",
-        kind: CheckKind::Panic,
-        worst: "\"what\":\"project\",\"expected\":\"no panic\",\"got\":\"panicked: project failed: \
+        kind: CheckKind::Error,
+        worst: "\"what\":\"project\",\"expected\":\"no error\",\"got\":\"returned an error: \
                 ContractPinhole: deliberate failure in the top-right corner\"",
     },
     Defect {
@@ -256,6 +262,11 @@ const DEFECTS: [Defect; 16] = [
         define: "DEFECT_NAN_TINT",
         kind: CheckKind::TintFinite,
         worst: "\"got\":\"(1, NaN, 1)\"",
+    },
+    Defect {
+        define: "DEFECT_CLIP_SPHERES",
+        kind: CheckKind::Clipping,
+        worst: "\"what\":\"min_dist with CameraZ\",\"expected\":\"",
     },
     Defect {
         define: "DEFECT_DOUBLE_SPREAD",
@@ -316,6 +327,11 @@ fn measure(d: &Defect, c: &Entry, all: &[Entry]) -> Result<(), String> {
             Err(format!("{} of {} pixels failed", c.failures, c.examined))
         }
         CheckKind::RaySpread => near(1.0, 0.01),
+        // min_dist = near where near/D.z is due: off by 1 − D.z, D.z = 1/sqrt(x² + y² + 1) at 90°.
+        CheckKind::Clipping => {
+            let (x, y) = c.worst_screen().ok_or("no worst screen position")?;
+            near(1.0 - 1.0 / (x * x + y * y + 1.0).sqrt(), 1e-5)
+        }
         // The answer is fov + 5 for a measured 90°.
         CheckKind::FieldOfView => near(5.0, 0.01),
         // Every ray looks down −Z.

@@ -280,10 +280,17 @@ unsafe impl Sync for Loaded {}
 
 impl Loaded {
     /// Takes a reference on the plugin's session, calling `init` when it is the first.
-    fn acquire(&self) -> Result<(), String> {
+    /// Calls the plugin's `init` with `plugin_path` (the library's own path when empty) unless another
+    /// factory of this library already did.
+    fn acquire(&self, plugin_path: &str) -> Result<(), String> {
         let mut s = self.session.lock().unwrap_or_else(PoisonError::into_inner);
         if s.users == 0 {
-            let path = CString::new(self.path.to_string_lossy().as_bytes()).unwrap_or_default();
+            let path = if plugin_path.is_empty() {
+                self.path.to_string_lossy().into_owned()
+            } else {
+                plugin_path.to_string()
+            };
+            let path = CString::new(path).map_err(|_| "the plugin path contains a NUL byte".to_string())?;
             let mut factory = std::ptr::null_mut();
             // SAFETY: the descriptor and fn pointer were checked at load; the out-pointer and sink are
             // valid for the call.
@@ -551,20 +558,16 @@ impl std::fmt::Debug for PluginFactory {
 }
 
 impl PluginFactory {
-    /// Opens the library at `path`, checks it, and initialises the plugin.
+    /// Opens the library at `path` and checks its descriptor. The plugin's `init` is not called here:
+    /// the registry calls it, with the library's path, before the first projection is created, so
+    /// listing or loading a plugin runs none of its code but the entry point.
     ///
     /// # Errors
     /// A [`PluginLoadError`] naming the file and the reason.
     pub fn open(path: &Path) -> Result<Self, PluginLoadError> {
-        let lib = open(path)?;
-        lib.acquire().map_err(|message| PluginLoadError::Init {
-            path: lib.path.clone(),
-            name: lib.name.clone(),
-            message,
-        })?;
         Ok(PluginFactory {
-            lib,
-            initialized: true,
+            lib: open(path)?,
+            initialized: false,
         })
     }
 
@@ -588,12 +591,14 @@ impl ProjectionFactory for PluginFactory {
         &self.lib.table
     }
 
-    fn init(&mut self, _plugin_path: &str) -> Result<(), PluginError> {
+    fn init(&mut self, plugin_path: &str) -> Result<(), PluginError> {
         if !self.initialized {
-            self.lib.acquire().map_err(|message| PluginError::Init {
-                plugin: self.lib.name.clone(),
-                message: format!("{}: {message}", self.lib.path.display()),
-            })?;
+            self.lib
+                .acquire(plugin_path)
+                .map_err(|message| PluginError::Init {
+                    plugin: self.lib.name.clone(),
+                    message: format!("{}: {message}", self.lib.path.display()),
+                })?;
             self.initialized = true;
         }
         Ok(())

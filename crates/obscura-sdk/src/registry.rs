@@ -8,12 +8,19 @@ struct Entry {
     factory: Box<dyn ProjectionFactory>,
     path: String,
     initialized: bool,
+    /// `RenderBegin` sent and `RenderEnd` not yet.
+    rendering: bool,
 }
 
 /// The projections a host knows, by name.
 ///
-/// Factories are initialised lazily, on the first `create`, and finalised when the registry is dropped,
-/// so a session only pays for the plugins it uses.
+/// The lifecycle of each factory, as RenderMan's: [`init`](ProjectionFactory::init) lazily, with the
+/// path the factory was registered with, just before its first projection is created (registering or
+/// listing runs none of a plugin's code);
+/// [`synchronize`](ProjectionFactory::synchronize)`(RenderBegin)` once, right after, before the first
+/// frame; `synchronize(RenderEnd)` once after the last frame ([`Registry::end_render`], or when the
+/// registry is dropped); [`finalize`](ProjectionFactory::finalize) when the registry is dropped. So a
+/// session only pays for the plugins it uses.
 #[derive(Default)]
 pub struct Registry {
     entries: Vec<Entry>,
@@ -49,6 +56,7 @@ impl Registry {
             factory,
             path: path.to_string(),
             initialized: false,
+            rendering: false,
         });
         Ok(())
     }
@@ -101,7 +109,7 @@ impl Registry {
     }
 
     /// Creates the projection `name` for a camera: initialises its factory on first use, sends it
-    /// `RenderBegin`, and calls `create_projection`.
+    /// `RenderBegin` when it is not rendering yet, and calls `create_projection`.
     ///
     /// # Errors
     /// An unknown name, a failing `init`, or the factory's own parameter errors.
@@ -119,13 +127,26 @@ impl Registry {
             entry.factory.init(&entry.path)?;
             entry.initialized = true;
         }
-        entry.factory.synchronize(SyncMessage::RenderBegin, Some(params));
+        if !entry.rendering {
+            entry.factory.synchronize(SyncMessage::RenderBegin, Some(params));
+            entry.rendering = true;
+        }
         entry.factory.create_projection(env, params)
+    }
+
+    /// Sends `RenderEnd` to every factory that was sent `RenderBegin`: call it after the last frame.
+    /// A later [`Registry::create`] begins a new render. Dropping the registry calls it too.
+    pub fn end_render(&mut self) {
+        for e in self.entries.iter_mut().filter(|e| e.rendering) {
+            e.factory.synchronize(SyncMessage::RenderEnd, None);
+            e.rendering = false;
+        }
     }
 }
 
 impl Drop for Registry {
     fn drop(&mut self) {
+        self.end_render();
         for e in self.entries.iter_mut().filter(|e| e.initialized) {
             e.factory.finalize();
         }
@@ -180,5 +201,94 @@ mod tests {
         assert_eq!(dup.0, "Loaded");
         assert_eq!(r.path("Loaded"), Some("/plugins/Loaded.so"));
         assert_eq!(r.names(), ["Built", "Loaded"]);
+    }
+
+    type Log = std::sync::Arc<std::sync::Mutex<Vec<String>>>;
+
+    /// A factory that writes down every lifecycle call it receives.
+    struct Recorder(Log);
+
+    impl ProjectionFactory for Recorder {
+        fn name(&self) -> &str {
+            "Recorder"
+        }
+
+        fn summary(&self) -> &str {
+            "records its calls"
+        }
+
+        fn param_table(&self) -> &[ParamDecl] {
+            &[]
+        }
+
+        fn init(&mut self, plugin_path: &str) -> Result<(), PluginError> {
+            self.0.lock().unwrap().push(format!("init {plugin_path}"));
+            Ok(())
+        }
+
+        fn finalize(&mut self) {
+            self.0.lock().unwrap().push("finalize".into());
+        }
+
+        fn synchronize(&mut self, message: SyncMessage, params: Option<&ParamList>) {
+            let with = if params.is_some() { "params" } else { "none" };
+            self.0.lock().unwrap().push(format!("{message:?} {with}"));
+        }
+
+        fn create_projection(
+            &self,
+            _env: &mut ProjectionEnvironment,
+            _params: &ParamList,
+        ) -> Result<Box<dyn Projection>, PluginError> {
+            self.0.lock().unwrap().push("create".into());
+            Named("Built").create_projection(_env, _params)
+        }
+    }
+
+    #[test]
+    fn the_lifecycle_is_init_once_with_its_path_begin_once_end_once_finalize_once() {
+        let log = Log::default();
+        let mut r = Registry::new();
+        r.register(Box::new(Recorder(log.clone())), "/plugins/Recorder.so")
+            .unwrap();
+        assert!(
+            log.lock().unwrap().is_empty(),
+            "registering runs none of the factory's code"
+        );
+        let mut env = ProjectionEnvironment::for_format(crate::Format::new(4, 4));
+        for _ in 0..3 {
+            let _ = r.create("Recorder", &mut env, &ParamList::new());
+        }
+        r.end_render();
+        let _ = r.create("Recorder", &mut env, &ParamList::new());
+        drop(r);
+        assert_eq!(
+            *log.lock().unwrap(),
+            [
+                "init /plugins/Recorder.so",
+                "RenderBegin params",
+                "create",
+                "create",
+                "create",
+                "RenderEnd none",
+                "RenderBegin params",
+                "create",
+                "RenderEnd none",
+                "finalize",
+            ]
+        );
+    }
+
+    #[test]
+    fn an_unused_factory_is_never_initialised_nor_finalised() {
+        let log = Log::default();
+        let r = {
+            let mut r = Registry::new();
+            r.register(Box::new(Recorder(log.clone())), "").unwrap();
+            r
+        };
+        assert_eq!(r.names(), ["Recorder"]);
+        drop(r);
+        assert!(log.lock().unwrap().is_empty());
     }
 }

@@ -199,6 +199,16 @@ static ObscuraStatus pinhole_project(const void *projection, const ObscuraProjec
         }
     }
 #endif
+#ifdef DEFECT_PROJECT_PANIC
+    /* What a C++ plugin returns when it catches an exception. */
+    for (uint32_t i = 0; i < ctx->num_rays; ++i) {
+        const ObscuraPoint2 s = ctx->screen[i];
+        if (s.x > 1.2f && s.y > 0.9f && s.y < 0.99f) {
+            obscura_report(error, "ContractPinhole: deliberate exception in the top-right corner");
+            return OBSCURA_PANIC;
+        }
+    }
+#endif
     const float d = p->d, d2 = d * d;
     for (uint32_t i = 0; i < ctx->num_rays; ++i) {
         const float sx = ctx->screen[i].x, sy = ctx->screen[i].y;
@@ -245,6 +255,10 @@ static ObscuraStatus pinhole_project(const void *projection, const ObscuraProjec
         if (sx > 0.8f) {
             ray->max_dist = 0.5f * ray->min_dist;
         }
+#endif
+#ifdef DEFECT_CLIP_SPHERES
+        /* Clipping spheres while reporting CameraZ: min_dist/max_dist not at the planes. */
+        ray->min_dist = p->near_dist;
 #endif
 #ifdef DEFECT_NAN_TINT
         if (sx < -0.8f) {
