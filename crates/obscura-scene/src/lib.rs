@@ -9,6 +9,7 @@
 //! numbers. Times in motion samples are in the scene's own units (those of `Shutter`); the renderer
 //! normalises them to the shutter interval.
 
+mod framing;
 pub mod gltf_scene;
 pub mod obj;
 pub mod rib;

@@ -18,7 +18,7 @@ use glam::Vec3;
 use obscura_host::CameraDesc;
 use obscura_sdk::Rgb;
 
-use crate::gltf_scene::{add_default_dome_if_unlit, frame_scene, grow_bounds};
+use crate::framing::{add_default_dome_if_unlit, frame_scene, grow_bounds};
 use crate::types::{Material, Mesh, MotionTransform, Object, Scene, Shape};
 
 /// An OBJ file (or a material library it names) could not be loaded. Every message starts with the
