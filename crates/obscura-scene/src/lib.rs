@@ -15,6 +15,9 @@ pub mod obj;
 pub mod rib;
 pub mod types;
 
+#[cfg(test)]
+mod test_support;
+
 pub use types::*;
 
 use std::path::Path;

@@ -66,23 +66,8 @@ impl Loader<'_> {
             primitive: prim.index(),
             what,
         };
-        let float = [DataType::F32];
-        self.check_accessor(&pos_acc, Dimensions::Vec3, &float)
-            .map_err(|e| bad(format!("POSITION {e}")))?;
+        self.check_attributes(prim, pos_acc).map_err(bad)?;
         let normal_acc = prim.get(&gltf::Semantic::Normals);
-        if let Some(acc) = &normal_acc {
-            self.check_accessor(acc, Dimensions::Vec3, &float)
-                .map_err(|e| bad(format!("NORMAL {e}")))?;
-        }
-        if let Some(acc) = prim.indices() {
-            self.check_accessor(
-                &acc,
-                Dimensions::Scalar,
-                &[DataType::U8, DataType::U16, DataType::U32],
-            )
-            .map_err(|e| bad(format!("indices {e}")))?;
-        }
-
         let buffers = self.buffers;
         let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
         let positions: Vec<Vec3> = reader
@@ -130,6 +115,31 @@ impl Loader<'_> {
             normals,
             triangles,
         }))
+    }
+
+    /// Checks the accessors of a primitive's positions, normals and indices (see [`Self::check_accessor`]);
+    /// the error names the attribute.
+    fn check_attributes(
+        &self,
+        prim: &gltf::Primitive<'_>,
+        positions: gltf::Accessor<'_>,
+    ) -> Result<(), String> {
+        let float = [DataType::F32];
+        self.check_accessor(&positions, Dimensions::Vec3, &float)
+            .map_err(|e| format!("POSITION {e}"))?;
+        if let Some(acc) = &prim.get(&gltf::Semantic::Normals) {
+            self.check_accessor(acc, Dimensions::Vec3, &float)
+                .map_err(|e| format!("NORMAL {e}"))?;
+        }
+        if let Some(acc) = prim.indices() {
+            self.check_accessor(
+                &acc,
+                Dimensions::Scalar,
+                &[DataType::U8, DataType::U16, DataType::U32],
+            )
+            .map_err(|e| format!("indices {e}"))?;
+        }
+        Ok(())
     }
 
     /// Checks what the `gltf` crate's readers assume (and assert) about an accessor: its type, a

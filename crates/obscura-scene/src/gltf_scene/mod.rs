@@ -7,7 +7,7 @@
 //!
 //! - the default scene (or the first one) and every node under its roots, each node's world matrix
 //!   being the product of its ancestors' local matrices;
-//! - every `TRIANGLES` primitive of every mesh node, as one [`Object`](crate::types::Object) with [`Shape::Mesh`](crate::types::Shape::Mesh): positions,
+//! - every `TRIANGLES` primitive of every mesh node, as one [`Object`] with [`Shape::Mesh`]: positions,
 //!   normals when present, indices (or the implicit `0, 1, 2, …`); other modes are skipped with a
 //!   warning;
 //! - materials, from `pbrMetallicRoughness` factors (textures are ignored, with one warning);
@@ -24,13 +24,16 @@
 //! The file's bytes are checked before they reach code that assumes them valid (GLB header lengths,
 //! accessor types, strides and extents, percent-encoded buffer URIs, the node hierarchy), so a
 //! malformed file gives a [`GltfError`] naming it, never a panic.
+//!
+//! [`Object`]: crate::types::Object
+//! [`Shape::Mesh`]: crate::types::Shape::Mesh
 
 //!
 //! # Layout
 //!
-//! This file holds the entry point and the node walk; [`container`] checks and reads the bytes (GLB
-//! header, buffers, what validation misses), [`mesh`] the triangle primitives, [`camera`],
-//! [`lights`] and [`materials`] convert those to ours.
+//! This file holds the entry point and the node walk; `container.rs` checks and reads the bytes (GLB
+//! header, buffers, what validation misses), `mesh.rs` the triangle primitives, `camera.rs`,
+//! `lights.rs` and `materials.rs` convert those to ours.
 
 mod camera;
 mod container;
@@ -133,18 +136,24 @@ pub enum GltfError {
 /// window `(−ymag·a, ymag·a, −ymag, ymag)`.
 ///
 /// Materials: glTF material `i` is [`Scene::materials`]`[i + 1]`; a primitive without one uses the
-/// default material 0. A non-zero `emissiveFactor` gives [`Material::Constant`](crate::types::Material::Constant); roughness 1 and
-/// metallic 0 give [`Material::Diffuse`](crate::types::Material::Diffuse) of the base colour; anything else [`Material::Surface`](crate::types::Material::Surface) with
+/// default material 0. A non-zero `emissiveFactor` gives [`Material::Constant`]; roughness 1 and
+/// metallic 0 give [`Material::Diffuse`] of the base colour; anything else [`Material::Surface`] with
 /// `diffuse = base·(1 − metallic)`, `specular = lerp(0.04, base, metallic)` and glTF's roughness
 /// (both are perceptual, α = roughness²).
 ///
 /// Lights (`KHR_lights_punctual`, read from the document's JSON because the `gltf` crate exposes the
-/// extension only behind a feature): `directional` → [`Light::Distant`](crate::types::Light::Distant) with the light node's world
+/// extension only behind a feature): `directional` → [`Light::Distant`] with the light node's world
 /// matrix times `S` (glTF's light shines down its −Z, ours along +Z) and the illuminance as
-/// intensity; `point` and `spot` → [`Light::Sphere`](crate::types::Light::Sphere) at the node's world position, 1 % of the scene's
+/// intensity; `point` and `spot` → [`Light::Sphere`] at the node's world position, 1 % of the scene's
 /// diagonal across, with the radiance that makes its radiant intensity equal the glTF intensity
 /// (candela read as W/sr); a spot light's cone is dropped with a warning. A scene with no light gets
 /// a white dome of intensity 1 and a warning, since it would otherwise render black.
+///
+/// [`Material::Constant`]: crate::types::Material::Constant
+/// [`Material::Diffuse`]: crate::types::Material::Diffuse
+/// [`Material::Surface`]: crate::types::Material::Surface
+/// [`Light::Distant`]: crate::types::Light::Distant
+/// [`Light::Sphere`]: crate::types::Light::Sphere
 ///
 /// # Errors
 /// A [`GltfError`] naming the file: unreadable, malformed JSON or GLB, missing or short buffers,

@@ -9,6 +9,7 @@ use proptest::prelude::*;
 
 use super::*;
 use crate::framing::to_row_vector;
+use crate::test_support::camera_point;
 use crate::types::{Light, Material, Shape};
 
 fn base64(bytes: &[u8]) -> String {
@@ -179,9 +180,7 @@ fn fov_param(scene: &Scene) -> f32 {
 }
 
 fn to_camera(scene: &Scene, p: Vec3) -> Vec3 {
-    let m = scene.camera.world_to_camera[0].world_to_camera;
-    let q = m.transform_point(obscura_sdk::Vec3::new(p.x, p.y, p.z));
-    Vec3::new(q.x, q.y, q.z)
+    camera_point(scene, 0, p)
 }
 
 fn close(a: Vec3, b: Vec3) -> bool {

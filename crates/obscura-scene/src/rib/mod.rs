@@ -35,13 +35,17 @@
 //! subdivision tags are skipped with a warning `file:line: …` in [`Scene::warnings`]. Relative paths
 //! (`ReadArchive`, `Display`, `lightColorMap`) resolve against the directory of the file that names them.
 //!
+//! [`Matrix4`]: obscura_sdk::Matrix4
+//! [`Object::transform`]: crate::types::Object::transform
+//!
 //! # Layout
 //!
-//! [`lex`] turns text into requests (a name, its line, its arguments); [`REQUESTS`] says where each known
-//! request may stand and which method of the reader handles it; [`request`] gives those methods typed
-//! access to the arguments and parameter lists. The handlers are grouped by what they describe:
-//! [`options`] (the image and the camera), [`transform`] (the CTM, motion and blocks), [`shading`]
-//! (dicing, materials, lights) and [`geometry`] (with polygons cut by [`triangulate`]).
+//! `lex.rs` turns text into requests (a name, its line, its arguments); the `REQUESTS` table in this
+//! file says where each known request may stand and which method of the reader handles it;
+//! `request.rs` gives those methods typed access to the arguments and parameter lists. The handlers
+//! are grouped by what they describe: `options.rs` (the image and the camera), `transform.rs` (the
+//! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
+//! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
 mod geometry;
 mod lex;

@@ -191,7 +191,8 @@ impl Reader {
         Ok(())
     }
 
-    /// `Display "file" "driver" "channels"`: replaces the displays, or adds one when the file starts with `+`.
+    /// `Display "file" "driver" "channels"`: replaces the displays, or adds one when the file starts
+    /// with `+`.
     pub(super) fn display(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let [
             Value::Str(file),

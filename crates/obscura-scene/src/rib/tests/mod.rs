@@ -11,10 +11,10 @@ mod transform;
 use std::path::Path;
 
 use glam::Vec3;
-use obscura_sdk::Vec3 as SdkVec3;
 use proptest::test_runner::Config as ProptestConfig;
 
 use super::{RibError, parse_str};
+use crate::test_support::camera_point;
 use crate::types::{Object, Scene};
 
 /// No regression files: these tests write nothing outside their temporary directories.
@@ -53,8 +53,11 @@ fn close(a: Vec3, b: Vec3) -> bool {
     (a - b).length() < 1e-5
 }
 
-fn camera_point(scene: &Scene, sample: usize, p: Vec3) -> Vec3 {
-    let m = scene.camera.world_to_camera[sample].world_to_camera;
-    let q = m.transform_point(SdkVec3::new(p.x, p.y, p.z));
-    Vec3::new(q.x, q.y, q.z)
+/// Asserts that camera motion sample `sample` sends the world point `p` to `expected` (within 1e-5).
+fn assert_camera_point(scene: &Scene, sample: usize, p: Vec3, expected: Vec3) {
+    let got = camera_point(scene, sample, p);
+    assert!(
+        close(got, expected),
+        "sample {sample}: {p} went to {got}, expected {expected}"
+    );
 }

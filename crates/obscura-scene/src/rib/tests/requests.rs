@@ -68,21 +68,11 @@ fn structural_requests_are_accepted_silently() {
 #[test]
 fn a_file_without_world_begin_still_gets_its_camera_transform() {
     let scene = ok("Translate 0 0 2");
-    assert!(close(
-        camera_point(&scene, 0, Vec3::ZERO),
-        Vec3::new(0.0, 0.0, 2.0)
-    ));
+    assert_camera_point(&scene, 0, Vec3::ZERO, Vec3::new(0.0, 0.0, 2.0));
 }
 
-#[test]
-fn full_example_scene_using_every_request_parses() {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(
-        dir.path().join("props.rib"),
-        "# an archive\nCylinder 0.5 0 1 360\n",
-    )
-    .unwrap();
-    let text = r#"version 3.04
+/// A scene using every request the reader knows (with `props.rib` beside it).
+const EVERY_REQUEST: &str = r#"version 3.04
 # Obscura's every-request scene
 Declare "squeeze" "float"
 Option "searchpath" "string archive" ["."]
@@ -141,7 +131,16 @@ ReadArchive "props.rib"
   WorldEnd
 FrameEnd
 "#;
-    let scene = parse_str(text, "every.rib", dir.path()).unwrap_or_else(|e| panic!("{e}"));
+
+#[test]
+fn full_example_scene_using_every_request_parses() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("props.rib"),
+        "# an archive\nCylinder 0.5 0 1 360\n",
+    )
+    .unwrap();
+    let scene = parse_str(EVERY_REQUEST, "every.rib", dir.path()).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         scene.warnings,
         vec!["every.rib:4: Option \"searchpath\" is not supported, ignored".to_string()]

@@ -13,10 +13,7 @@ fn translate_before_world_begin_puts_the_world_origin_at_plus_z() {
     assert_eq!(w2c[0].time, 0.25);
     // Row-vector convention: the translation sits in the last row.
     assert_eq!(w2c[0].world_to_camera.0[3], [0.0, 0.0, 5.0, 1.0]);
-    assert!(close(
-        camera_point(&scene, 0, Vec3::ZERO),
-        Vec3::new(0.0, 0.0, 5.0)
-    ));
+    assert_camera_point(&scene, 0, Vec3::ZERO, Vec3::new(0.0, 0.0, 5.0));
 }
 
 #[test]
@@ -24,17 +21,14 @@ fn rotate_90_about_y_sends_world_x_to_camera_minus_z() {
     // Rotation by +90° about +Y in the column-vector formula: x' = x cosθ + z sinθ, z' = −x sinθ + z cosθ,
     // so (1, 0, 0) → (0, 0, −1), behind the camera.
     let scene = ok("Rotate 90 0 1 0\nWorldBegin\n");
-    assert!(close(camera_point(&scene, 0, Vec3::X), Vec3::new(0.0, 0.0, -1.0)));
+    assert_camera_point(&scene, 0, Vec3::X, Vec3::new(0.0, 0.0, -1.0));
 }
 
 #[test]
 fn camera_requests_apply_last_written_first() {
     // Translate is written last, so it acts first: (0,0,0) → (0,0,5) → rotated 90° about Y → (5,0,0).
     let scene = ok("Rotate 90 0 1 0\nTranslate 0 0 5\nWorldBegin\n");
-    assert!(close(
-        camera_point(&scene, 0, Vec3::ZERO),
-        Vec3::new(5.0, 0.0, 0.0)
-    ));
+    assert_camera_point(&scene, 0, Vec3::ZERO, Vec3::new(5.0, 0.0, 0.0));
 }
 
 #[test]
@@ -144,14 +138,8 @@ fn camera_motion_block_gives_one_sample_per_time() {
         ok("Shutter 0 1\nMotionBegin [0 1]\nTranslate 0 0 5\nTranslate 1 0 5\nMotionEnd\nWorldBegin\n");
     let w2c = &scene.camera.world_to_camera;
     assert_eq!(w2c.iter().map(|s| s.time).collect::<Vec<_>>(), vec![0.0, 1.0]);
-    assert!(close(
-        camera_point(&scene, 0, Vec3::ZERO),
-        Vec3::new(0.0, 0.0, 5.0)
-    ));
-    assert!(close(
-        camera_point(&scene, 1, Vec3::ZERO),
-        Vec3::new(1.0, 0.0, 5.0)
-    ));
+    assert_camera_point(&scene, 0, Vec3::ZERO, Vec3::new(0.0, 0.0, 5.0));
+    assert_camera_point(&scene, 1, Vec3::ZERO, Vec3::new(1.0, 0.0, 5.0));
 }
 
 #[test]
