@@ -9,10 +9,14 @@
 //! numbers. Times in motion samples are in the scene's own units (those of `Shutter`); the renderer
 //! normalises them to the shutter interval.
 
+mod framing;
 pub mod gltf_scene;
 pub mod obj;
 pub mod rib;
 pub mod types;
+
+#[cfg(test)]
+mod test_support;
 
 pub use types::*;
 

@@ -3,12 +3,14 @@
 //! Every object (or each run of faces under one `usemtl`) becomes one [`Object`] with [`Shape::Mesh`]
 //! (polygons fan-triangulated, one index per vertex) and the identity transform. Points and lines are
 //! dropped. There is no camera or light in OBJ: the camera frames the geometry with
-//! [`crate::gltf_scene::frame_bounds`] and a 45° `PxrPerspective`, and a white dome lights the scene.
+//! [`frame_bounds`] and a 45° `PxrPerspective`, and a white dome lights the scene.
 //!
 //! `tobj` reports no line numbers and trusts some of its input, so the text is checked first (face
 //! indices against the vertices the file declares, colour statements of the material library) and fed
 //! to `tobj` through a reader that knows which line it is on: every error names the file and, where
 //! there is one, the line, and no input panics.
+//!
+//! [`frame_bounds`]: crate::gltf_scene::frame_bounds
 
 use std::cell::{Cell, RefCell};
 use std::io::{BufRead, Read};
@@ -18,7 +20,7 @@ use glam::Vec3;
 use obscura_host::CameraDesc;
 use obscura_sdk::Rgb;
 
-use crate::gltf_scene::{add_default_dome_if_unlit, frame_scene, grow_bounds};
+use crate::framing::{add_default_dome_if_unlit, frame_scene, grow_bounds};
 use crate::types::{Material, Mesh, MotionTransform, Object, Scene, Shape};
 
 /// An OBJ file (or a material library it names) could not be loaded. Every message starts with the
@@ -57,8 +59,8 @@ pub enum ObjError {
 /// Loads a Wavefront OBJ file into a [`Scene`] for `camera`.
 ///
 /// `camera` supplies format, windows, shutter and clipping; its `world_to_camera` is replaced by
-/// [`crate::gltf_scene::frame_bounds`] of the geometry's bounds with a 45° field of view, and the
-/// projection set to `PxrPerspective` with `"float fov" [45]` (the CLI may override both).
+/// [`frame_bounds`](crate::gltf_scene::frame_bounds) of the geometry's bounds with a 45° field of
+/// view, and the projection set to `PxrPerspective` with `"float fov" [45]` (the CLI may override both).
 ///
 /// Materials from the `mtllib` files, appended after the default material 0 in the order read:
 /// non-zero `Ke` gives [`Material::Constant`]; non-zero `Ks` gives [`Material::Surface`] with `Kd` as
@@ -81,11 +83,42 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
     let text = utf8(path, &bytes)?;
     let usemtl = check_faces(path, text)?;
     let file = path.display().to_string();
+    let Parsed {
+        models,
+        materials,
+        libraries,
+    } = parse(path, text)?;
+
+    let mut scene = Scene::new(camera);
+    read_materials(&mut scene, &file, &libraries, &materials, usemtl);
+    let mut bounds = None;
+    for model in models {
+        if let Some(object) = model_object(path, &file, model, materials.len(), &mut scene.warnings)? {
+            if let Shape::Mesh(mesh) = &object.shape {
+                for &p in &mesh.positions {
+                    grow_bounds(&mut bounds, p);
+                }
+            }
+            scene.objects.push(object);
+        }
+    }
+    if scene.objects.is_empty() {
+        scene
+            .warnings
+            .push(format!("{file}: no faces; the scene has no geometry"));
+    }
+    frame_scene(&mut scene, bounds, &file);
+    add_default_dome_if_unlit(&mut scene, &file);
+    Ok(scene)
+}
+
+/// Runs `tobj` over the checked text through a [`LineReader`], loading material libraries beside the
+/// file. A malformed library is reported before what it may have caused.
+fn parse(path: &Path, text: &str) -> Result<Parsed, ObjError> {
     let base = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-
     let pos = Cell::new(0);
     let mut reader = LineReader {
         data: text.as_bytes(),
@@ -105,7 +138,6 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
         result
     });
     let libraries = libraries.into_inner();
-    // A broken library is reported before what it may have caused.
     for library in &libraries {
         if let LibraryState::Malformed { line, what } = &library.state {
             return Err(ObjError::Parse {
@@ -120,9 +152,33 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
         line: line_at(text.as_bytes(), pos.get()),
         what: e.to_string(),
     })?;
+    Ok(Parsed {
+        models,
+        materials: materials.unwrap_or_default(),
+        libraries,
+    })
+}
 
-    let mut scene = Scene::new(camera);
-    for library in &libraries {
+/// What `tobj` read from a file.
+struct Parsed {
+    /// The objects (or runs of faces under one `usemtl`).
+    models: Vec<tobj::Model>,
+    /// The materials of every library that loaded.
+    materials: Vec<tobj::Material>,
+    /// Every material library the file named, loaded or not.
+    libraries: Vec<Library>,
+}
+
+/// Appends the materials after the default one, warning about unreadable libraries, textures and
+/// `usemtl` names (at their lines) that no library defines.
+fn read_materials(
+    scene: &mut Scene,
+    file: &str,
+    libraries: &[Library],
+    materials: &[tobj::Material],
+    usemtl: Vec<(usize, String)>,
+) {
+    for library in libraries {
         if let LibraryState::Unreadable { what } = &library.state {
             scene.warnings.push(format!(
                 "{file}:{}: cannot read material library {}: {what}; its materials fall back to the default",
@@ -131,9 +187,8 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
             ));
         }
     }
-    let materials = materials.unwrap_or_default();
     let mut textured = None;
-    for m in &materials {
+    for m in materials {
         if textured.is_none() && uses_texture(m) {
             textured = Some(m.name.clone());
         }
@@ -153,71 +208,66 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
             }
         }
     }
+}
 
-    let mut bounds = None;
-    for model in models {
-        let m = model.mesh;
-        let positions: Vec<Vec3> = m
-            .positions
-            .chunks_exact(3)
-            .map(|p| Vec3::new(p[0], p[1], p[2]))
-            .collect();
-        if m.indices.len() < 3 {
-            continue;
-        }
-        if let Some(&i) = m.indices.iter().find(|&&i| i as usize >= positions.len()) {
-            return Err(ObjError::Invalid {
-                path: path.to_path_buf(),
-                what: format!(
-                    "object \"{}\": vertex index {i} out of range ({} vertices)",
-                    model.name,
-                    positions.len()
-                ),
-            });
-        }
-        let normals = if m.normals.len() == m.positions.len() {
-            Some(
-                m.normals
-                    .chunks_exact(3)
-                    .map(|n| Vec3::new(n[0], n[1], n[2]))
-                    .collect(),
-            )
-        } else {
-            if !m.normals.is_empty() {
-                scene.warnings.push(format!(
-                    "{file}: object \"{}\": only some vertices have normals; normals ignored",
-                    model.name
-                ));
-            }
-            None
-        };
-        for &p in &positions {
-            grow_bounds(&mut bounds, p);
-        }
-        let material = match m.material_id {
-            Some(i) if i < materials.len() => u32::try_from(i + 1).unwrap_or(0),
-            _ => 0,
-        };
-        scene.objects.push(Object {
-            shape: Shape::Mesh(Mesh {
-                positions,
-                normals,
-                triangles: m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
-            }),
-            transform: MotionTransform::default(),
-            material,
-            micropolygon_length: 1.0,
-            source: format!("{file}: object \"{}\"", model.name),
+/// One `tobj` model as an object with the identity transform; `None` when it has no triangle.
+fn model_object(
+    path: &Path,
+    file: &str,
+    model: tobj::Model,
+    materials: usize,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Object>, ObjError> {
+    let m = model.mesh;
+    let positions: Vec<Vec3> = m
+        .positions
+        .chunks_exact(3)
+        .map(|p| Vec3::new(p[0], p[1], p[2]))
+        .collect();
+    if m.indices.len() < 3 {
+        return Ok(None);
+    }
+    if let Some(&i) = m.indices.iter().find(|&&i| i as usize >= positions.len()) {
+        return Err(ObjError::Invalid {
+            path: path.to_path_buf(),
+            what: format!(
+                "object \"{}\": vertex index {i} out of range ({} vertices)",
+                model.name,
+                positions.len()
+            ),
         });
     }
-    if scene.objects.is_empty() {
-        scene
-            .warnings
-            .push(format!("{file}: no faces; the scene has no geometry"));
-    }
-    frame_scene(&mut scene, bounds, &file);
-    add_default_dome_if_unlit(&mut scene, &file);
-    Ok(scene)
+    let normals = if m.normals.len() == m.positions.len() {
+        Some(
+            m.normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2]))
+                .collect(),
+        )
+    } else {
+        if !m.normals.is_empty() {
+            warnings.push(format!(
+                "{file}: object \"{}\": only some vertices have normals; normals ignored",
+                model.name
+            ));
+        }
+        None
+    };
+    let material = match m.material_id {
+        Some(i) if i < materials => u32::try_from(i + 1).unwrap_or(0),
+        _ => 0,
+    };
+    Ok(Some(Object {
+        shape: Shape::Mesh(Mesh {
+            positions,
+            normals,
+            triangles: m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+        }),
+        transform: MotionTransform::default(),
+        material,
+        micropolygon_length: 1.0,
+        source: format!("{file}: object \"{}\"", model.name),
+    }))
 }
 
 /// The line (from 1) holding byte `pos`, or the line just ended when `pos` follows its newline: where
@@ -472,368 +522,4 @@ fn roughness_from_ns(ns: f32) -> f32 {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use obscura_sdk::{Format, ParamValue};
-
-    use crate::types::Light;
-
-    const CUBE: &str = "\
-# a unit cube, two materials
-mtllib cube.mtl
-o cube
-v 0 0 0
-v 1 0 0
-v 1 1 0
-v 0 1 0
-v 0 0 1
-v 1 0 1
-v 1 1 1
-v 0 1 1
-vn 0 0 -1
-vn 0 0 1
-vn 0 -1 0
-vn 0 1 0
-vn -1 0 0
-vn 1 0 0
-usemtl red
-f 1//1 4//1 3//1 2//1
-f 5//2 6//2 7//2 8//2
-f 1//3 2//3 6//3 5//3
-usemtl shiny
-f 4//4 8//4 7//4 3//4
-f 1//5 5//5 8//5 4//5
-f 2//6 3//6 7//6 6//6
-";
-
-    const MTL: &str = "\
-newmtl red
-Kd 0.8 0.1 0.1
-
-newmtl shiny
-Kd 0.2 0.2 0.2
-Ks 0.5 0.5 0.5
-Ns 98
-
-newmtl lamp
-Ke 4 4 3
-";
-
-    fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> PathBuf {
-        let path = dir.path().join(name);
-        std::fs::write(&path, text).unwrap();
-        path
-    }
-
-    fn camera() -> CameraDesc {
-        CameraDesc::new(Format::new(640, 480))
-    }
-
-    fn load_cube(mtl: Option<&str>) -> Scene {
-        let dir = tempfile::tempdir().unwrap();
-        if let Some(mtl) = mtl {
-            write(&dir, "cube.mtl", mtl);
-        }
-        load_obj(&write(&dir, "cube.obj", CUBE), camera()).unwrap()
-    }
-
-    fn meshes(scene: &Scene) -> Vec<&Mesh> {
-        scene
-            .objects
-            .iter()
-            .map(|o| match &o.shape {
-                Shape::Mesh(m) => m,
-                other => panic!("not a mesh: {other:?}"),
-            })
-            .collect()
-    }
-
-    #[test]
-    fn obj_cube_has_twelve_triangles_with_normals() {
-        let scene = load_cube(Some(MTL));
-        let meshes = meshes(&scene);
-        assert_eq!(meshes.iter().map(|m| m.triangles.len()).sum::<usize>(), 12);
-        for m in &meshes {
-            let n = m.normals.as_ref().expect("normals");
-            assert_eq!(n.len(), m.positions.len());
-            // Each triangle's winding agrees with its normal up to sign, and the normal is axial.
-            for t in &m.triangles {
-                let [a, b, c] = t.map(|i| m.positions[i as usize]);
-                let face = (b - a).cross(c - a);
-                assert!(face.length() > 0.0);
-                assert!((face.normalize().dot(n[t[0] as usize]).abs() - 1.0).abs() < 1e-6);
-            }
-        }
-        assert!(
-            scene
-                .objects
-                .iter()
-                .all(|o| o.transform == MotionTransform::default())
-        );
-        assert!(scene.objects[0].source.contains("cube.obj"));
-    }
-
-    #[test]
-    fn obj_mtl_materials_map_to_diffuse_surface_and_constant() {
-        let scene = load_cube(Some(MTL));
-        assert_eq!(scene.materials.len(), 4);
-        assert_eq!(
-            scene.materials[1],
-            Material::Diffuse {
-                color: Rgb::new(0.8, 0.1, 0.1)
-            }
-        );
-        let Material::Surface {
-            diffuse,
-            specular,
-            roughness,
-        } = scene.materials[2]
-        else {
-            panic!("{:?}", scene.materials[2])
-        };
-        assert_eq!(
-            (diffuse, specular),
-            (Rgb::new(0.2, 0.2, 0.2), Rgb::new(0.5, 0.5, 0.5))
-        );
-        // Ns 98 is a Beckmann α of sqrt(2/100); our roughness is sqrt(α).
-        assert!(
-            (roughness * roughness - 0.02f32.sqrt()).abs() < 1e-6,
-            "{roughness}"
-        );
-        assert_eq!(
-            scene.materials[3],
-            Material::Constant {
-                color: Rgb::new(4.0, 4.0, 3.0)
-            }
-        );
-        // Three faces (six triangles) each.
-        let mut by_material = [0; 4];
-        for (o, m) in scene.objects.iter().zip(meshes(&scene)) {
-            by_material[o.material as usize] += m.triangles.len();
-        }
-        assert_eq!(by_material, [0, 6, 6, 0]);
-        assert!(
-            scene.warnings.iter().all(|w| !w.contains("material")),
-            "{:?}",
-            scene.warnings
-        );
-    }
-
-    #[test]
-    fn obj_single_value_colour_is_grey() {
-        let scene = load_cube(Some("newmtl red\nKd 0.5\n"));
-        assert_eq!(
-            scene.materials[1],
-            Material::Diffuse {
-                color: Rgb::new(0.5, 0.5, 0.5)
-            }
-        );
-        assert!(
-            scene
-                .warnings
-                .iter()
-                .any(|w| w.contains("usemtl \"shiny\"") && w.contains("cube.obj:22:"))
-        );
-    }
-
-    #[test]
-    fn obj_missing_mtl_warns_and_uses_the_default_material() {
-        let scene = load_cube(None);
-        assert_eq!(scene.materials, vec![Material::default()]);
-        assert!(scene.objects.iter().all(|o| o.material == 0));
-        assert!(
-            scene
-                .warnings
-                .iter()
-                .any(|w| w.contains("cube.obj:2") && w.contains("cube.mtl")),
-            "{:?}",
-            scene.warnings
-        );
-    }
-
-    #[test]
-    fn obj_camera_frames_every_corner_of_the_bounds() {
-        let scene = load_cube(Some(MTL));
-        assert_eq!(scene.projection, "PxrPerspective");
-        let fov = match &scene.projection_params.get("fov").unwrap().value {
-            ParamValue::Floats(v) => v[0],
-            other => panic!("{other:?}"),
-        };
-        assert_eq!(fov, 45.0);
-        let m = scene.camera.world_to_camera[0].world_to_camera;
-        let t = (0.5 * fov.to_radians()).tan() * (1.0 + 1e-4);
-        for i in 0..8 {
-            let corner = obscura_sdk::Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
-            let c = m.transform_point(corner);
-            assert!(
-                c.z > 0.0 && (c.x / c.z).abs() <= t && (c.y / c.z).abs() <= t,
-                "{corner:?} → {c:?}"
-            );
-        }
-    }
-
-    #[test]
-    fn obj_gets_a_default_dome_light() {
-        let scene = load_cube(Some(MTL));
-        assert!(matches!(
-            scene.lights.as_slice(),
-            [Light::Dome {
-                intensity: 1.0,
-                map: None,
-                ..
-            }]
-        ));
-        assert!(scene.warnings.iter().any(|w| w.contains("dome")));
-    }
-
-    fn error_of(obj: &str, mtl: Option<&str>) -> String {
-        let dir = tempfile::tempdir().unwrap();
-        if let Some(mtl) = mtl {
-            write(&dir, "cube.mtl", mtl);
-        }
-        load_obj(&write(&dir, "bad.obj", obj), camera())
-            .unwrap_err()
-            .to_string()
-    }
-
-    #[test]
-    fn obj_malformed_numbers_are_errors_naming_file_and_line() {
-        let e = error_of("v 0 0 0\nv 1 0 0\nv 1 x 0\nf 1 2 3\n", None);
-        assert!(e.contains("bad.obj:3:") && e.contains("position"), "{e}");
-        // The last line without a newline.
-        let e = error_of("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 q", None);
-        assert!(e.contains("bad.obj:4:") && e.contains("face"), "{e}");
-    }
-
-    #[test]
-    fn obj_face_indices_out_of_range_are_errors_not_panics() {
-        for (face, what) in [
-            ("f 1 2 4", "vertex index 4"),
-            ("f 0 1 2", "index 0"),
-            ("f 1/0/1 2/1/1 3/1/1", "texture coordinate index 0"),
-            ("f 1//0 2//1 3//1", "normal index 0"),
-            ("f 1//9223372036854775807 2//1 3//1", "out of range"),
-            ("f -4 -2 -1", "reaches before"),
-            ("f 1//-2 2//1 3//1", "reaches before"),
-        ] {
-            let obj = format!("v 0 0 0\nv 1 0 0\nvt 0 0\nv 0 1 0\nvn 0 0 1\n{face}\n");
-            let e = error_of(&obj, None);
-            assert!(e.contains("bad.obj:6:") && e.contains(what), "{face}: {e}");
-        }
-        // Relative indices inside the range are fine.
-        let dir = tempfile::tempdir().unwrap();
-        let scene = load_obj(
-            &write(&dir, "rel.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"),
-            camera(),
-        )
-        .unwrap();
-        assert_eq!(meshes(&scene)[0].triangles.len(), 1);
-    }
-
-    #[test]
-    fn obj_malformed_mtl_is_an_error_naming_the_mtl_and_line() {
-        let e = error_of(CUBE, Some("newmtl red\nKd 0.5 0.5\n"));
-        assert!(e.contains("cube.mtl:2:") && e.contains("Kd"), "{e}");
-        let e = error_of(CUBE, Some("newmtl red\n\nNs lots\n"));
-        assert!(e.contains("cube.mtl:3:"), "{e}");
-    }
-
-    #[test]
-    fn obj_missing_and_non_utf8_files_are_errors() {
-        let e = load_obj(Path::new("/nonexistent/model.obj"), camera()).unwrap_err();
-        assert!(matches!(e, ObjError::Read { .. }) && e.to_string().contains("/nonexistent/model.obj"));
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("latin1.obj");
-        std::fs::write(&path, b"v 0 0 0\no caf\xe9\n").unwrap();
-        let e = load_obj(&path, camera()).unwrap_err().to_string();
-        assert!(e.contains("latin1.obj:2:") && e.contains("UTF-8"), "{e}");
-    }
-
-    #[test]
-    fn obj_line_at_counts_from_one() {
-        let t = b"a\nbb\nc";
-        assert_eq!(line_at(t, 0), 1);
-        assert_eq!(line_at(t, 2), 1); // just past the first newline: line 1 was consumed
-        assert_eq!(line_at(t, 3), 2);
-        assert_eq!(line_at(t, 6), 3);
-        assert_eq!(line_at(t, 99), 3);
-    }
-
-    #[test]
-    fn obj_roughness_follows_the_blinn_phong_exponent() {
-        assert_eq!(roughness_from_ns(0.0), 1.0);
-        assert_eq!(roughness_from_ns(-5.0), 1.0);
-        assert!(roughness_from_ns(1000.0) < roughness_from_ns(10.0));
-        assert!((roughness_from_ns(6.0).powi(4) - 0.25).abs() < 1e-6);
-    }
-
-    const OBJ_WORDS: &[&str] = &[
-        "v 0 0 0",
-        "v 1 2 3 4",
-        "v 1 2 3 0",
-        "v 1 2",
-        "v 1 2 3 0.5 0.5",
-        "vt 0 0",
-        "vn 0 0 1",
-        "f 1 2 3",
-        "f -1 -2 -3",
-        "f 1/1/1 2/2/2 3/3/3",
-        "f 1//1 2//1 3//1 4//1",
-        "f 2 3",
-        "f 1",
-        "l 1 2",
-        "p 1",
-        "o",
-        "o thing",
-        "g grp",
-        "usemtl a",
-        "usemtl",
-        "mtllib m.mtl",
-        "f 99999999999999999999 1 2",
-        "f 1/-5 2 3",
-        "f a b c",
-        "#",
-        "",
-        "s 1",
-        "f 1/2/3/4 1 1",
-        "f 1/1 2/1 3/1 4/1 5/1",
-        "  o  ",
-        "f",
-    ];
-    const MTL_WORDS: &[&str] = &[
-        "newmtl a",
-        "newmtl",
-        "Kd 1",
-        "Kd 1 2",
-        "Kd 1 2 3",
-        "Ks 1 1 1",
-        "Ns 10",
-        "Ns",
-        "Ke 1 1 1",
-        "map_Kd",
-        "map_Kd t.png",
-        "illum",
-        "d 0.5",
-        "Kd",
-        "Tf 1 1 1",
-        "Ka nan 1 1",
-        "Kd spectral x.rfl",
-    ];
-
-    proptest::proptest! {
-        #[test]
-        fn obj_random_statements_never_panic(
-            obj in proptest::collection::vec(proptest::sample::select(OBJ_WORDS), 0..24),
-            mtl in proptest::collection::vec(proptest::sample::select(MTL_WORDS), 0..8),
-        ) {
-            let dir = tempfile::tempdir().unwrap();
-            write(&dir, "m.mtl", &mtl.join("\n"));
-            let path = write(&dir, "fuzz.obj", &obj.join("\n"));
-            // Any outcome but a panic; a scene always gets a camera and a light.
-            if let Ok(scene) = load_obj(&path, camera()) {
-                proptest::prop_assert_eq!(scene.camera.world_to_camera.len(), 1);
-                proptest::prop_assert!(!scene.lights.is_empty());
-            }
-        }
-    }
-}
+mod tests;

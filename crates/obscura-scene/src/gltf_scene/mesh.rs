@@ -1,0 +1,208 @@
+//! Mesh primitives: each `TRIANGLES` primitive becomes an object, its accessors checked before the
+//! `gltf` crate's readers (which assert) see them.
+
+use glam::{Mat4, Vec3};
+use gltf::accessor::{DataType, Dimensions};
+
+use super::{GltfError, Loader};
+use crate::framing::grow_bounds;
+use crate::types::{Mesh, MotionTransform, Object, Shape};
+
+impl Loader<'_> {
+    /// One object per triangle primitive of `mesh`, placed by `world`.
+    pub(super) fn read_mesh(
+        &mut self,
+        node: &gltf::Node<'_>,
+        mesh: &gltf::Mesh<'_>,
+        world: Mat4,
+    ) -> Result<(), GltfError> {
+        for prim in mesh.primitives() {
+            let Some(shape) = self.read_primitive(mesh.index(), &prim)? else {
+                continue;
+            };
+            for &p in &shape.positions {
+                grow_bounds(&mut self.bounds, world.transform_point3(p));
+            }
+            let name = node.name().map(|n| format!(" \"{n}\"")).unwrap_or_default();
+            let material = prim.material().index().map_or(0, |i| i + 1);
+            self.scene.objects.push(Object {
+                shape: Shape::Mesh(shape),
+                transform: MotionTransform::fixed(world),
+                material: u32::try_from(material).unwrap_or(0),
+                micropolygon_length: 1.0,
+                source: format!(
+                    "{}: node {}{name} mesh {} primitive {}",
+                    self.file,
+                    node.index(),
+                    mesh.index(),
+                    prim.index()
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The triangles of one primitive; `None` (with a warning) when it is not made of triangles.
+    pub(super) fn read_primitive(
+        &mut self,
+        mesh: usize,
+        prim: &gltf::Primitive<'_>,
+    ) -> Result<Option<Mesh>, GltfError> {
+        let here = format!("mesh {mesh} primitive {}", prim.index());
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            self.warn(format!(
+                "{here}: mode {:?} is not TRIANGLES; skipped",
+                prim.mode()
+            ));
+            return Ok(None);
+        }
+        let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+            self.warn(format!("{here}: no POSITION attribute; skipped"));
+            return Ok(None);
+        };
+        let bad = |what: String| GltfError::Primitive {
+            path: self.path.to_path_buf(),
+            mesh,
+            primitive: prim.index(),
+            what,
+        };
+        self.check_attributes(prim, pos_acc).map_err(bad)?;
+        let normal_acc = prim.get(&gltf::Semantic::Normals);
+        let buffers = self.buffers;
+        let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+        let positions: Vec<Vec3> = reader
+            .read_positions()
+            .ok_or_else(|| bad("POSITION data cannot be read".into()))?
+            .map(Vec3::from)
+            .collect();
+        let n = positions.len();
+        let mut normals = None;
+        if normal_acc.is_some() {
+            let ns: Vec<Vec3> = reader
+                .read_normals()
+                .ok_or_else(|| bad("NORMAL data cannot be read".into()))?
+                .map(Vec3::from)
+                .collect();
+            if ns.len() == n {
+                normals = Some(ns);
+            } else {
+                self.warn(format!(
+                    "{here}: {} normals for {n} positions; normals ignored",
+                    ns.len()
+                ));
+            }
+        }
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(ix) => ix.into_u32().collect(),
+            None if prim.indices().is_some() => return Err(bad("index data cannot be read".into())),
+            None => (0..u32::try_from(n).map_err(|_| bad(format!("{n} vertices is too many")))?).collect(),
+        };
+        if let Some(&index) = indices.iter().find(|&&i| i as usize >= n) {
+            return Err(bad(format!(
+                "index {index} is out of range: the primitive has {n} vertices"
+            )));
+        }
+        if !indices.len().is_multiple_of(3) {
+            self.warn(format!(
+                "{here}: {} indices is not a multiple of 3; the last {} ignored",
+                indices.len(),
+                indices.len() % 3
+            ));
+        }
+        let triangles = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        Ok(Some(Mesh {
+            positions,
+            normals,
+            triangles,
+        }))
+    }
+
+    /// Checks the accessors of a primitive's positions, normals and indices (see [`Self::check_accessor`]);
+    /// the error names the attribute.
+    fn check_attributes(
+        &self,
+        prim: &gltf::Primitive<'_>,
+        positions: gltf::Accessor<'_>,
+    ) -> Result<(), String> {
+        let float = [DataType::F32];
+        self.check_accessor(&positions, Dimensions::Vec3, &float)
+            .map_err(|e| format!("POSITION {e}"))?;
+        if let Some(acc) = &prim.get(&gltf::Semantic::Normals) {
+            self.check_accessor(acc, Dimensions::Vec3, &float)
+                .map_err(|e| format!("NORMAL {e}"))?;
+        }
+        if let Some(acc) = prim.indices() {
+            self.check_accessor(
+                &acc,
+                Dimensions::Scalar,
+                &[DataType::U8, DataType::U16, DataType::U32],
+            )
+            .map_err(|e| format!("indices {e}"))?;
+        }
+        Ok(())
+    }
+
+    /// Checks what the `gltf` crate's readers assume (and assert) about an accessor: its type, a
+    /// stride no smaller than an element, and that every element lies inside its view and buffer.
+    pub(super) fn check_accessor(
+        &self,
+        acc: &gltf::Accessor<'_>,
+        dims: Dimensions,
+        types: &[DataType],
+    ) -> Result<(), String> {
+        let which = format!("accessor {}", acc.index());
+        if acc.dimensions() != dims || !types.contains(&acc.data_type()) {
+            return Err(format!(
+                "{which} is {:?} of {:?}; expected {dims:?} of {}",
+                acc.dimensions(),
+                acc.data_type(),
+                types
+                    .iter()
+                    .map(|t| format!("{t:?}"))
+                    .collect::<Vec<_>>()
+                    .join(" or ")
+            ));
+        }
+        if acc.sparse().is_some() {
+            return Err(format!("{which} is sparse, which this reader does not support"));
+        }
+        let count = acc.count();
+        if count == 0 {
+            return Err(format!("{which} has no elements"));
+        }
+        let view = acc.view().ok_or_else(|| format!("{which} has no buffer view"))?;
+        let elem = acc.size();
+        let stride = view.stride().unwrap_or(elem);
+        if stride < elem {
+            return Err(format!(
+                "{which}: buffer view {} has stride {stride}, smaller than one {elem}-byte element",
+                view.index()
+            ));
+        }
+        let end = stride
+            .checked_mul(count - 1)
+            .and_then(|s| s.checked_add(elem))
+            .and_then(|s| s.checked_add(acc.offset()));
+        if end.is_none_or(|e| e > view.length()) {
+            return Err(format!(
+                "{which}: {count} elements from byte {} run past the end of buffer view {} ({} bytes)",
+                acc.offset(),
+                view.index(),
+                view.length()
+            ));
+        }
+        let buffer_len = self.buffers.get(view.buffer().index()).map_or(0, Vec::len);
+        if view
+            .offset()
+            .checked_add(view.length())
+            .is_none_or(|e| e > buffer_len)
+        {
+            return Err(format!(
+                "{which}: buffer view {} runs past the end of buffer {} ({buffer_len} bytes)",
+                view.index(),
+                view.buffer().index()
+            ));
+        }
+        Ok(())
+    }
+}

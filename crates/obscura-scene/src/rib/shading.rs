@@ -1,0 +1,148 @@
+//! Shading state and emitters: `Attribute` (dicing), `Bxdf` materials and lights.
+
+use obscura_sdk::Rgb;
+
+use super::lex::Value;
+use super::request::{Req, get_color, get_float, get_string};
+use super::{Reader, RibError};
+use crate::types::{Light, Material};
+
+impl Reader {
+    /// `Attribute "dice"` with `micropolygonlength`; other attributes are warned about once each.
+    pub(super) fn attribute(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [Value::Str(name), rest @ ..] = r.args else {
+            return Err(r.err("Attribute expects an attribute name (a string) then parameters"));
+        };
+        if name != "dice" {
+            if self.warned_attributes.insert(name.clone()) {
+                self.warn(r, format!("Attribute \"{name}\" is not supported, ignored"));
+            }
+            return Ok(());
+        }
+        let list = self.params(r, rest, &["float micropolygonlength"], false)?;
+        if let Some(x) = get_float(&list, "micropolygonlength") {
+            if x <= 0.0 {
+                return Err(r.err(format!(
+                    "Attribute \"dice\": micropolygonlength must be greater than 0, got {x}"
+                )));
+            }
+            self.micropolygon_length = x;
+        }
+        Ok(())
+    }
+
+    /// `Bxdf`: `PxrDiffuse`, `PxrConstant` or `PxrSurface` becomes the current material; others warn and
+    /// select the default material.
+    pub(super) fn bxdf(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [Value::Str(kind), Value::Str(_handle), rest @ ..] = r.args else {
+            return Err(r.err("Bxdf expects a Bxdf name and a handle (2 strings) then parameters"));
+        };
+        let material = match kind.as_str() {
+            "PxrDiffuse" => {
+                let list = self.params(r, rest, &["color diffuseColor"], false)?;
+                Material::Diffuse {
+                    color: get_color(&list, "diffuseColor").unwrap_or(Rgb::new(0.18, 0.18, 0.18)),
+                }
+            }
+            "PxrConstant" => {
+                let list = self.params(r, rest, &["color emitColor"], false)?;
+                Material::Constant {
+                    color: get_color(&list, "emitColor").unwrap_or(Rgb::WHITE),
+                }
+            }
+            "PxrSurface" => {
+                let table = [
+                    "color diffuseColor",
+                    "float diffuseGain",
+                    "color specularFaceColor",
+                    "float specularRoughness",
+                ];
+                let list = self.params(r, rest, &table, false)?;
+                let color = get_color(&list, "diffuseColor").unwrap_or(Rgb::new(0.18, 0.18, 0.18));
+                let gain = get_float(&list, "diffuseGain").unwrap_or(1.0);
+                Material::Surface {
+                    diffuse: Rgb::new(color.r * gain, color.g * gain, color.b * gain),
+                    specular: get_color(&list, "specularFaceColor").unwrap_or(Rgb::BLACK),
+                    roughness: get_float(&list, "specularRoughness").unwrap_or(0.2),
+                }
+            }
+            other => {
+                self.warn(
+                    r,
+                    format!(
+                        "Bxdf: unknown Bxdf \"{other}\" (known: PxrDiffuse, PxrConstant, PxrSurface), using the default material"
+                    ),
+                );
+                self.material = 0;
+                return Ok(());
+            }
+        };
+        self.material = self.scene.materials.len() as u32;
+        self.scene.materials.push(material);
+        Ok(())
+    }
+
+    /// `Light`, `LightSource` or `AreaLightSource`: the Pxr dome, distant, rect and sphere lights, placed by
+    /// the current transform.
+    pub(super) fn light(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [Value::Str(kind), Value::Str(_) | Value::Num(_), rest @ ..] = r.args else {
+            return Err(r.err(format!(
+                "{} expects a light name and a handle, e.g. {} \"PxrDomeLight\" \"dome\"",
+                r.name, r.name
+            )));
+        };
+        let mut table = vec!["color lightColor", "float intensity", "float exposure"];
+        match kind.as_str() {
+            "PxrDomeLight" => table.push("string lightColorMap"),
+            "PxrDistantLight" => table.push("float angleExtent"),
+            "PxrRectLight" | "PxrSphereLight" => {}
+            other => {
+                self.warn(
+                    r,
+                    format!(
+                        "{}: unknown light \"{other}\" (known: PxrDomeLight, PxrDistantLight, PxrRectLight, PxrSphereLight), skipped",
+                        r.name
+                    ),
+                );
+                return Ok(());
+            }
+        }
+        let list = self.params(r, rest, &table, false)?;
+        let color = get_color(&list, "lightColor").unwrap_or(Rgb::WHITE);
+        let intensity = get_float(&list, "intensity").unwrap_or(1.0);
+        let exposure = get_float(&list, "exposure").unwrap_or(0.0);
+        let transform = self.ctm.first();
+        let light = match kind.as_str() {
+            "PxrDomeLight" => Light::Dome {
+                color,
+                intensity,
+                exposure,
+                map: get_string(&list, "lightColorMap")
+                    .filter(|m| !m.is_empty())
+                    .map(|m| r.resolve(m)),
+                transform,
+            },
+            "PxrDistantLight" => Light::Distant {
+                color,
+                intensity,
+                exposure,
+                angle_extent: get_float(&list, "angleExtent").unwrap_or(0.53),
+                transform,
+            },
+            "PxrRectLight" => Light::Rect {
+                color,
+                intensity,
+                exposure,
+                transform,
+            },
+            _ => Light::Sphere {
+                color,
+                intensity,
+                exposure,
+                transform,
+            },
+        };
+        self.scene.lights.push(light);
+        Ok(())
+    }
+}

@@ -1,0 +1,95 @@
+//! `ReadArchive` and `parse_file`: paths, nesting, and the file named in messages.
+
+use glam::{Mat4, Vec3};
+
+use crate::rib::parse_file;
+
+#[test]
+fn read_archive_reads_in_place_with_the_same_state() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let main = dir.path().join("main.rib");
+    std::fs::write(
+        &main,
+        "WorldBegin\nBxdf \"PxrDiffuse\" \"d\"\nTranslate 1 0 0\nReadArchive \"sub/part.rib\"\nSphere 1 -1 1 360\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("sub/part.rib"),
+        "Cone 1 1 360\nReadArchive \"leaf.rib\"\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("sub/leaf.rib"),
+        "Translate 0 1 0\nDisk 0 1 360\nBogus 1\n",
+    )
+    .unwrap();
+    let scene = parse_file(&main).unwrap();
+    let part = dir.path().join("sub/part.rib").display().to_string();
+    let leaf = dir.path().join("sub/leaf.rib").display().to_string();
+    let o = &scene.objects;
+    assert_eq!(o.len(), 3);
+    assert_eq!(o[0].source, format!("{part}:1"));
+    assert_eq!(
+        (o[0].material, o[0].transform.samples[0].1),
+        (1, Mat4::from_translation(Vec3::X))
+    );
+    assert_eq!(o[1].source, format!("{leaf}:2"));
+    // The archive's Translate stays in force after it: the state is shared.
+    assert_eq!(
+        o[2].transform.samples[0].1,
+        Mat4::from_translation(Vec3::new(1.0, 1.0, 0.0))
+    );
+    assert_eq!(
+        scene.warnings,
+        vec![format!("{leaf}:3: unknown request Bogus, skipped")]
+    );
+}
+
+#[test]
+fn missing_archive_names_the_including_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let main = dir.path().join("main.rib");
+    std::fs::write(&main, "WorldBegin\nReadArchive \"nope.rib\"\n").unwrap();
+    let e = parse_file(&main).unwrap_err();
+    assert_eq!(
+        (e.file.as_str(), e.line),
+        (main.display().to_string().as_str(), 2)
+    );
+    let missing = dir.path().join("nope.rib").display().to_string();
+    assert!(
+        e.message
+            .starts_with(&format!("ReadArchive: cannot read \"{missing}\": ")),
+        "{e}"
+    );
+}
+
+#[test]
+fn recursive_archives_stop_at_32_levels() {
+    let dir = tempfile::tempdir().unwrap();
+    let me = dir.path().join("self.rib");
+    std::fs::write(&me, "ReadArchive \"self.rib\"\n").unwrap();
+    let e = parse_file(&me).unwrap_err();
+    assert_eq!((e.file.as_str(), e.line), (me.display().to_string().as_str(), 1));
+    assert_eq!(
+        e.message,
+        "ReadArchive \"self.rib\": archives nested more than 32 deep (does an archive read itself?)"
+    );
+}
+
+#[test]
+fn parse_file_names_the_file_in_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bad.rib");
+    std::fs::write(&path, "\n\nFormat 1 2\n").unwrap();
+    let e = parse_file(&path).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{}:3: Format expects width height pixelaspect (3 numbers), got 2",
+            path.display()
+        )
+    );
+    let e = parse_file(&dir.path().join("absent.rib")).unwrap_err();
+    assert_eq!(e.line, 0);
+}
