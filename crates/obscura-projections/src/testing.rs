@@ -1,5 +1,6 @@
 //! Test helpers: run a projection on hand-made samples.
 
+use obscura_sdk::contract;
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamList, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Rgb,
@@ -158,6 +159,16 @@ pub fn project_points(
     aperture: &[Point2],
     time: &[f32],
 ) -> Vec<RayGeometry> {
+    project_batch(p, screen, aperture, time).0
+}
+
+/// Projects one batch of hand-made samples and returns the rays, output times and tints.
+pub fn project_batch(
+    p: &dyn Projection,
+    screen: &[Point2],
+    aperture: &[Point2],
+    time: &[f32],
+) -> (Vec<RayGeometry>, Vec<f32>, Vec<Rgb>) {
     let n = screen.len();
     let lens: Vec<Point2> = aperture
         .iter()
@@ -168,7 +179,7 @@ pub fn project_points(
     let mut tint = vec![Rgb::WHITE; n];
     let mut ctx = ProjectionContext::new(screen, &lens, aperture, &mut time, &mut rays, &mut tint).unwrap();
     p.project(&mut ctx);
-    rays
+    (rays, time, tint)
 }
 
 /// The rays through every pixel centre of `format` with the default screen window, row by row.
@@ -274,13 +285,16 @@ pub fn contract_points(format: Format) -> Vec<Point2> {
     pts
 }
 
-/// Checks issue 4's contract on one projection and panics with a description of the first breach:
+/// Checks the contract on one projection and panics with a description of the first breach:
 ///
-/// - every field finite (`max_dist` may be +∞), radius and spread ≥ 0, `min_dist ≤ max_dist`;
-/// - directions unit length (±1e-5) or exactly zero;
+/// - every ray keeps the contract's per-ray rules ([`contract::check_ray`], the host's own), and its
+///   clipping distances are the environment's planes or spheres by its deep metric
+///   ([`contract::clipping_distances`]);
+/// - beyond the contract, the bar for built-ins: directions unit to 10⁻⁵ (the contract allows 10⁻³)
+///   and `min_dist` finite;
 /// - DeepMetric RayLength whenever a direction has `z < 0`;
 /// - DicingHint Perspective ⇒ one shared origin; Orthographic ⇒ one shared direction;
-/// - every property answer of the right type;
+/// - every property answer usable ([`contract::ask_property`]), and every float answer finite and > 0;
 /// - `unproject(O + depth·D) = s` within `roundtrip_px` pixels for every valid sample inside the window
 ///   (or, where a map glues edges, a screen point whose ray is within `roundtrip_px` pixels' angle);
 /// - `ray_spread` within `spread_rel_tol` of ½·sqrt(αx·αy), with αx, αy one-sided finite differences of
@@ -293,13 +307,15 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     let pts = contract_points(format);
     let mut stats = ContractStats::default();
     for prop in ProjectionProperty::ALL {
-        if let Some(v) = p.property(prop) {
-            assert!(prop.accepts(v), "{prop:?} answered with {v:?}");
-            if let PropertyValue::Float(f) = v {
-                assert!(f.is_finite() && f > 0.0, "{prop:?} = {f}");
-            }
+        match contract::ask_property(p, prop) {
+            Ok(Some(PropertyValue::Float(f))) => assert!(f.is_finite() && f > 0.0, "{prop:?} = {f}"),
+            Ok(_) => {}
+            Err(problem) => panic!("{prop:?}: {problem:?}"),
         }
     }
+    let env = ProjectionEnvironment::for_format(format);
+    let (near, far) = (env.clipping_near(), env.clipping_far());
+    let deep_metric = contract::Properties::read(p, &env).0.deep_metric;
     let hint = p.property(ProjectionProperty::DicingHint);
     let metric = p.property(ProjectionProperty::DeepMetric);
     let inside =
@@ -308,7 +324,7 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     let mut first_dir: Option<Vec3> = None;
     for &time in &t.times {
         let n = pts.len();
-        let rays = project_points(p, &pts, &vec![Point2::ZERO; n], &vec![time; n]);
+        let (rays, times, tints) = project_batch(p, &pts, &vec![Point2::ZERO; n], &vec![time; n]);
         // Neighbours a hundredth of a pixel away, for the finite differences.
         let h = 0.01f32;
         let offsets = [(h * px, 0.0), (-h * px, 0.0), (0.0, h * py), (0.0, -h * py)];
@@ -322,31 +338,30 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
         for (i, (s, r)) in pts.iter().zip(&rays).enumerate() {
             stats.samples += 1;
             let at = format!("screen ({}, {}) time {time}", s.x, s.y);
-            assert!(
-                r.origin.is_finite()
-                    && r.direction.is_finite()
-                    && r.origin_radius.is_finite()
-                    && r.ray_spread.is_finite()
-                    && r.min_dist.is_finite()
-                    && !r.max_dist.is_nan(),
-                "non-finite ray at {at}: {r:?}"
-            );
-            assert!(
-                r.origin_radius >= 0.0 && r.ray_spread >= 0.0,
-                "negative footprint at {at}: {r:?}"
-            );
-            assert!(
-                r.min_dist >= 0.0 && r.min_dist <= r.max_dist,
-                "bad clipping range at {at}: {r:?}"
-            );
+            if let Some(b) = contract::check_ray(r, times[i], tints[i]) {
+                panic!("{:?} at {at}: {} = {} ({r:?})", b.violation, b.what, b.got);
+            }
+            assert!(r.min_dist.is_finite(), "infinite min_dist at {at}: {r:?}");
             if r.direction == Vec3::ZERO {
                 continue;
             }
             let len = r.direction.length();
             assert!(
-                (len - 1.0).abs() <= 1e-5,
+                (len - 1.0).abs() <= BUILTIN_UNIT_TOLERANCE,
                 "direction not unit ({len}) at {at}: {r:?}"
             );
+            if let Some((lo, hi)) =
+                contract::clipping_distances(r.origin, r.direction, deep_metric, near, far)
+            {
+                let off =
+                    |got: f32, want: f32| got != want && (got - want).abs() > 1e-4 * want.abs().max(1e-3);
+                assert!(
+                    !off(r.min_dist, lo) && !off(r.max_dist, hi),
+                    "clipping ({}, {}) at {at}, expected ({lo}, {hi}) for {deep_metric:?}: {r:?}",
+                    r.min_dist,
+                    r.max_dist
+                );
+            }
             stats.valid += 1;
             if r.direction.z < 0.0 {
                 stats.backward += 1;
@@ -429,6 +444,10 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     }
     stats
 }
+
+/// How close to unit length a built-in's directions are (the contract itself allows
+/// [`contract::UNIT_TOLERANCE`]).
+pub const BUILTIN_UNIT_TOLERANCE: f32 = 1e-5;
 
 /// The angle between two directions in radians, in `f64` (`atan2(|a × b|, a·b)`, accurate at every
 /// size).
