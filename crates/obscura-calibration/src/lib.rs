@@ -4,6 +4,8 @@
 //! and NVIDIA's f-theta as one Obscura projection, `CalibratedCamera`, exact in both directions, and
 //! readers for the calibration files those tools write.
 
+#![forbid(unsafe_code)]
+
 pub mod files;
 
 mod distortion;

@@ -10,9 +10,9 @@
 //!   pinhole family, OCamCalib's `[c d; e 1]` with its row/column swap, f-theta's linear term);
 //! - tilt: OpenCV's tilted-sensor homography (14-coefficient model only);
 //! - undistort: the exact inverse of the model's polynomial distortion
-//!   ([`crate::distortion`]), on the perspective plane (`m = (x/z, y/z)`) or the equidistant plane
+//!   (`distortion.rs`), on the perspective plane (`m = (x/z, y/z)`) or the equidistant plane
 //!   (`m = θ·(x, y)/|(x, y)|`) of COLMAP's fisheye models;
-//! - lift: the model's ray of `m` ([`crate::lift`]): pinhole, equidistant, unified/EUCM, Mei,
+//! - lift: the model's ray of `m` (`lift.rs`): pinhole, equidistant, unified/EUCM, Mei,
 //!   double sphere, division, FOV, equirectangular, OCamCalib's `pol`, f-theta's angle polynomial.
 //!
 //! Ray → pixel ("projection" in CV terms) runs the same stages forward. Each stage's Jacobian is

@@ -13,6 +13,8 @@
 //!   `project`, validates every ray and culls what breaks the contract, counting it (the rules
 //!   themselves are [`obscura_sdk::contract`]).
 
+#![forbid(unsafe_code)]
+
 pub mod aperture;
 pub mod camera;
 pub mod driver;

@@ -9,6 +9,8 @@
 //! numbers. Times in motion samples are in the scene's own units (those of `Shutter`); the renderer
 //! normalises them to the shutter interval.
 
+#![forbid(unsafe_code)]
+
 mod framing;
 pub mod gltf_scene;
 pub mod obj;
