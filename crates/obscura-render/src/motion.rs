@@ -113,6 +113,8 @@ impl Motion {
     }
 }
 
+/// The interpolation against an independent model; that model, `rotating_transform`, is
+/// shared with the scene accelerator's tests.
 #[cfg(test)]
 pub(crate) mod tests {
     use core::f32::consts::FRAC_PI_2;

@@ -51,6 +51,28 @@ struct Span {
     depth: u32,
 }
 
+/// A node still to build.
+struct Subtree<'r> {
+    /// Its primitives: the part of the leaf order that starts at `offset`.
+    refs: &'r mut [u32],
+    offset: usize,
+    /// Its index in the flat node vector.
+    slot: usize,
+    span: Span,
+}
+
+impl<'r> Subtree<'r> {
+    /// The root (slot 0) over all of `refs`.
+    fn root(refs: &'r mut [u32], span: Span) -> Self {
+        Self {
+            refs,
+            offset: 0,
+            slot: 0,
+            span,
+        }
+    }
+}
+
 /// A subtree left for the parallel phase.
 struct Task {
     slot: usize,
@@ -251,51 +273,63 @@ impl Builder<'_> {
         )
     }
 
-    fn build_seq(&self, refs: &mut [u32], offset: usize, slot: usize, span: Span, nodes: &mut Vec<Node>) {
+    /// Makes `node` a leaf, or splits it: then allocates its two children in `nodes` and returns them,
+    /// left first.
+    fn split_node<'r>(&self, node: Subtree<'r>, nodes: &mut Vec<Node>) -> Option<[Subtree<'r>; 2]> {
+        let Subtree {
+            refs,
+            offset,
+            slot,
+            span,
+        } = node;
         match self.split(refs, &span) {
-            None => nodes[slot] = Node::new(&span.bounds, offset as u32, refs.len() as u32),
+            None => {
+                nodes[slot] = Node::new(&span.bounds, offset as u32, refs.len() as u32);
+                None
+            }
             Some((mid, left, right)) => {
                 let l = nodes.len();
                 nodes.extend([Node::default(); 2]);
                 nodes[slot] = Node::new(&span.bounds, l as u32, 0);
                 let (a, b) = refs.split_at_mut(mid);
-                self.build_seq(a, offset, l, left, nodes);
-                self.build_seq(b, offset + mid, l + 1, right, nodes);
+                Some([
+                    Subtree {
+                        refs: a,
+                        offset,
+                        slot: l,
+                        span: left,
+                    },
+                    Subtree {
+                        refs: b,
+                        offset: offset + mid,
+                        slot: l + 1,
+                        span: right,
+                    },
+                ])
             }
         }
     }
 
+    /// Builds `node` and everything below it.
+    fn build_seq(&self, node: Subtree<'_>, nodes: &mut Vec<Node>) {
+        for child in self.split_node(node, nodes).into_iter().flatten() {
+            self.build_seq(child, nodes);
+        }
+    }
+
     /// Like [`Builder::build_seq`], but subtrees of at most `grain` primitives become [`Task`]s.
-    #[allow(clippy::too_many_arguments)]
-    fn build_top(
-        &self,
-        refs: &mut [u32],
-        offset: usize,
-        slot: usize,
-        span: Span,
-        nodes: &mut Vec<Node>,
-        tasks: &mut Vec<Task>,
-        grain: usize,
-    ) {
-        if refs.len() <= grain {
+    fn build_top(&self, node: Subtree<'_>, nodes: &mut Vec<Node>, tasks: &mut Vec<Task>, grain: usize) {
+        if node.refs.len() <= grain {
             tasks.push(Task {
-                slot,
-                offset,
-                len: refs.len(),
-                span,
+                slot: node.slot,
+                offset: node.offset,
+                len: node.refs.len(),
+                span: node.span,
             });
             return;
         }
-        match self.split(refs, &span) {
-            None => nodes[slot] = Node::new(&span.bounds, offset as u32, refs.len() as u32),
-            Some((mid, left, right)) => {
-                let l = nodes.len();
-                nodes.extend([Node::default(); 2]);
-                nodes[slot] = Node::new(&span.bounds, l as u32, 0);
-                let (a, b) = refs.split_at_mut(mid);
-                self.build_top(a, offset, l, left, nodes, tasks, grain);
-                self.build_top(b, offset + mid, l + 1, right, nodes, tasks, grain);
-            }
+        for child in self.split_node(node, nodes).into_iter().flatten() {
+            self.build_top(child, nodes, tasks, grain);
         }
     }
 
@@ -307,13 +341,13 @@ impl Builder<'_> {
         let span = self.span(refs, 0);
         let mut nodes = vec![Node::default()];
         if refs.len() < PARALLEL_BUILD_MIN {
-            self.build_seq(refs, 0, 0, span, &mut nodes);
+            self.build_seq(Subtree::root(refs, span), &mut nodes);
             return Self::finish(&nodes);
         }
 
         let grain = (refs.len() / 16).max(4096);
         let mut tasks = Vec::new();
-        self.build_top(refs, 0, 0, span, &mut nodes, &mut tasks, grain);
+        self.build_top(Subtree::root(&mut *refs, span), &mut nodes, &mut tasks, grain);
         // Tasks come out in depth-first order, so their ranges are increasing and disjoint.
         let mut jobs = Vec::with_capacity(tasks.len());
         let mut rest: &mut [u32] = refs;
@@ -329,7 +363,7 @@ impl Builder<'_> {
             .into_par_iter()
             .map(|(task, chunk)| {
                 let mut local = vec![Node::default()];
-                self.build_seq(chunk, 0, 0, task.span, &mut local);
+                self.build_seq(Subtree::root(chunk, task.span), &mut local);
                 local
             })
             .collect();

@@ -7,6 +7,7 @@ use obscura_scene::Mesh;
 use super::{DiceError, check_finite};
 use crate::ray::TriangleMesh;
 
+/// A polygon mesh, checked and converted.
 pub(super) fn pass_through(mesh: &Mesh) -> Result<TriangleMesh, DiceError> {
     let n = mesh.positions.len();
     check_finite(&mesh.positions)?;

@@ -32,6 +32,7 @@ use obscura_scene::SubdivMesh;
 use rayon::prelude::*;
 
 use self::limit::limit_surface;
+/// Also named by the tests, which build a level's topology directly.
 pub(super) use self::topology::Topology;
 use super::{
     DiceError, DicingContext, INFINITE_SHARPNESS, MAX_QUADS_PER_PRIMITIVE, MAX_SUBDIVISION_LEVEL,
@@ -242,11 +243,29 @@ pub(super) fn subdivide(level: &Level, topology: &Topology) -> Result<Level, Dic
         .map(|v| vertex_point(level, topology, &face_points, v))
         .collect();
 
+    let (face_start, face_verts) = child_faces(level, topology);
+    let creases = child_creases(topology, nv as u32);
+    let positions = vertex_points
+        .into_iter()
+        .chain(edge_points)
+        .chain(face_points)
+        .collect();
+    Ok(Level {
+        positions,
+        face_start,
+        face_verts,
+        creases,
+    })
+}
+
+/// The faces of the next level as `(face_start, face_verts)`: each n-gon becomes n quads
+/// `(corner, edge point, face point, previous edge point)`, numbered vertices, then edges, then faces.
+fn child_faces(level: &Level, topology: &Topology) -> (Vec<usize>, Vec<u32>) {
     let mut face_start = Vec::with_capacity(level.face_verts.len() + 1);
     let mut face_verts = Vec::with_capacity(4 * level.face_verts.len());
     face_start.push(0);
-    let (nv, ne) = (nv as u32, ne as u32);
-    for f in 0..nf {
+    let (nv, ne) = (level.positions.len() as u32, topology.edges.len() as u32);
+    for f in 0..level.face_count() {
         let start = level.face_start[f];
         let n = level.face_start[f + 1] - start;
         for i in 0..n {
@@ -260,6 +279,12 @@ pub(super) fn subdivide(level: &Level, topology: &Topology) -> Result<Level, Dic
             face_start.push(face_verts.len());
         }
     }
+    (face_start, face_verts)
+}
+
+/// The creases of the next level: each semi-sharp or sharp interior edge's two halves, with the
+/// sharpness [`Topology::child_sharpness`] gives them, sorted; `nv` is the old vertex count.
+fn child_creases(topology: &Topology, nv: u32) -> Vec<(u32, u32, f32)> {
     let mut creases = Vec::new();
     for (id, e) in topology.edges.iter().enumerate() {
         if e.is_boundary() || e.sharpness <= 0.0 {
@@ -273,17 +298,7 @@ pub(super) fn subdivide(level: &Level, topology: &Topology) -> Result<Level, Dic
         }
     }
     creases.sort_unstable_by_key(|x| (x.0, x.1));
-    let positions = vertex_points
-        .into_iter()
-        .chain(edge_points)
-        .chain(face_points)
-        .collect();
-    Ok(Level {
-        positions,
-        face_start,
-        face_verts,
-        creases,
-    })
+    creases
 }
 
 /// The new position of an old vertex.

@@ -42,74 +42,8 @@ pub(crate) struct Topology {
 impl Topology {
     /// The topology of `level`; fails on an edge shared by more than two faces.
     pub(crate) fn build(level: &Level) -> Result<Topology, DiceError> {
-        // Bucket the face corners by the lower end of their edge (a counting sort), then sort each
-        // small bucket by the upper end: edges come out sorted by (lo, hi) without a global sort.
         let n = level.positions.len();
-        let corners = level.face_verts.len();
-        let mut corner_face = vec![0u32; corners];
-        let mut corner_next = vec![0u32; corners];
-        for f in 0..level.face_count() {
-            let face = level.face(f);
-            for i in 0..face.len() {
-                corner_face[level.face_start[f] + i] = f as u32;
-                corner_next[level.face_start[f] + i] = face[(i + 1) % face.len()];
-            }
-        }
-        let ends = |c: usize| {
-            let (a, b) = (level.face_verts[c], corner_next[c]);
-            (a.min(b), a.max(b))
-        };
-        let mut bucket_start = vec![0usize; n + 1];
-        for c in 0..corners {
-            bucket_start[ends(c).0 as usize + 1] += 1;
-        }
-        for v in 0..n {
-            bucket_start[v + 1] += bucket_start[v];
-        }
-        let mut fill = bucket_start.clone();
-        let mut entries = vec![(0u32, 0u32); corners];
-        for c in 0..corners {
-            let (lo, hi) = ends(c);
-            entries[fill[lo as usize]] = (hi, c as u32);
-            fill[lo as usize] += 1;
-        }
-        let mut edges: Vec<Edge> = Vec::with_capacity(corners / 2 + n);
-        let mut corner_edge = vec![0u32; corners];
-        for lo in 0..n {
-            let bucket = &mut entries[bucket_start[lo]..bucket_start[lo + 1]];
-            bucket.sort_unstable();
-            for group in bucket.chunk_by(|x, y| x.0 == y.0) {
-                let (lo, hi) = (lo as u32, group[0].0);
-                if group.len() > 2 {
-                    return Err(DiceError::NonManifoldEdge {
-                        a: lo,
-                        b: hi,
-                        faces: group.len(),
-                    });
-                }
-                let id = edges.len() as u32;
-                let mut faces = [u32::MAX; 2];
-                for (slot, &(_, c)) in group.iter().enumerate() {
-                    faces[slot] = corner_face[c as usize];
-                    corner_edge[c as usize] = id;
-                }
-                let sharpness = if group.len() < 2 {
-                    f32::INFINITY
-                } else {
-                    level
-                        .creases
-                        .binary_search_by(|c| (c.0, c.1).cmp(&(lo, hi)))
-                        .map_or(0.0, |i| level.creases[i].2)
-                };
-                edges.push(Edge {
-                    lo,
-                    hi,
-                    faces,
-                    face_count: group.len() as u32,
-                    sharpness,
-                });
-            }
-        }
+        let (edges, corner_edge) = sorted_edges(level)?;
         let (vertex_edge_start, vertex_edges) = adjacency(
             n,
             edges
@@ -173,8 +107,12 @@ impl Topology {
     }
 }
 
-/// A compressed adjacency list from `(vertex, item)` pairs.
-fn adjacency(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<usize>, Vec<u32>) {
+/// A compressed adjacency list from `(vertex, item)` pairs (a counting sort by vertex): vertex `v`'s
+/// items, in the order given, are `items[start[v]..start[v + 1]]`.
+fn adjacency<T: Copy + Default>(
+    n: usize,
+    pairs: impl Iterator<Item = (u32, T)> + Clone,
+) -> (Vec<usize>, Vec<T>) {
     let mut start = vec![0usize; n + 1];
     for (v, _) in pairs.clone() {
         start[v as usize + 1] += 1;
@@ -183,10 +121,85 @@ fn adjacency(n: usize, pairs: impl Iterator<Item = (u32, u32)> + Clone) -> (Vec<
         start[i + 1] += start[i];
     }
     let mut fill = start.clone();
-    let mut items = vec![0u32; start[n]];
+    let mut items = vec![T::default(); start[n]];
     for (v, item) in pairs {
         items[fill[v as usize]] = item;
         fill[v as usize] += 1;
     }
     (start, items)
+}
+
+/// The edges of `level`, sorted by `(lo, hi)`, and the edge from each face corner to the next.
+///
+/// The face corners are bucketed by the lower end of their edge (a counting sort), then each small
+/// bucket is sorted by the upper end: edges come out sorted by `(lo, hi)` without a global sort.
+fn sorted_edges(level: &Level) -> Result<(Vec<Edge>, Vec<u32>), DiceError> {
+    let n = level.positions.len();
+    let corners = level.face_verts.len();
+    let mut corner_face = vec![0u32; corners];
+    let mut corner_next = vec![0u32; corners];
+    for f in 0..level.face_count() {
+        let face = level.face(f);
+        for i in 0..face.len() {
+            corner_face[level.face_start[f] + i] = f as u32;
+            corner_next[level.face_start[f] + i] = face[(i + 1) % face.len()];
+        }
+    }
+    let ends = |c: usize| {
+        let (a, b) = (level.face_verts[c], corner_next[c]);
+        (a.min(b), a.max(b))
+    };
+    let (bucket_start, mut entries) = adjacency(
+        n,
+        (0..corners).map(|c| {
+            let (lo, hi) = ends(c);
+            (lo, (hi, c as u32))
+        }),
+    );
+    let mut edges: Vec<Edge> = Vec::with_capacity(corners / 2 + n);
+    let mut corner_edge = vec![0u32; corners];
+    for lo in 0..n {
+        let bucket = &mut entries[bucket_start[lo]..bucket_start[lo + 1]];
+        bucket.sort_unstable();
+        for group in bucket.chunk_by(|x, y| x.0 == y.0) {
+            let id = edges.len() as u32;
+            for &(_, c) in group {
+                corner_edge[c as usize] = id;
+            }
+            edges.push(edge(level, lo as u32, group, &corner_face)?);
+        }
+    }
+    Ok((edges, corner_edge))
+}
+
+/// The edge from `lo` to the common upper end of `group`'s `(hi, corner)` entries: its faces, and its
+/// sharpness (infinite on the boundary, else the level's crease sharpness, 0 without one).
+fn edge(level: &Level, lo: u32, group: &[(u32, u32)], corner_face: &[u32]) -> Result<Edge, DiceError> {
+    let hi = group[0].0;
+    if group.len() > 2 {
+        return Err(DiceError::NonManifoldEdge {
+            a: lo,
+            b: hi,
+            faces: group.len(),
+        });
+    }
+    let mut faces = [u32::MAX; 2];
+    for (slot, &(_, c)) in group.iter().enumerate() {
+        faces[slot] = corner_face[c as usize];
+    }
+    let sharpness = if group.len() < 2 {
+        f32::INFINITY
+    } else {
+        level
+            .creases
+            .binary_search_by(|c| (c.0, c.1).cmp(&(lo, hi)))
+            .map_or(0.0, |i| level.creases[i].2)
+    };
+    Ok(Edge {
+        lo,
+        hi,
+        faces,
+        face_count: group.len() as u32,
+        sharpness,
+    })
 }

@@ -37,7 +37,15 @@ fn near_theta(p: Vec3, lo: f32, hi: f32) -> bool {
     r < 1e-4 || (lo - 1e-3..=hi + 1e-3).contains(&t) || wraps
 }
 
+/// The quadric cases, each with its independent surface, normal, limits and area.
 fn cases() -> Vec<Case> {
+    let mut cases = sphere_and_cylinder_cases();
+    cases.extend(cone_disk_and_torus_cases());
+    cases
+}
+
+/// Two spheres (one with reversed limits and a negative sweep) and a cylinder.
+fn sphere_and_cylinder_cases() -> Vec<Case> {
     use std::f64::consts::PI;
     vec![
         Case {
@@ -77,6 +85,13 @@ fn cases() -> Vec<Case> {
             in_limits: |p| between(p.z, -1.0, 2.0) && near_theta(p, 0.0, 270.0),
             area: 1.5 * 1.5 * PI * 3.0,
         },
+    ]
+}
+
+/// Two cones (one upside down), a disk and a torus.
+fn cone_disk_and_torus_cases() -> Vec<Case> {
+    use std::f64::consts::PI;
+    vec![
         Case {
             shape: Shape::Cone {
                 height: 2.0,
