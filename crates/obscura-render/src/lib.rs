@@ -24,6 +24,7 @@ pub mod integrator;
 pub mod job;
 pub mod light;
 pub mod material;
+pub mod motion;
 pub mod output;
 pub mod ray;
 pub mod raymap;

@@ -29,13 +29,14 @@ use obscura_scene::Scene;
 use obscura_sdk::{DeepMetric, Matrix4, Registry};
 use rayon::prelude::*;
 
-use crate::bvh::{Instance, Motion, SceneAccel};
+use crate::bvh::{Instance, SceneAccel};
 use crate::deep::{DeepImage, DeepSample};
 use crate::dice::{DiceError, DicingContext, dice};
 use crate::film::{Film, SampleValues};
 use crate::filter::{Filter, FilterError};
 use crate::integrator::{PathOptions, ShadingScene, trace_path};
 use crate::light::{Lights, ShadeError};
+use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
 use crate::rng::Rng;
 

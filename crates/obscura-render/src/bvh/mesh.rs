@@ -1,0 +1,246 @@
+//! [`MeshBvh`]: one mesh's hierarchy in object space, with the nearest-hit and any-hit queries
+//! that the scene accelerator runs per instance.
+
+use core::fmt;
+
+use glam::Vec3A;
+use rayon::prelude::*;
+
+#[cfg(target_arch = "x86_64")]
+use super::avx2;
+use super::build::{PARALLEL_BUILD_MIN, build_tree};
+use super::traverse::{BoxKernel, LeafVisitor, ScalarKernel, traverse};
+use super::tree::{Aabb, Tree};
+use super::triangle::{TriRay, triangle_vertices};
+use crate::ray::{Ray, TriangleMesh};
+
+/// Most triangles in a mesh leaf.
+const MESH_LEAF_SIZE: usize = 4;
+
+/// A binned-SAH BVH over one mesh's triangles, in object space.
+///
+/// Leaves hold at most four triangles. Skipped triangles (bad indices, non-finite or zero-area
+/// vertices) are left out and never hit.
+pub struct MeshBvh {
+    mesh: TriangleMesh,
+    pub(super) tree: Tree,
+    /// Triangle vertices in leaf order.
+    tris: Vec<[Vec3A; 3]>,
+    /// Mesh triangle index of each entry of `tris`.
+    tri_ids: Vec<u32>,
+}
+
+impl MeshBvh {
+    /// Builds the hierarchy: binned SAH (16 bins per axis) down to 16 triangles, an exact sorted
+    /// sweep below that, leaves of at most 4. Meshes of 16k triangles or more build their subtrees on
+    /// rayon's thread pool; the tree does not depend on the number of threads.
+    #[must_use]
+    pub fn build(mesh: TriangleMesh) -> Self {
+        let n = mesh.triangles.len().min(u32::MAX as usize);
+        let bound = |i: usize| match triangle_vertices(&mesh, mesh.triangles[i]) {
+            Some([a, b, c]) => Aabb {
+                lo: a.min(b).min(c),
+                hi: a.max(b).max(c),
+            },
+            None => Aabb::EMPTY,
+        };
+        let boxes: Vec<Aabb> = if n >= PARALLEL_BUILD_MIN {
+            (0..n).into_par_iter().map(bound).collect()
+        } else {
+            (0..n).map(bound).collect()
+        };
+        // Skipped triangles have empty boxes; everything else has a finite one.
+        let mut refs: Vec<u32> = (0..n as u32)
+            .filter(|&i| boxes[i as usize].lo.x <= boxes[i as usize].hi.x)
+            .collect();
+        let tree = build_tree(&boxes, &mut refs, MESH_LEAF_SIZE);
+        // Every ref passed this same check, so none is dropped and `tris` stays aligned with `tri_ids`.
+        let tris = refs
+            .iter()
+            .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
+            .collect();
+        Self {
+            mesh,
+            tree,
+            tris,
+            tri_ids: refs,
+        }
+    }
+
+    /// The object-space bounding box `(min, max)` of the triangles that can be hit. An empty mesh
+    /// gives an empty box: `min = +∞`, `max = −∞`.
+    #[must_use]
+    pub fn bounds(&self) -> (Vec3A, Vec3A) {
+        let b = self.tree.root_bounds();
+        (b.lo, b.hi)
+    }
+
+    /// The number of triangles that can be hit (skipped triangles are not counted).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.tris.len()
+    }
+
+    /// The mesh the hierarchy was built over, unchanged.
+    #[must_use]
+    pub fn mesh(&self) -> &TriangleMesh {
+        &self.mesh
+    }
+
+    /// The nearest hit in object space as `(t, triangle index, u, v)`, with `ray.t_min < t <
+    /// ray.t_max`; `ray.time` is ignored. Barycentrics follow [`Hit::uv`](crate::ray::Hit::uv): the point is
+    /// `(1 - u - v)·v0 + u·v1 + v·v2`. Equal `t` goes to the lower triangle index.
+    #[must_use]
+    pub fn intersect(&self, ray: &Ray) -> Option<(f32, u32, f32, f32)> {
+        self.intersect_with(ray, false)
+    }
+
+    /// True when any triangle is hit with `ray.t_min < t < ray.t_max`; stops at the first one found.
+    #[must_use]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.occluded_with(ray, false)
+    }
+
+    /// [`MeshBvh::intersect`], with the AVX2 kernel unless `scalar_only` (the tests run both).
+    pub(super) fn intersect_with(&self, ray: &Ray, scalar_only: bool) -> Option<(f32, u32, f32, f32)> {
+        #[cfg(target_arch = "x86_64")]
+        if !scalar_only && let Some(k) = avx2::Avx2Kernel::detect() {
+            // SAFETY: the token from `detect` proves the CPU supports AVX2 and FMA.
+            return unsafe { self.closest_avx2(k, ray.origin, ray.direction, ray.t_min, ray.t_max) };
+        }
+        let _ = scalar_only;
+        self.closest(ScalarKernel, ray.origin, ray.direction, ray.t_min, ray.t_max)
+    }
+
+    /// [`MeshBvh::occluded`], with the AVX2 kernel unless `scalar_only`.
+    pub(super) fn occluded_with(&self, ray: &Ray, scalar_only: bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if !scalar_only && let Some(k) = avx2::Avx2Kernel::detect() {
+            // SAFETY: the token from `detect` proves the CPU supports AVX2 and FMA.
+            return unsafe { self.any_avx2(k, ray.origin, ray.direction, ray.t_min, ray.t_max) };
+        }
+        let _ = scalar_only;
+        self.any(ScalarKernel, ray.origin, ray.direction, ray.t_min, ray.t_max)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn closest_avx2(
+        &self,
+        k: avx2::Avx2Kernel,
+        origin: Vec3A,
+        direction: Vec3A,
+        t_min: f32,
+        t_lim: f32,
+    ) -> Option<(f32, u32, f32, f32)> {
+        self.closest(k, origin, direction, t_min, t_lim)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn any_avx2(&self, k: avx2::Avx2Kernel, origin: Vec3A, direction: Vec3A, t_min: f32, t_max: f32) -> bool {
+        self.any(k, origin, direction, t_min, t_max)
+    }
+
+    /// Nearest hit with `t_min < t < t_lim`; on equal `t` the lowest triangle index wins.
+    #[inline(always)]
+    pub(super) fn closest<K: BoxKernel>(
+        &self,
+        kernel: K,
+        origin: Vec3A,
+        direction: Vec3A,
+        t_min: f32,
+        t_lim: f32,
+    ) -> Option<(f32, u32, f32, f32)> {
+        let box_ray = kernel.prepare(origin, direction, t_min);
+        let mut visitor = MeshClosest {
+            bvh: self,
+            ray: TriRay::new(origin, direction),
+            t_min,
+            lim: t_lim,
+            best: None,
+        };
+        traverse(&self.tree, kernel, &box_ray, t_lim, &mut visitor);
+        visitor.best
+    }
+
+    /// True when a triangle is hit with `t_min < t < t_max`.
+    #[inline(always)]
+    pub(super) fn any<K: BoxKernel>(
+        &self,
+        kernel: K,
+        origin: Vec3A,
+        direction: Vec3A,
+        t_min: f32,
+        t_max: f32,
+    ) -> bool {
+        let box_ray = kernel.prepare(origin, direction, t_min);
+        let mut visitor = MeshAny {
+            bvh: self,
+            ray: TriRay::new(origin, direction),
+            t_min,
+            t_max,
+            found: false,
+        };
+        traverse(&self.tree, kernel, &box_ray, t_max, &mut visitor);
+        visitor.found
+    }
+}
+
+struct MeshClosest<'a> {
+    bvh: &'a MeshBvh,
+    ray: TriRay,
+    t_min: f32,
+    /// Exclusive upper limit: the ray's `t_max`, then just above the best `t` (so ties still count).
+    lim: f32,
+    best: Option<(f32, u32, f32, f32)>,
+}
+
+impl LeafVisitor for MeshClosest<'_> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
+        let range = first..first + count;
+        for (tri, &id) in self.bvh.tris[range.clone()].iter().zip(&self.bvh.tri_ids[range]) {
+            if let Some((t, u, v)) = self.ray.intersect(tri, self.t_min, self.lim) {
+                // `t < lim` already means `t <= best t`.
+                if self.best.is_none_or(|b| t < b.0 || id < b.1) {
+                    self.best = Some((t, id, u, v));
+                    self.lim = t.next_up();
+                    *t_far = t;
+                }
+            }
+        }
+        false
+    }
+}
+
+struct MeshAny<'a> {
+    bvh: &'a MeshBvh,
+    ray: TriRay,
+    t_min: f32,
+    t_max: f32,
+    found: bool,
+}
+
+impl LeafVisitor for MeshAny<'_> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
+        for tri in &self.bvh.tris[first..first + count] {
+            if self.ray.intersect(tri, self.t_min, self.t_max).is_some() {
+                self.found = true;
+                return true;
+            }
+        }
+        false
+    }
+}
+
+impl fmt::Debug for MeshBvh {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("MeshBvh")
+            .field("triangles", &self.tris.len())
+            .field("nodes", &self.tree.node_count())
+            .field("bounds", &self.bounds())
+            .finish()
+    }
+}

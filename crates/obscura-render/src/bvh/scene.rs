@@ -1,0 +1,339 @@
+//! [`SceneAccel`]: the two-level scene accelerator. A top-level binned-SAH tree over the world boxes
+//! of [`Instance`]s, each placing a [`MeshBvh`] by a [`Motion`] over the shutter; world rays are
+//! moved into object space (direction not renormalised, so `t` carries over) and traced there.
+//!
+//! # Bounds of a moving instance
+//!
+//! The top-level box of a moving instance is conservative for [`Motion`]'s interpolation (scale and
+//! translation linear, rotation by shortest-path slerp, the nearest sample held outside the sampled
+//! range). The transformed
+//! object lies in the convex hull of its transformed box corners, so it suffices to bound the corner
+//! paths `w(f) = T(f) + R(f)·S(f)·x`. Per segment each corner is transformed at 17 evenly spaced
+//! times; between two samples a path strays from the chord (which the box of samples contains) by at
+//! most `h²/8 · max|w''|` (the linear-interpolation error bound, `h = 1/16`), and with `T` and `S`
+//! linear and `R` turning at the constant rate `θ` (the segment's rotation angle),
+//! `|w''| <= θ²·|s_max ∘ X| + 2θ·|Δscale ∘ X|`, where `s_max` is the larger absolute scale at the
+//! segment's ends and `X` the largest absolute object-space corner coordinates. The box of samples
+//! grown by that bound, then by `4e-6` of its largest coordinate for rounding (which also covers
+//! glam's slerp switching to a normalised lerp below ~1e-3 rad, where the two differ by ~θ³), contains
+//! the instance at every time.
+
+use core::fmt;
+
+use glam::{Affine3A, Vec3A};
+use rayon::prelude::*;
+
+#[cfg(target_arch = "x86_64")]
+use super::avx2;
+use super::build::build_tree;
+use super::mesh::MeshBvh;
+use super::traverse::{BoxKernel, LeafVisitor, ScalarKernel, traverse};
+use super::tree::{Aabb, Tree};
+use super::triangle::SceneHit;
+use crate::motion::{Motion, interpolate};
+use crate::ray::{Hit, Ray, Tracer, TriangleMesh};
+
+/// Most instances in a top-level leaf: an instance visit costs a whole mesh traversal, so split fully.
+const INSTANCE_LEAF_SIZE: usize = 1;
+/// Samples per motion segment for the conservative instance bounds.
+const MOTION_STEPS: usize = 16;
+/// Padding of instance boxes for the rounding of transforms, relative to their largest coordinate.
+const BOUNDS_REL_PAD: f32 = 4e-6;
+
+/// One placement of a mesh: object-to-world motion samples at shutter-normalised times in `[0, 1]`.
+///
+/// Samples are expected sorted by time, with at least one; [`SceneAccel::build`] sorts them anyway,
+/// drops samples whose time is not finite, and places an instance with no samples by the identity.
+/// With several samples each transform is decomposed into scale, rotation and translation (see
+/// [`Motion`]), so it should be invertible and free of shear; a single sample is used exactly as given.
+#[derive(Debug, Clone)]
+pub struct Instance {
+    /// Index of the mesh in the list given to [`SceneAccel::build`]. An out-of-range index makes an
+    /// instance that is never hit.
+    pub mesh: u32,
+    /// `(time, object-to-world)` samples.
+    pub transform: Vec<(f32, Affine3A)>,
+}
+
+/// One instance as the accelerator keeps it.
+#[derive(Debug, Clone)]
+pub(super) struct Placement {
+    /// Index into `SceneAccel::meshes`, if valid.
+    pub(super) mesh: Option<usize>,
+    motion: Motion,
+}
+
+/// The scene accelerator: a top-level binned-SAH BVH over instance boxes (conservative over the
+/// shutter for moving instances), each instance referring to a [`MeshBvh`].
+pub struct SceneAccel {
+    pub(super) meshes: Vec<MeshBvh>,
+    pub(super) placements: Vec<Placement>,
+    top: Tree,
+    /// Instance index of each top-level leaf entry.
+    top_ids: Vec<u32>,
+    triangle_count: usize,
+}
+
+impl SceneAccel {
+    /// Builds one [`MeshBvh`] per mesh (in parallel) and the top-level hierarchy over `instances`.
+    ///
+    /// Instances whose mesh index is out of range, or whose world box is not finite (non-finite or
+    /// singular motion samples), are kept — their indices still count — but never hit.
+    #[must_use]
+    pub fn build(meshes: Vec<TriangleMesh>, instances: Vec<Instance>) -> Self {
+        let meshes: Vec<MeshBvh> = meshes.into_par_iter().map(MeshBvh::build).collect();
+        let placements: Vec<Placement> = instances
+            .iter()
+            .map(|inst| Placement {
+                mesh: ((inst.mesh as usize) < meshes.len()).then_some(inst.mesh as usize),
+                motion: Motion::new(&inst.transform),
+            })
+            .collect();
+        let n = placements.len().min(u32::MAX as usize);
+        let boxes: Vec<Aabb> = placements[..n]
+            .iter()
+            .map(|p| match p.mesh.map(|m| &meshes[m]) {
+                Some(mesh) if mesh.triangle_count() > 0 => world_bounds(&p.motion, &mesh.tree.root_bounds()),
+                _ => Aabb::EMPTY,
+            })
+            .collect();
+        let mut top_ids: Vec<u32> = (0..n as u32).filter(|&i| boxes[i as usize].is_finite()).collect();
+        let triangle_count = top_ids
+            .iter()
+            .filter_map(|&i| placements[i as usize].mesh)
+            .map(|m| meshes[m].triangle_count())
+            .sum();
+        let top = build_tree(&boxes, &mut top_ids, INSTANCE_LEAF_SIZE);
+        Self {
+            meshes,
+            placements,
+            top,
+            top_ids,
+            triangle_count,
+        }
+    }
+
+    /// The number of triangles that can be hit, summed over instances (a mesh placed twice counts
+    /// twice; instances that are never hit count nothing).
+    #[must_use]
+    pub fn triangle_count(&self) -> usize {
+        self.triangle_count
+    }
+
+    /// The world-space box `(min, max)` enclosing every instance over the whole shutter. An empty
+    /// scene gives an empty box: `min = +∞`, `max = −∞`.
+    #[must_use]
+    pub fn bounds(&self) -> (Vec3A, Vec3A) {
+        let b = self.top.root_bounds();
+        (b.lo, b.hi)
+    }
+
+    /// The object-to-world transform of `instance` at shutter time `time` (clamped to the sampled
+    /// range; NaN means the first sample).
+    ///
+    /// # Panics
+    ///
+    /// Panics if `instance` is not an index into the instances given to [`SceneAccel::build`].
+    #[must_use]
+    pub fn instance_transform_at(&self, instance: u32, time: f32) -> Affine3A {
+        self.placements[instance as usize].motion.object_to_world(time)
+    }
+
+    /// The nearest hit, with the AVX2 kernel unless `scalar_only` (the tests run both).
+    pub(super) fn closest_dispatch(&self, ray: &Ray, scalar_only: bool) -> Option<SceneHit> {
+        #[cfg(target_arch = "x86_64")]
+        if !scalar_only && let Some(k) = avx2::Avx2Kernel::detect() {
+            // SAFETY: the token from `detect` proves the CPU supports AVX2 and FMA.
+            return unsafe { self.closest_avx2(k, ray) };
+        }
+        let _ = scalar_only;
+        self.closest(ScalarKernel, ray)
+    }
+
+    /// True when anything is hit, with the AVX2 kernel unless `scalar_only`.
+    pub(super) fn any_dispatch(&self, ray: &Ray, scalar_only: bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if !scalar_only && let Some(k) = avx2::Avx2Kernel::detect() {
+            // SAFETY: the token from `detect` proves the CPU supports AVX2 and FMA.
+            return unsafe { self.any_avx2(k, ray) };
+        }
+        let _ = scalar_only;
+        self.any(ScalarKernel, ray)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn closest_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
+        self.closest(k, ray)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn any_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> bool {
+        self.any(k, ray)
+    }
+
+    /// The mesh of `instance` and `ray`'s origin and direction in its object space (`None` for an
+    /// instance without a mesh); the direction is not renormalised, so `t` carries over unchanged.
+    #[inline(always)]
+    fn object_ray(&self, instance: u32, ray: &Ray) -> Option<(usize, Vec3A, Vec3A)> {
+        let placement = &self.placements[instance as usize];
+        let mesh = placement.mesh?;
+        let to_object = placement.motion.world_to_object(ray.time);
+        Some((
+            mesh,
+            to_object.transform_point3a(ray.origin),
+            to_object.transform_vector3a(ray.direction),
+        ))
+    }
+
+    #[inline(always)]
+    fn closest<K: BoxKernel>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
+        let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
+        let mut visitor = SceneClosest {
+            accel: self,
+            kernel,
+            ray,
+            lim: ray.t_max,
+            best: None,
+        };
+        traverse(&self.top, kernel, &box_ray, ray.t_max, &mut visitor);
+        visitor.best
+    }
+
+    #[inline(always)]
+    fn any<K: BoxKernel>(&self, kernel: K, ray: &Ray) -> bool {
+        let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
+        let mut visitor = SceneAny {
+            accel: self,
+            kernel,
+            ray,
+            found: false,
+        };
+        traverse(&self.top, kernel, &box_ray, ray.t_max, &mut visitor);
+        visitor.found
+    }
+
+    /// The world-space [`Hit`] for `h` at the ray's time (see [`SceneHit::world_hit`]).
+    pub(super) fn make_hit(&self, ray: &Ray, h: SceneHit) -> Hit {
+        let to_world = self.placements[h.instance as usize]
+            .motion
+            .object_to_world(ray.time);
+        h.world_hit(self.meshes[h.mesh].mesh(), &to_world, ray)
+    }
+}
+
+struct SceneClosest<'a, K> {
+    accel: &'a SceneAccel,
+    kernel: K,
+    ray: &'a Ray,
+    lim: f32,
+    best: Option<SceneHit>,
+}
+
+impl<K: BoxKernel> LeafVisitor for SceneClosest<'_, K> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
+        let ray = self.ray;
+        for &instance in &self.accel.top_ids[first..first + count] {
+            let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
+                continue;
+            };
+            if let Some((t, primitive, u, v)) =
+                self.accel.meshes[mesh].closest(self.kernel, o, d, ray.t_min, self.lim)
+                && self.best.is_none_or(|b| t < b.t || instance < b.instance)
+            {
+                self.best = Some(SceneHit {
+                    t,
+                    instance,
+                    mesh,
+                    primitive,
+                    u,
+                    v,
+                });
+                self.lim = t.next_up();
+                *t_far = t;
+            }
+        }
+        false
+    }
+}
+
+struct SceneAny<'a, K> {
+    accel: &'a SceneAccel,
+    kernel: K,
+    ray: &'a Ray,
+    found: bool,
+}
+
+impl<K: BoxKernel> LeafVisitor for SceneAny<'_, K> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
+        let ray = self.ray;
+        for &instance in &self.accel.top_ids[first..first + count] {
+            let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
+                continue;
+            };
+            if self.accel.meshes[mesh].any(self.kernel, o, d, ray.t_min, ray.t_max) {
+                self.found = true;
+                return true;
+            }
+        }
+        false
+    }
+}
+
+impl Tracer for SceneAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_dispatch(ray, false).map(|h| self.make_hit(ray, h))
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.any_dispatch(ray, false)
+    }
+}
+
+impl fmt::Debug for SceneAccel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SceneAccel")
+            .field("meshes", &self.meshes.len())
+            .field("instances", &self.placements.len())
+            .field("triangles", &self.triangle_count)
+            .field("bounds", &self.bounds())
+            .finish()
+    }
+}
+
+/// A world box containing the object box `b` at every time under `motion` (see the module docs).
+fn world_bounds(motion: &Motion, b: &Aabb) -> Aabb {
+    let corners = b.corners();
+    let mut out = Aabb::EMPTY;
+    match motion {
+        Motion::Static { to_world, .. } => {
+            for c in corners {
+                out.grow_point(to_world.transform_point3a(c));
+            }
+        }
+        Motion::Moving { keys } => {
+            let reach = b.lo.abs().max(b.hi.abs());
+            for seg in keys.windows(2) {
+                let (k0, k1) = (&seg[0], &seg[1]);
+                let mut seg_box = Aabb::EMPTY;
+                for step in 0..=MOTION_STEPS {
+                    let m = interpolate(k0, k1, step as f32 / MOTION_STEPS as f32);
+                    for c in corners {
+                        seg_box.grow_point(m.transform_point3a(c));
+                    }
+                }
+                let theta = 2.0 * k0.rotation.dot(k1.rotation).abs().min(1.0).acos();
+                let s_max = k0.scale.abs().max(k1.scale.abs());
+                let bend = theta * theta * (s_max * reach).length()
+                    + 2.0 * theta * ((k1.scale - k0.scale) * reach).length();
+                let steps = MOTION_STEPS as f32;
+                out.grow(&seg_box.padded(bend / (8.0 * steps * steps)));
+            }
+        }
+    }
+    let magnitude = out.lo.abs().max(out.hi.abs()).max_element();
+    out.padded(BOUNDS_REL_PAD * magnitude)
+}

@@ -1,0 +1,355 @@
+//! Dicing: quadrics and Catmull–Clark subdivision surfaces → triangles in object space, once per
+//! render at render start, at a rate set by the projection's `DicingHint` and `FieldOfView`
+//! (§5.8 of the projection document; §2.4 for the two properties).
+//!
+//! # The rate: pixels per object-space unit
+//!
+//! A primitive's object-space bounding sphere (centre `c₀`, radius `ρ₀`) is taken to camera space
+//! with `M` = object → camera: `c = M·c₀`, `ρ = σ·ρ₀`, where `σ` is the longest of `M`'s three axis
+//! columns (an upper bound on how much `M` stretches a length). One screen unit spans
+//! `s = max(W/(r − l), H/(t − b))` pixels (`W × H` the format, `l r b t` the screen window; with
+//! square pixels both terms agree). An object-space length `L` then covers `L·k` pixels, with
+//!
+//! | dicing hint | `k` (pixels per object-space unit) |
+//! |---|---|
+//! | `Perspective` | `σ·s·d / z`, `d = 1/tan(fov/2)`, `z = max(c.z − ρ, ε·ρ)` |
+//! | `Orthographic` | `σ·s` (no divide: a camera-space unit is a screen unit) |
+//! | `Spherical` | `σ·(2s/fov) / D`, `D = max(‖c‖ − ρ, ε·ρ)`, fov in radians |
+//!
+//! `ε` = [`NEAR_FRACTION`]: a primitive that straddles the camera plane, surrounds the camera or lies
+//! behind it is measured as if its nearest point were `ε·ρ` away, so it dices finely but finitely.
+//! For `Spherical`, the field of view spans the unit circle of screen space, i.e. `2s` pixels:
+//! with the default screen window and square pixels `2s = min(W, H)`, the image's shorter side.
+//! `k` is clamped to `[0, MAX_PIXELS_PER_UNIT]` (NaN → 0). The field of view is the projection's
+//! `FieldOfView` in degrees (90 when it is not a positive finite number), clamped to 179° for
+//! `Perspective` and 360° for `Spherical`.
+//!
+//! # Files
+//!
+//! | module | holds |
+//! |---|---|
+//! | `quadric` | spheres, cylinders, cones, disks and tori: segment counts and the (u, v) grid |
+//! | `subdivision` | Catmull–Clark with semi-sharp creases: levels, topology, the limit surface |
+//! | `polygon` | polygon meshes, checked and passed through |
+
+mod polygon;
+mod quadric;
+mod subdivision;
+#[cfg(test)]
+mod tests;
+
+use glam::{Mat4, Vec3};
+use obscura_scene::Shape;
+use obscura_sdk::{DicingHint, Format, ScreenWindow};
+
+use self::polygon::pass_through;
+use self::quadric::{cone, cylinder, disk, sphere, torus};
+use self::subdivision::subdivision;
+use crate::ray::TriangleMesh;
+
+/// The most segments along one parametric direction of a quadric.
+pub const MAX_SEGMENTS: u32 = 4096;
+
+/// The fewest segments along a full 360° sweep (a partial sweep gets this times its fraction of a
+/// turn, and at least one).
+pub const MIN_SEGMENTS_PER_TURN: u32 = 4;
+
+/// The most quads one primitive dices into (a quadric's `n_u·n_v`, a subdivision surface's faces
+/// after the last level): the memory bound for a primitive that surrounds the camera.
+pub const MAX_QUADS_PER_PRIMITIVE: u64 = 1 << 22;
+
+/// The deepest Catmull–Clark subdivision level.
+pub const MAX_SUBDIVISION_LEVEL: u32 = 6;
+
+/// The nearest a primitive is assumed to be, as a fraction of its camera-space bounding radius
+/// (the `ε` of the module documentation).
+pub const NEAR_FRACTION: f32 = 0.05;
+
+/// The cap on [`pixels_per_unit`].
+pub const MAX_PIXELS_PER_UNIT: f32 = 1e30;
+
+/// Crease sharpness at or above which an edge is infinitely sharp.
+pub const INFINITE_SHARPNESS: f32 = 10.0;
+
+/// What dicing needs to know about the camera and the primitive.
+#[derive(Debug, Clone, Copy)]
+pub struct DicingContext {
+    /// The projection's `DicingHint` property.
+    pub hint: DicingHint,
+    /// The projection's FieldOfView property in degrees (the host uses 90 when a projection answers none).
+    pub field_of_view: f32,
+    /// The image format.
+    pub format: Format,
+    /// The screen window.
+    pub screen_window: ScreenWindow,
+    /// Object space → camera space (glam, column vectors), at shutter open.
+    pub object_to_camera: Mat4,
+    /// Target edge length in pixels (`Attribute "dice" "float micropolygonlength"`, default 1).
+    pub micropolygon_length: f32,
+}
+
+impl DicingContext {
+    /// A context with `format`'s default screen window, the identity object-to-camera transform and
+    /// a micropolygon length of one pixel.
+    #[must_use]
+    pub fn new(hint: DicingHint, field_of_view: f32, format: Format) -> Self {
+        DicingContext {
+            hint,
+            field_of_view,
+            format,
+            screen_window: ScreenWindow::default_for(format),
+            object_to_camera: Mat4::IDENTITY,
+            micropolygon_length: 1.0,
+        }
+    }
+}
+
+/// Why a shape could not be diced. Each names the offending element.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DiceError {
+    /// A polygon mesh's triangle names a vertex that does not exist.
+    #[error("mesh triangle {triangle} uses vertex {index}, but the mesh has {vertex_count} vertices")]
+    MeshIndexOutOfRange {
+        /// Which triangle.
+        triangle: usize,
+        /// The bad index.
+        index: u32,
+        /// How many vertices there are.
+        vertex_count: usize,
+    },
+    /// A polygon mesh has a different number of normals than positions.
+    #[error("mesh has {normals} normals for {positions} positions")]
+    MeshNormalCount {
+        /// Normals given.
+        normals: usize,
+        /// Positions given.
+        positions: usize,
+    },
+    /// A mesh vertex or subdivision control point is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite position")]
+    NonFinitePosition {
+        /// Which vertex.
+        vertex: usize,
+    },
+    /// The subdivision mesh's face counts do not add up to its number of face indices.
+    #[error("subdivision mesh face counts add up to {expected} indices, but {found} are given")]
+    FaceIndexCount {
+        /// The sum of the face counts.
+        expected: u64,
+        /// The number of face indices.
+        found: usize,
+    },
+    /// A subdivision face has fewer than three vertices.
+    #[error("subdivision face {face} has {vertices} vertices (at least 3 needed)")]
+    FaceTooSmall {
+        /// Which face.
+        face: usize,
+        /// Its vertex count.
+        vertices: u32,
+    },
+    /// A subdivision face names a control point that does not exist.
+    #[error("subdivision face {face} uses vertex {index}, but the mesh has {vertex_count} vertices")]
+    IndexOutOfRange {
+        /// Which face.
+        face: usize,
+        /// The bad index.
+        index: u32,
+        /// How many control points there are.
+        vertex_count: usize,
+    },
+    /// A subdivision face uses the same control point twice.
+    #[error("subdivision face {face} uses vertex {vertex} more than once")]
+    RepeatedVertex {
+        /// Which face.
+        face: usize,
+        /// The repeated vertex.
+        vertex: u32,
+    },
+    /// An edge is shared by more than two faces: the mesh is not a manifold.
+    #[error("edge ({a}, {b}) is used by {faces} faces (a manifold edge has at most 2)")]
+    NonManifoldEdge {
+        /// One end.
+        a: u32,
+        /// The other end.
+        b: u32,
+        /// How many faces use it.
+        faces: usize,
+    },
+    /// A crease names a control point that does not exist.
+    #[error("crease {crease} uses vertex {index}, but the mesh has {vertex_count} vertices")]
+    CreaseIndexOutOfRange {
+        /// Which crease (index into `SubdivMesh::creases`).
+        crease: usize,
+        /// The bad index.
+        index: u32,
+        /// How many control points there are.
+        vertex_count: usize,
+    },
+    /// A crease joins two control points that no face edge joins.
+    #[error("crease {crease} ({a}, {b}) is not an edge of the mesh")]
+    CreaseNotAnEdge {
+        /// Which crease.
+        crease: usize,
+        /// One end.
+        a: u32,
+        /// The other end.
+        b: u32,
+    },
+    /// The control mesh is too large to subdivide even once with 32-bit indices.
+    #[error("subdivision mesh too large: one level would make {vertices} vertices")]
+    TooLarge {
+        /// The vertex count one level would need.
+        vertices: u64,
+    },
+    /// The diced geometry overflowed to infinity (parameters near the limits of `f32`).
+    #[error("diced geometry is not finite (parameters too large)")]
+    NonFiniteGeometry,
+}
+
+/// The shape as triangles in OBJECT space, with smooth per-vertex normals for curved surfaces.
+/// Meshes pass through (normals kept).
+///
+/// Degenerate quadrics (zero sweep or radius, `zmin = zmax`, NaN parameters) give an empty mesh;
+/// every vertex and normal of a returned mesh is finite. See the module documentation for the rate.
+///
+/// # Errors
+///
+/// A malformed polygon or subdivision mesh (see [`DiceError`]), or geometry that overflows `f32`.
+pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceError> {
+    let mesh = match shape {
+        Shape::Sphere {
+            radius,
+            z_min,
+            z_max,
+            theta_max,
+        } => sphere(*radius, *z_min, *z_max, *theta_max, ctx),
+        Shape::Cylinder {
+            radius,
+            z_min,
+            z_max,
+            theta_max,
+        } => cylinder(*radius, *z_min, *z_max, *theta_max, ctx),
+        Shape::Cone {
+            height,
+            radius,
+            theta_max,
+        } => cone(*height, *radius, *theta_max, ctx),
+        Shape::Disk {
+            height,
+            radius,
+            theta_max,
+        } => disk(*height, *radius, *theta_max, ctx),
+        Shape::Torus {
+            major_radius,
+            minor_radius,
+            phi_min,
+            phi_max,
+            theta_max,
+        } => torus(*major_radius, *minor_radius, *phi_min, *phi_max, *theta_max, ctx),
+        Shape::Mesh(mesh) => pass_through(mesh)?,
+        Shape::Subdiv(mesh) => subdivision(mesh, ctx)?,
+    };
+    let finite = mesh.positions.iter().all(|p| p.is_finite())
+        && mesh
+            .normals
+            .as_ref()
+            .is_none_or(|ns| ns.iter().all(|n| n.is_finite()));
+    if finite {
+        Ok(mesh)
+    } else {
+        Err(DiceError::NonFiniteGeometry)
+    }
+}
+
+/// Pixels per unit of object-space length for a primitive with the given object-space bounding
+/// sphere (centre, radius) under ctx: the scale the rate uses (exported for tests and the renderer's
+/// statistics).
+///
+/// The formulas are in the module documentation. Always finite and in `[0, MAX_PIXELS_PER_UNIT]`:
+/// a NaN anywhere in the inputs gives 0 (the coarsest dicing); a primitive reaching the camera plane
+/// is measured at the [`NEAR_FRACTION`] floor (so a zero-radius one there gets the cap).
+#[must_use]
+pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
+    let m = ctx.object_to_camera;
+    let sigma = m
+        .x_axis
+        .truncate()
+        .length()
+        .max(m.y_axis.truncate().length())
+        .max(m.z_axis.truncate().length());
+    let c = m.transform_point3(centre);
+    let rho = radius.abs() * sigma;
+    let near = (NEAR_FRACTION * rho).max(f32::MIN_POSITIVE);
+    let s = pixels_per_screen_unit(ctx);
+    let k = match ctx.hint {
+        DicingHint::Orthographic => sigma * s,
+        DicingHint::Perspective => {
+            let d = 1.0 / (0.5 * field_of_view_radians(ctx.field_of_view, 179.0)).tan();
+            let z = (c.z - rho).max(near);
+            sigma * s * d / z
+        }
+        DicingHint::Spherical => {
+            let pixels_per_radian = 2.0 * s / field_of_view_radians(ctx.field_of_view, 360.0);
+            let distance = (c.length() - rho).max(near);
+            sigma * pixels_per_radian / distance
+        }
+    };
+    if k.is_nan() {
+        0.0
+    } else {
+        k.clamp(0.0, MAX_PIXELS_PER_UNIT)
+    }
+}
+
+/// `max(W/(r − l), H/(t − b))`, falling back to the default window when the given one is degenerate.
+fn pixels_per_screen_unit(ctx: &DicingContext) -> f32 {
+    let w = ctx.format.width.max(1) as f32;
+    let h = ctx.format.height.max(1) as f32;
+    let usable = |win: &ScreenWindow| {
+        let (sw, sh) = (win.width().abs(), win.height().abs());
+        sw.is_finite() && sh.is_finite() && sw > 0.0 && sh > 0.0
+    };
+    let mut window = ctx.screen_window;
+    if !usable(&window) {
+        let pixel_aspect = ctx.format.pixel_aspect;
+        let pixel_aspect = if pixel_aspect.is_finite() && pixel_aspect > 0.0 {
+            pixel_aspect
+        } else {
+            1.0
+        };
+        let format = Format {
+            width: w as u32,
+            height: h as u32,
+            pixel_aspect,
+        };
+        window = ScreenWindow::default_for(format);
+        if !usable(&window) {
+            window = ScreenWindow::new(-1.0, 1.0, -1.0, 1.0);
+        }
+    }
+    (w / window.width().abs()).max(h / window.height().abs())
+}
+
+/// The field of view in radians: 90° when not a positive finite number, clamped to `max_degrees`.
+fn field_of_view_radians(degrees: f32, max_degrees: f32) -> f32 {
+    let degrees = if degrees.is_finite() && degrees > 0.0 {
+        degrees
+    } else {
+        90.0
+    };
+    degrees.clamp(1e-3, max_degrees).to_radians()
+}
+
+/// The micropolygon length in pixels: `ctx`'s when positive, else one pixel.
+fn micropolygon_length(ctx: &DicingContext) -> f64 {
+    let m = ctx.micropolygon_length;
+    if m > 0.0 { f64::from(m) } else { 1.0 }
+}
+
+/// Refuses the first position that is NaN or infinite (of a polygon mesh or a control mesh).
+fn check_finite(positions: &[Vec3]) -> Result<(), DiceError> {
+    match positions.iter().position(|p| !p.is_finite()) {
+        Some(vertex) => Err(DiceError::NonFinitePosition { vertex }),
+        None => Ok(()),
+    }
+}
