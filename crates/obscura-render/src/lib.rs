@@ -9,6 +9,7 @@
 //! | [`rng`] | the per-path random number generator |
 //! | [`dice`] | quadrics and subdivision surfaces → triangles, at a rate from the dicing hint |
 //! | [`bvh`] | binned-SAH BVH per mesh, and the two-level motion-blurred scene accelerator |
+//! | [`motion`] | transforms keyed in time (camera and instances), interpolated at a ray's time |
 //! | [`material`], [`light`], [`integrator`] | shading: BSDFs, the four lights, the path tracer |
 //! | [`filter`], [`film`], [`output`], [`deep`] | pixel filters, AOV accumulation, EXR/PNG/deep EXR |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
