@@ -18,6 +18,9 @@
 //! | `EquiangularCubemapFace` | [`cubemap`] | Spherical | RayLength |
 //! | `Octahedral` | [`octahedral`] | Spherical | RayLength |
 //!
+//! [`panorama`] holds what the panoramic projections share (window coordinates, azimuth sweeps, radial
+//! maps, spherical clipping and property answers).
+//!
 //! [`register_builtins`] adds them all to a [`Registry`]; [`builtin_registry`] makes one holding them.
 
 pub mod cubemap;
@@ -29,6 +32,7 @@ pub mod octahedral;
 pub mod omnistereo;
 pub mod orthographic;
 pub mod panini;
+pub mod panorama;
 pub mod perspective;
 pub mod pxrcamera;
 pub mod rolling_shutter;
