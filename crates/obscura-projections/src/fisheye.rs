@@ -47,7 +47,7 @@
 //! αx = Δx·sqrt(A²·sx² + B²·sy²)/r,   αy = Δy·sqrt(A²·sy² + B²·sx²)/r,   ray_spread = ½·sqrt(αx·αy)
 //! ```
 //!
-//! (`αx = Δx·A`, `αy = Δy·A` at `r = 0`). Per mapping: equidistant `A = fov/2`, `B = sin θ/r`;
+//! (`αx = Δx·A`, `αy = Δy·A` at `r = 0`; [`crate::panorama`]'s radial maps). Per mapping: equidistant `A = fov/2`, `B = sin θ/r`;
 //! stereographic `A = B = 2t/(r·(1 + t²))`, `t = r·tan(fov/4)` (it is conformal); orthographic
 //! `A = sin(fov/2)/cos θ`, `B = sin(fov/2)`; equisolid `A = 2q/cos(θ/2)`, `B = 2q·cos(θ/2)` with
 //! `q = (mm per screen unit)/(2f)`; polynomial `A = dθ/dr` from the derivative polynomial. The

@@ -4,9 +4,9 @@
 //! # Mapping
 //!
 //! The ball fills the unit circle `sx² + sy² < 1` of screen space (with the default screen window it
-//! touches the shorter image edges) and is seen orthographically. Under screen point `s = (sx, sy)`,
-//! `r = |s|`, the ball's surface has the normal `N = (sx, sy, σ·c)` with `c = sqrt(1 − r²)`, and the
-//! ray's direction is the view direction `−σ·Z` reflected in it:
+//! touches the shorter image edges) and is seen orthographically, by a viewer looking down `V = −σ·Z`.
+//! Under screen point `s = (sx, sy)`, `r = |s|`, the ball's surface facing that viewer has the normal
+//! `N = (sx, sy, σ·c)` with `c = sqrt(1 − r²)`, and the ray's direction is `V` reflected in it:
 //!
 //! ```text
 //! D = reflect(−σ·Z, N) = −σ·Z − 2((−σ·Z)·N)·N
@@ -17,9 +17,10 @@
 //!
 //! - `"camera"` (default), `σ = +1`: Cycles' `mirrorball_to_direction` (sphere point
 //!   `(2u − 1, −c, 2v − 1)`, `I = (0, −1, 0)`, `D = 2(N·I)·N − I`) turned into this camera space by
-//!   Blender's mirror-ball camera matrix (its panorama `(x, y, z)` is our `(x, z, −y)`). The centre of
-//!   the ball looks down **+Z**, the camera's view direction; the angle from +Z is `γ = 2·asin(r)`, and
-//!   the rim `r → 1` is −Z, straight behind the camera.
+//!   Blender's mirror-ball camera matrix (its panorama `(x, y, z)` is our `(x, z, −y)`). The viewer
+//!   looks back at the ball down −Z, so the centre of the ball shows **+Z**, our camera's view
+//!   direction; the angle from +Z is `γ = 2·asin(r)`, and the rim `r → 1` is −Z, straight behind the
+//!   camera. Near the centre this is a pinhole of focal length ½: `D ≈ (2·sx, 2·sy, 1)`.
 //! - `"lightprobe"`, `σ = −1`: the ball as the camera that photographed a light probe saw it, looking
 //!   down +Z at it. The centre reflects **−Z**, back toward that camera; the angle from −Z is
 //!   `γ = 2·asin(r)`, and the rim is +Z, straight behind the ball. Its directions are the default's
@@ -123,8 +124,8 @@ impl ProjectionFactory for MirrorBallFactory {
     }
 
     fn summary(&self) -> &str {
-        "mirror ball in the unit circle: D = (2c sx, 2c sy, s(1 - 2r^2)), c = sqrt(1 - r^2); \
-         orientation camera (Cycles, s = +1: centre +Z, rim -Z) or lightprobe (s = -1: centre -Z, rim +Z)"
+        "mirror ball in the unit circle: D = (2c sx, 2c sy, sigma (1 - 2r^2)), c = sqrt(1 - r^2); orientation \
+         camera (Cycles, sigma = +1: centre +Z, rim -Z) or lightprobe (sigma = -1: centre -Z, rim +Z)"
     }
 
     fn param_table(&self) -> &[ParamDecl] {

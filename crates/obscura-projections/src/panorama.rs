@@ -45,10 +45,10 @@
 //!
 //! # Properties and clipping
 //!
-//! Every panoramic camera answers DicingHint Spherical and DeepMetric RayLength
-//! ([`spherical_property`]); its FieldOfView makes the host's dicing rate `2s/fov` pixels per radian
-//! (`s = max(W/(r − l), H/(t − b))` pixels per screen unit) equal the finest angular resolution of the
-//! image ([`spherical_field_of_view`]). Clipping is by spheres around the camera: `min_dist = near`,
+//! The panoramic cameras answer DicingHint Spherical and DeepMetric RayLength ([`spherical_property`];
+//! `PxrPanini` at compression 0 is a pinhole and answers as one). Their FieldOfView makes the host's
+//! dicing rate `2s/fov` pixels per radian (`s = max(W/(r − l), H/(t − b))` pixels per screen unit)
+//! equal the finest angular resolution of the image ([`spherical_field_of_view`]). Clipping is by spheres around the camera: `min_dist = near`,
 //! `max_dist = far` ([`SphericalClip`]).
 
 use obscura_sdk::{
@@ -57,7 +57,7 @@ use obscura_sdk::{
 };
 
 /// How far outside the window (in units of its half size) [`Projection::unproject`] still answers.
-pub(crate) const EDGE_TOLERANCE: f64 = 1e-5;
+pub const EDGE_TOLERANCE: f64 = 1e-5;
 
 /// Window coordinates farther out than this are clamped (64 half windows: no pixel filter reaches
 /// there), which keeps the angle reduction of [`sin_cos`] exact.
