@@ -81,7 +81,10 @@ TILES: dict[str, list[Tile]] = {
             1.0,
         ),
     ],
-    "MirrorBall": [Tile("", [], 1.0)],
+    "MirrorBall": [
+        Tile("Cycles' orientation: centre +Z, rim -Z", ["orientation=camera"], 1.0),
+        Tile("light probe: centre -Z, rim +Z", ["orientation=lightprobe"], 1.0),
+    ],
     "EquiangularCubemapFace": [Tile("front face", [], 1.0)],
     "Octahedral": [Tile("equal-area sphere", [], 1.0)],
     "CalibratedCamera": [

@@ -57,8 +57,8 @@ use obscura_sdk::{
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
 };
 
+use crate::panorama::{SphericalClip, SweepWindow, finite_f64, spherical_property};
 use crate::simd;
-use crate::sphere::{SphericalClip, spherical_property};
 
 /// The name scenes use.
 pub const NAME: &str = "EquiangularCubemapFace";
@@ -157,9 +157,7 @@ impl ProjectionFactory for CubemapFaceFactory {
 pub struct CubemapFace {
     face: Face,
     basis: [Vec3; 3],
-    /// Window centre and half extents: `u = (sx − cx)/hx`, `v = (sy − cy)/hy`.
-    centre: (f32, f32),
-    half: (f32, f32),
+    window: SweepWindow,
     /// `½·sqrt(Δu·Δv)·π/4`.
     spread_scale: f32,
     clip: SphericalClip,
@@ -169,15 +167,11 @@ impl CubemapFace {
     /// The face `face` for `env`.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, face: Face) -> Self {
-        let w = env.screen_window();
-        let (dx, dy) = env.pixel_size();
-        let (du, dv) = (2.0 * dx / w.width(), 2.0 * dy / w.height());
         CubemapFace {
             face,
             basis: face.basis(),
-            centre: (0.5 * (w.left + w.right), 0.5 * (w.bottom + w.top)),
-            half: (0.5 * w.width(), 0.5 * w.height()),
-            spread_scale: 0.5 * (du * dv).sqrt() * FRAC_PI_4,
+            window: SweepWindow::new(env.screen_window()),
+            spread_scale: SweepWindow::half_pixel(env) * FRAC_PI_4,
             clip: SphericalClip::new(env),
         }
     }
@@ -190,8 +184,7 @@ impl CubemapFace {
 
     #[inline(always)]
     fn ray(&self, s: Point2) -> RayGeometry {
-        let u = (s.x - self.centre.0) / self.half.0;
-        let v = (s.y - self.centre.1) / self.half.1;
+        let (u, v) = self.window.uv(s);
         if !(u.abs() < 2.0 && v.abs() < 2.0) {
             return RayGeometry::CULLED;
         }
@@ -236,14 +229,8 @@ impl Projection for CubemapFace {
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        if !point.is_finite() {
-            return None;
-        }
-        let dot = |v: Vec3| {
-            f64::from(point.x) * f64::from(v.x)
-                + f64::from(point.y) * f64::from(v.y)
-                + f64::from(point.z) * f64::from(v.z)
-        };
+        let (x, y, z) = finite_f64(point)?;
+        let dot = |v: Vec3| x * f64::from(v.x) + y * f64::from(v.y) + z * f64::from(v.z);
         let [f, r, up] = self.basis;
         let pf = dot(f);
         if pf.is_nan() || pf <= 0.0 {
@@ -252,10 +239,7 @@ impl Projection for CubemapFace {
         let to_screen = std::f64::consts::FRAC_1_PI * 4.0;
         let u = to_screen * (dot(r) / pf).atan();
         let v = to_screen * (dot(up) / pf).atan();
-        Some(Point2::new(
-            (f64::from(self.centre.0) + u * f64::from(self.half.0)) as f32,
-            (f64::from(self.centre.1) + v * f64::from(self.half.1)) as f32,
-        ))
+        Some(self.window.screen_point(u, v))
     }
 }
 

@@ -3,7 +3,7 @@
 //!
 //! # Mapping
 //!
-//! With the window coordinates `u, v ∈ [−1, 1]` of conventions.md (see [`crate::sphere::SweepWindow`]):
+//! With the window coordinates `u, v ∈ [−1, 1]` of conventions.md (see [`crate::panorama::SweepWindow`]):
 //!
 //! - azimuth `φ = u·hsweep/2`; height on the unit cylinder `y = v·tan(vsweep/2)`, so the elevation is
 //!   `θ = atan(y)` and the window's top and bottom edges are at `±vsweep/2`;
@@ -26,35 +26,27 @@
 //!
 //! DicingHint Spherical; DeepMetric RayLength (also set in the environment); FieldOfView from the finest
 //! angular resolution, at the image centre: `max(W/hsweep, H/(2·tan(vsweep/2)))` pixels per radian, as
-//! `2·s/that` (see [`crate::sphere::spherical_field_of_view`]).
+//! `2·s/that` (see [`crate::panorama::spherical_field_of_view`]).
 
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
-    Vec3,
+    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
 };
 
-use crate::simd;
-use crate::sphere::{
-    SphericalClip, SweepWindow, degenerate_window, radians_toward_zero, sin_cos, spherical_field_of_view,
+use crate::panorama::{
+    AzimuthSweep, SphericalClip, boxed_spherical, finite_f64, hsweep_param, sin_cos, spherical_field_of_view,
     spherical_property,
 };
+use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrCylinderCamera";
 
 static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
     vec![
-        ParamDecl::float("hsweep", 360.0)
-            .range(ValueRange {
-                min: 0.0,
-                max: 360.0,
-                min_inclusive: false,
-                max_inclusive: true,
-            })
-            .doc("horizontal sweep in degrees across the screen window's width (azimuth ±hsweep/2)"),
+        hsweep_param(),
         ParamDecl::float("vsweep", 90.0)
             .range(ValueRange::open(0.0, 180.0))
             .doc("vertical field of view in degrees across the window's height; screen y is linear in tan(elevation)"),
@@ -84,19 +76,15 @@ impl ProjectionFactory for CylinderCameraFactory {
         params: &ParamList,
     ) -> Result<Box<dyn Projection>, PluginError> {
         let p = Params::resolve(NAME, &TABLE, params)?;
-        let cylinder = CylinderCamera::new(env, p.float("hsweep")?, p.float("vsweep")?)
-            .ok_or_else(|| degenerate_window(NAME, env.screen_window()))?;
-        env.set_deep_metric(DeepMetric::RayLength);
-        Ok(Box::new(cylinder))
+        let cylinder = CylinderCamera::new(env, p.float("hsweep")?, p.float("vsweep")?);
+        boxed_spherical(NAME, env, cylinder)
     }
 }
 
 /// The cylindrical panorama (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CylinderCamera {
-    window: SweepWindow,
-    /// `hsweep/2` in radians, rounded toward zero.
-    half_h: f32,
+    sweep: AzimuthSweep,
     /// `tan(vsweep/2)`.
     tan_v: f32,
     /// `½·sqrt(αx·αy)` at the horizon.
@@ -110,14 +98,13 @@ impl CylinderCamera {
     /// window; `None` when the window has no area.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, hsweep: f32, vsweep: f32) -> Option<Self> {
-        let window = SweepWindow::usable(env.screen_window())?;
+        let sweep = AzimuthSweep::new(env.screen_window(), hsweep)?;
         let (w, h) = (env.width() as f64, env.height() as f64);
         let hs = (hsweep as f64).to_radians();
         let tan_v = (0.5 * (vsweep as f64).to_radians()).tan();
         let pixels_per_radian = (w / hs).max(h / (2.0 * tan_v));
         Some(CylinderCamera {
-            window,
-            half_h: radians_toward_zero(0.5 * hsweep as f64),
+            sweep,
             tan_v: tan_v as f32,
             spread: (hs * tan_v / (2.0 * w * h)).sqrt() as f32,
             clip: SphericalClip::new(env),
@@ -129,11 +116,10 @@ impl CylinderCamera {
     #[inline(always)]
     #[must_use]
     pub fn ray(&self, s: Point2) -> RayGeometry {
-        let (u, v) = self.window.uv(s);
-        if u.is_nan() || v.is_nan() {
+        let Some((phi, v)) = self.sweep.azimuth_and_v(s) else {
             return RayGeometry::CULLED;
-        }
-        let (sp, cp) = sin_cos(u * self.half_h);
+        };
+        let (sp, cp) = sin_cos(phi);
         let y = v * self.tan_v;
         let inv_l = 1.0 / (1.0 + y * y).sqrt();
         self.clip.centred_ray(
@@ -154,16 +140,12 @@ impl Projection for CylinderCamera {
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        if !point.is_finite() {
-            return None;
-        }
-        let (x, y, z) = (point.x as f64, point.y as f64, point.z as f64);
+        let (x, y, z) = finite_f64(point)?;
         let rho = x.hypot(z);
         if rho == 0.0 {
             return None;
         }
-        self.window
-            .screen(x.atan2(z) / self.half_h as f64, y / rho / self.tan_v as f64)
+        self.sweep.screen(x.atan2(z), y / rho / self.tan_v as f64)
     }
 }
 

@@ -20,6 +20,9 @@
 //!
 //! The table of every built-in projection (these and the calibrated cameras of `obscura-calibration`)
 //! is assembled above both crates, in `obscura-plugins`.
+//!
+//! [`panorama`] holds what the panoramic projections share (window coordinates, azimuth sweeps, radial
+//! maps, spherical clipping and property answers).
 
 pub mod cubemap;
 pub mod cylinder;
@@ -30,6 +33,7 @@ pub mod octahedral;
 pub mod omnistereo;
 pub mod orthographic;
 pub mod panini;
+pub mod panorama;
 pub mod perspective;
 pub mod pxrcamera;
 pub mod rolling_shutter;

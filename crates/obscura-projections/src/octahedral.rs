@@ -61,8 +61,8 @@ use obscura_sdk::{
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
 };
 
+use crate::panorama::{SphericalClip, SweepWindow, finite_f64, spherical_property};
 use crate::simd;
-use crate::sphere::{SphericalClip, spherical_property};
 
 /// The name scenes use.
 pub const NAME: &str = "Octahedral";
@@ -98,9 +98,7 @@ impl ProjectionFactory for OctahedralFactory {
 /// An equal-area octahedral camera (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Octahedral {
-    /// Window centre and half extents: `u = (sx − cx)/hx`, `v = (sy − cy)/hy`.
-    centre: (f32, f32),
-    half: (f32, f32),
+    window: SweepWindow,
     /// `½·sqrt(Δu·Δv)`.
     half_pixel_uv: f32,
     clip: SphericalClip,
@@ -113,24 +111,11 @@ impl Octahedral {
     /// An octahedral camera for `env`.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment) -> Self {
-        let w = env.screen_window();
-        let (dx, dy) = env.pixel_size();
-        let (du, dv) = (2.0 * dx / w.width(), 2.0 * dy / w.height());
         Octahedral {
-            centre: (0.5 * (w.left + w.right), 0.5 * (w.bottom + w.top)),
-            half: (0.5 * w.width(), 0.5 * w.height()),
-            half_pixel_uv: 0.5 * (du * dv).sqrt(),
+            window: SweepWindow::new(env.screen_window()),
+            half_pixel_uv: SweepWindow::half_pixel(env),
             clip: SphericalClip::new(env),
         }
-    }
-
-    /// The window coordinates `(u, v)` of screen point `s`.
-    #[inline(always)]
-    fn uv(&self, s: Point2) -> (f32, f32) {
-        (
-            (s.x - self.centre.0) / self.half.0,
-            (s.y - self.centre.1) / self.half.1,
-        )
     }
 
     /// The direction of window coordinates `(u, v) ∈ [−1, 1]²` and the squared turn rates
@@ -160,7 +145,7 @@ impl Octahedral {
 
     #[inline(always)]
     fn ray(&self, s: Point2) -> RayGeometry {
-        let (mut u, mut v) = self.uv(s);
+        let (mut u, mut v) = self.window.uv(s);
         if u > 1.0 {
             (u, v) = (2.0 - u, -v);
         } else if u < -1.0 {
@@ -191,10 +176,7 @@ impl Projection for Octahedral {
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        if !point.is_finite() {
-            return None;
-        }
-        let (x, y, z) = (f64::from(point.x), f64::from(point.y), f64::from(point.z));
+        let (x, y, z) = finite_f64(point)?;
         let len = (x * x + y * y + z * z).sqrt();
         if len == 0.0 {
             return None;
@@ -209,10 +191,7 @@ impl Projection for Octahedral {
             (p, q) = (1.0 - q, 1.0 - p);
         }
         let (u, v) = (p.copysign(x), q.copysign(y));
-        Some(Point2::new(
-            (f64::from(self.centre.0) + u * f64::from(self.half.0)) as f32,
-            (f64::from(self.centre.1) + v * f64::from(self.half.1)) as f32,
-        ))
+        Some(self.window.screen_point(u, v))
     }
 }
 

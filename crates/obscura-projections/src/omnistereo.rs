@@ -6,7 +6,7 @@
 //!
 //! # Mapping
 //!
-//! With the window coordinates `u, v ∈ [−1, 1]` of conventions.md ([`crate::sphere::SweepWindow`]):
+//! With the window coordinates `u, v ∈ [−1, 1]` of conventions.md ([`crate::panorama::SweepWindow`]):
 //!
 //! - azimuth `φ = u·hsweep/2`, elevation `θ = v·vsweep/2` (equirectangular at the defaults 360 × 180);
 //!   the centre direction `Dc = (sin φ·cos θ, sin θ, cos φ·cos θ)`;
@@ -54,16 +54,15 @@
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
-    Vec3,
+    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
 };
 
-use crate::simd;
-use crate::sphere::{
-    SphericalClip, SweepWindow, degenerate_window, radians_toward_zero, sin_cos, spherical_field_of_view,
-    spherical_property,
+use crate::panorama::{
+    AzimuthSweep, SphericalClip, boxed_spherical, direction_angles, finite_f64, hsweep_param,
+    lat_long_field_of_view, radians_toward_zero, sin_cos, spherical_property, vsweep_param,
 };
+use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "OmnidirectionalStereo";
@@ -115,22 +114,8 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
         ParamDecl::float("poleMergeTo", 75.0)
             .range(angle)
             .doc("elevation in degrees from which the eyes coincide (no swirl at the poles)"),
-        ParamDecl::float("hsweep", 360.0)
-            .range(ValueRange {
-                min: 0.0,
-                max: 360.0,
-                min_inclusive: false,
-                max_inclusive: true,
-            })
-            .doc("horizontal sweep in degrees across the screen window's width"),
-        ParamDecl::float("vsweep", 180.0)
-            .range(ValueRange {
-                min: 0.0,
-                max: 180.0,
-                min_inclusive: false,
-                max_inclusive: true,
-            })
-            .doc("vertical sweep in degrees across the screen window's height"),
+        hsweep_param(),
+        vsweep_param(),
     ]
 });
 
@@ -191,10 +176,8 @@ impl ProjectionFactory for OmnidirectionalStereoFactory {
             hsweep: p.float("hsweep")?,
             vsweep: p.float("vsweep")?,
         };
-        let ods = OmnidirectionalStereo::new(env, &settings)
-            .ok_or_else(|| degenerate_window(NAME, env.screen_window()))?;
-        env.set_deep_metric(DeepMetric::RayLength);
-        Ok(Box::new(ods))
+        let ods = OmnidirectionalStereo::new(env, &settings);
+        boxed_spherical(NAME, env, ods)
     }
 }
 
@@ -218,8 +201,8 @@ pub struct OdsSettings {
 /// One eye's ODS panorama (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct OmnidirectionalStereo {
-    window: SweepWindow,
-    half_h: f32,
+    sweep: AzimuthSweep,
+    /// `vsweep/2` in radians, rounded toward zero.
     half_v: f32,
     /// `σ·IPD/2`.
     offset: f32,
@@ -239,12 +222,10 @@ impl OmnidirectionalStereo {
     /// One eye's panorama over `env`'s screen window; `None` when the window has no area.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, s: &OdsSettings) -> Option<Self> {
-        let window = SweepWindow::usable(env.screen_window())?;
         let (w, h) = (env.width() as f64, env.height() as f64);
         let (hs, vs) = (s.hsweep as f64, s.vsweep as f64);
         Some(OmnidirectionalStereo {
-            window,
-            half_h: radians_toward_zero(0.5 * hs),
+            sweep: AzimuthSweep::new(env.screen_window(), s.hsweep)?,
             half_v: radians_toward_zero(0.5 * vs),
             offset: s.eye.sign() * 0.5 * s.ipd,
             merge_from: s.pole_merge.0.to_radians(),
@@ -253,7 +234,7 @@ impl OmnidirectionalStereo {
             dphi: (hs.to_radians() / w) as f32,
             dtheta: (vs.to_radians() / h) as f32,
             clip: SphericalClip::new(env),
-            fov: spherical_field_of_view(env, (w / hs).max(h / vs)),
+            fov: lat_long_field_of_view(env, s.hsweep, s.vsweep),
         })
     }
 
@@ -277,12 +258,11 @@ impl OmnidirectionalStereo {
     #[inline(always)]
     #[must_use]
     pub fn ray(&self, s: Point2) -> RayGeometry {
-        let (u, v) = self.window.uv(s);
-        if u.is_nan() || v.is_nan() {
+        let Some((phi, v)) = self.sweep.azimuth_and_v(s) else {
             return RayGeometry::CULLED;
-        }
+        };
         let theta = v * self.half_v;
-        let (sp, cp) = sin_cos(u * self.half_h);
+        let (sp, cp) = sin_cos(phi);
         let (st, ct) = sin_cos(theta);
         let (r, dr) = self.offset_at(theta);
         let origin = Vec3::new(-r * cp, 0.0, r * sp);
@@ -340,10 +320,8 @@ impl Projection for OmnidirectionalStereo {
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        if !point.is_finite() {
-            return None;
-        }
-        let p = [point.x as f64, point.y as f64, point.z as f64];
+        let (px, py, pz) = finite_f64(point)?;
+        let p = [px, py, pz];
         let (rho, y) = (p[0].hypot(p[2]), p[1]);
         let psi = p[0].atan2(p[2]);
         let inv_c = self.convergence.map_or(0.0, |c| 1.0 / c as f64);
@@ -406,10 +384,8 @@ impl Projection for OmnidirectionalStereo {
                 [d[0] * k + o[0], d[1] * k, d[2] * k + o[2]]
             }
         };
-        let phi = w[0].atan2(w[2]);
-        let theta = w[1].atan2(w[0].hypot(w[2]));
-        self.window
-            .screen(phi / self.half_h as f64, theta / self.half_v as f64)
+        let (phi, theta) = direction_angles(w[0], w[1], w[2]);
+        self.sweep.screen(phi, theta / self.half_v as f64)
     }
 }
 
@@ -417,7 +393,7 @@ impl Projection for OmnidirectionalStereo {
 mod tests {
     use super::*;
     use crate::testing::{self, assert_refused, assert_spherical_ray_length, keeps_contract, ray_at};
-    use obscura_sdk::Format;
+    use obscura_sdk::{DeepMetric, Format};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {

@@ -66,8 +66,8 @@ use obscura_sdk::{
     Vec3,
 };
 
+use crate::panorama::{SphericalClip, SweepWindow, degenerate_window, finite_f64};
 use crate::simd;
-use crate::sphere::{SphericalClip, SweepWindow, degenerate_window};
 
 /// The name scenes use.
 pub const NAME: &str = "PxrPanini";
@@ -253,10 +253,7 @@ impl Projection for Panini {
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        if !point.is_finite() {
-            return None;
-        }
-        let (x, y, z) = (point.x as f64, point.y as f64, point.z as f64);
+        let (x, y, z) = finite_f64(point)?;
         let d = self.d as f64;
         let rho = x.hypot(z);
         if rho == 0.0 {
