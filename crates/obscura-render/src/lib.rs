@@ -11,10 +11,12 @@
 //! | [`bvh`] | binned-SAH BVH per mesh, and the two-level motion-blurred scene accelerator |
 //! | [`material`], [`light`], [`integrator`] | shading: BSDFs, the four lights, the path tracer |
 //! | [`filter`], [`film`], [`output`], [`deep`] | pixel filters, AOV accumulation, EXR/PNG/deep EXR |
+//! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
+pub mod atomic;
 pub mod bvh;
 pub mod deep;
 pub mod dice;
