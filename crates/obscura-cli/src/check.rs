@@ -2,10 +2,13 @@
 //!
 //! Argument handling and printing only; the checks are `obscura_sdk::contract`.
 
+use crate::args::{load_calibration, parse_checked_format};
+use crate::params::merge_param_args;
 use clap::Args;
 use obscura_check::{CheckOptions, check_registered};
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::{PluginSearch, ensure};
+use obscura_render::job::CALIBRATED;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 /// `obscura check <name or path> [--param ...] [--json]`.
@@ -31,7 +34,7 @@ pub struct CheckArgs {
     pub json: bool,
     /// Image size sampled, WIDTHxHEIGHT: every pixel centre plus a margin around the window
     /// [default: 96x72; with --calibration, 96 wide in the calibration image's aspect].
-    #[arg(long, value_parser = parse_format)]
+    #[arg(long, value_parser = parse_checked_format)]
     pub format: Option<(u32, u32)>,
     /// Pixel aspect ratio (pixel width / height).
     #[arg(long, default_value_t = 1.0)]
@@ -54,19 +57,6 @@ pub struct CheckArgs {
     /// Samples per project call.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=1_048_576))]
     pub batch: u64,
-}
-
-fn parse_format(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("'{s}': expected WIDTHxHEIGHT with positive integers, e.g. 96x72");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (w, h) = (
-        w.trim().parse::<u32>().map_err(|_| bad())?,
-        h.trim().parse::<u32>().map_err(|_| bad())?,
-    );
-    if w == 0 || h == 0 || u64::from(w) * u64::from(h) > 16_777_216 {
-        return Err(bad());
-    }
-    Ok((w, h))
 }
 
 /// The options the arguments describe, checked; `calibrated` is the calibration image's size, if any.
@@ -163,8 +153,9 @@ fn run_report(a: &CheckArgs, search: &PluginSearch) -> Result<Option<String>, St
     let mut registry = builtin_registry();
     let (name, mut params, calibrated) = match (&a.calibration, &a.projection) {
         (Some(path), _) => {
-            let (c, list) = crate::load_calibration(path, a.camera.as_deref(), a.json)?;
-            (crate::CALIBRATED.to_string(), list, Some((c.width, c.height)))
+            let c = load_calibration(path, a.camera.as_deref(), a.json)?;
+            let size = c.size();
+            (CALIBRATED.to_string(), c.params, Some(size))
         }
         // A registered name is used as is; a path, or a name found as <Name>.so along
         // --plugin-path and OBSCURA_PLUGIN_PATH, is loaded into the registry first.
@@ -177,7 +168,7 @@ fn run_report(a: &CheckArgs, search: &PluginSearch) -> Result<Option<String>, St
     };
     let opts = options(a, calibrated)?;
     let factory = registry.find(&name).map_err(|e| e.to_string())?;
-    crate::merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
+    merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
     // Panics are caught and reported by the checker; the default hook would print each one as well.
     let hook = std::panic::take_hook();
     std::panic::set_hook(Box::new(|_| {}));
@@ -214,10 +205,13 @@ mod tests {
 
     #[test]
     fn formats_are_read_and_bad_ones_refused() {
-        assert_eq!(parse_format("96x72"), Ok((96, 72)));
-        assert_eq!(parse_format(" 8 X 6 "), Ok((8, 6)));
+        assert_eq!(parse_checked_format("96x72"), Ok((96, 72)));
+        assert_eq!(parse_checked_format(" 8 X 6 "), Ok((8, 6)));
         for bad in ["96", "0x5", "ax5", "100000x100000"] {
-            assert!(parse_format(bad).unwrap_err().contains("WIDTHxHEIGHT"), "{bad}");
+            assert!(
+                parse_checked_format(bad).unwrap_err().contains("WIDTHxHEIGHT"),
+                "{bad}"
+            );
         }
     }
 }

@@ -1,23 +1,25 @@
 //! The `obscura` command. Argument parsing only: every job lives in the library crates.
 
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-use crate::params::push_param_arg;
+use crate::args::{crop_window, load_calibration, parse_format};
+use crate::params::{merge_param_args, param_list};
 use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::shutter::ShutterDesc;
-use obscura_host::{CameraDesc, CameraStage, CropWindow};
+use obscura_host::{CameraDesc, CameraStage};
 use obscura_plugins::builtin_registry;
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all};
 use obscura_render::integrator::PathOptions;
-use obscura_render::job;
+use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
+mod args;
 mod check;
 mod params;
 mod stmap;
@@ -170,83 +172,16 @@ struct RaysArgs {
     output: PathBuf,
 }
 
-fn parse_format(s: &str) -> Result<(u32, u32), String> {
-    let bad = || format!("'{s}': expected WIDTHxHEIGHT with positive integers, e.g. 640x480");
-    let (w, h) = s.split_once(['x', 'X']).ok_or_else(bad)?;
-    let (w, h) = (
-        w.trim().parse::<u32>().map_err(|_| bad())?,
-        h.trim().parse::<u32>().map_err(|_| bad())?,
-    );
-    if w == 0 || h == 0 {
-        return Err(bad());
-    }
-    Ok((w, h))
-}
-
-/// The projection that renders through a calibration file.
-const CALIBRATED: &str = obscura_calibration::files::PROJECTION;
-
-/// Reads `--calibration FILE [--camera ID]` into the calibration and CalibratedCamera's parameters;
-/// says on stderr which camera was taken when the file holds several and none was named.
-fn load_calibration(
-    path: &Path,
-    camera: Option<&str>,
-    quiet: bool,
-) -> Result<(obscura_calibration::files::Calibration, ParamList), String> {
-    let c = obscura_calibration::files::load(path, camera).map_err(|e| e.to_string())?;
-    if !quiet && let Some(note) = c.selection_note() {
-        eprintln!("note: {note}");
-    }
-    let list = c.param_list().map_err(|e| e.to_string())?;
-    Ok((c, list))
-}
-
-/// Warns when `format`'s frame aspect differs from the calibration image's: the calibrated image
-/// still fills the frame, so the same camera is resampled with non-square pixels.
-fn warn_calibration_aspect(c: &obscura_calibration::files::Calibration, format: Format) {
-    let frame = f64::from(format.width) * f64::from(format.pixel_aspect) / f64::from(format.height);
-    let calibrated = f64::from(c.width) / f64::from(c.height);
-    if (frame / calibrated - 1.0).abs() > 1e-3 {
-        eprintln!(
-            "warning: the image is {}x{} (frame aspect {frame:.4}) but the calibration is {}x{} ({calibrated:.4}); \
-             the calibrated image fills the frame, so each pixel covers {:.3} x {:.3} calibration pixels",
-            format.width,
-            format.height,
-            c.width,
-            c.height,
-            f64::from(c.width) / f64::from(format.width),
-            f64::from(c.height) / f64::from(format.height)
-        );
-    }
-}
-
-/// Adds `--param` arguments to `list`, each replacing the entries of the same name.
-fn merge_param_args(
-    list: &mut ParamList,
-    args: &[String],
-    plugin: &str,
-    table: &[obscura_sdk::ParamDecl],
-) -> Result<(), String> {
-    for p in args {
-        let mut one = ParamList::new();
-        push_param_arg(&mut one, p, plugin, table).map_err(|e| e.to_string())?;
-        for e in one.entries() {
-            list.remove(&e.name);
-            let decl = match e.array_len {
-                None => format!("{} {}", e.ty, e.name),
-                Some(n) => format!("{}[{n}] {}", e.ty, e.name),
-            };
-            list.push(&decl, e.value.clone(), e.origin.clone())
-                .map_err(|e| e.to_string())?;
-        }
-    }
-    Ok(())
-}
-
-fn camera(a: &RaysArgs) -> CameraDesc {
+/// The camera `obscura rays` traces: the options as given; the image size is `--format`, else the
+/// calibration's, else 640x480.
+fn camera(a: &RaysArgs, calibration: Option<&Calibrated>) -> CameraDesc {
+    let (width, height) = a
+        .format
+        .or(calibration.map(Calibrated::size))
+        .unwrap_or((640, 480));
     let mut cam = CameraDesc::new(Format {
-        width: a.format.map_or(640, |f| f.0),
-        height: a.format.map_or(480, |f| f.1),
+        width,
+        height,
         pixel_aspect: a.pixel_aspect,
     });
     cam.screen_window = a
@@ -254,12 +189,7 @@ fn camera(a: &RaysArgs) -> CameraDesc {
         .as_ref()
         .map(|w| ScreenWindow::new(w[0], w[1], w[2], w[3]));
     if let Some(c) = &a.crop {
-        cam.crop_window = CropWindow {
-            x_min: c[0],
-            x_max: c[1],
-            y_min: c[2],
-            y_max: c[3],
-        };
+        cam.crop_window = crop_window(c);
     }
     if let Some(s) = &a.shutter {
         cam.shutter = (s[0], s[1]);
@@ -288,23 +218,21 @@ fn camera(a: &RaysArgs) -> CameraDesc {
 
 fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     let mut registry = builtin_registry();
-    let calibration = match &a.calibration {
-        Some(path) => Some(load_calibration(path, a.camera.as_deref(), false)?),
-        None => None,
-    };
+    let calibration = a
+        .calibration
+        .as_deref()
+        .map(|path| load_calibration(path, a.camera.as_deref(), false))
+        .transpose()?;
     let projection = match calibration {
         Some(_) => CALIBRATED.to_string(),
         None => ensure(&mut registry, &a.projection, search).map_err(|e| e.to_string())?,
     };
     let factory = registry.find(&projection).map_err(|e| e.to_string())?;
-    let mut params = calibration.as_ref().map(|(_, l)| l.clone()).unwrap_or_default();
+    let mut params = calibration.as_ref().map(|c| c.params.clone()).unwrap_or_default();
     merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
-    let mut cam = camera(a);
-    if let Some((c, _)) = &calibration {
-        if a.format.is_none() {
-            (cam.format.width, cam.format.height) = (c.width, c.height);
-        }
-        warn_calibration_aspect(c, cam.format);
+    let cam = camera(a, calibration.as_ref());
+    if let Some(w) = calibration.as_ref().and_then(|c| c.aspect_warning(cam.format)) {
+        eprintln!("warning: {w}");
     }
     let stage = CameraStage::new(&mut registry, &projection, &params, &cam).map_err(|e| e.to_string())?;
     for w in stage.setup_warnings() {
@@ -318,8 +246,8 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
         ("obscura:projection", projection.clone()),
         ("obscura:parameters", a.params.join("; ")),
     ];
-    if let Some((c, _)) = &calibration {
-        attributes.push(("obscura:calibration", c.summary()));
+    if let Some(c) = &calibration {
+        attributes.push(("obscura:calibration", c.calibration.summary()));
     }
     write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
     println!(
@@ -339,64 +267,34 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
 
 fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     let mut registry = builtin_registry();
-    let format = a
-        .format
-        .map(|(w, h)| Format::new(w, h))
-        .unwrap_or(Format::new(640, 360));
-    let (mut scene, base_dir) = match &a.scene {
-        None => (
-            obscura_scene::rib::parse_str(job::DEFAULT_SCENE, "<built-in scene>", Path::new("."))
-                .map_err(|e| e.to_string())?,
-            PathBuf::from("."),
-        ),
-        Some(path) => (
-            obscura_scene::load(path, CameraDesc::new(format)).map_err(|e| e.to_string())?,
-            path.parent().map(Path::to_path_buf).unwrap_or_default(),
-        ),
+    let (width, height) = a.format.unwrap_or(job::DEFAULT_FORMAT);
+    let (mut scene, base_dir) =
+        job::load_scene(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
+    let calibration = a
+        .calibration
+        .as_deref()
+        .map(|path| load_calibration(path, a.camera.as_deref(), a.quiet))
+        .transpose()?;
+    let mut overrides = Overrides {
+        format: a.format,
+        crop: a.crop.as_deref().map(crop_window),
+        projection: a.projection.clone(),
+        calibration,
+        params: ParamList::new(),
     };
-    if let Some((w, h)) = a.format {
-        scene.camera.format.width = w;
-        scene.camera.format.height = h;
-    }
-    if let Some(c) = &a.crop {
-        scene.camera.crop_window = CropWindow {
-            x_min: c[0],
-            x_max: c[1],
-            y_min: c[2],
-            y_max: c[3],
-        };
-    }
-    if let Some(p) = &a.projection {
-        scene.projection = p.clone();
-        scene.projection_params = ParamList::new();
-    }
-    if let Some(path) = &a.calibration {
-        let (c, list) = load_calibration(path, a.camera.as_deref(), a.quiet)?;
-        scene.projection = CALIBRATED.to_string();
-        scene.projection_params = list;
-        if a.format.is_none() {
-            scene.camera.format = Format::new(c.width, c.height);
-        }
-        if !a.quiet {
-            warn_calibration_aspect(&c, scene.camera.format);
-        }
-    }
-    scene.projection = ensure(&mut registry, &scene.projection, search).map_err(|e| e.to_string())?;
-    let factory = registry.find(&scene.projection).map_err(|e| e.to_string())?;
-    for p in &a.params {
-        let mut one = ParamList::new();
-        push_param_arg(&mut one, p, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
-        for e in one.entries() {
-            scene.projection_params.remove(&e.name);
-            let decl = match e.array_len {
-                None => format!("{} {}", e.ty, e.name),
-                Some(n) => format!("{}[{n}] {}", e.ty, e.name),
-            };
-            scene
-                .projection_params
-                .push(&decl, e.value.clone(), e.origin.clone())
-                .map_err(|e| e.to_string())?;
-        }
+    // --param is read against the table of the projection rendered through, so that one (a plugin
+    // given by name or path) is loaded first.
+    let projection =
+        ensure(&mut registry, overrides.projection(&scene), search).map_err(|e| e.to_string())?;
+    let factory = registry.find(&projection).map_err(|e| e.to_string())?;
+    overrides.params =
+        param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
+    overrides.apply(&mut scene).map_err(|e| e.to_string())?;
+    scene.projection = projection;
+    if !a.quiet
+        && let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format))
+    {
+        eprintln!("warning: {w}");
     }
     if !a.quiet {
         for w in &scene.warnings {

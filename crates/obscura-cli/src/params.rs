@@ -8,6 +8,7 @@
 //! | RIB | `"float fov" [60]`, `"string eye" ["left"]` |
 //! | untyped assignment (type from the projection's table) | `fov=60`, `eye=left` |
 
+use obscura_render::job::merge_params;
 use obscura_sdk::{DeclarationError, ParamDecl, ParamList, did_you_mean};
 
 /// A `--param` argument could not be read.
@@ -102,6 +103,33 @@ pub fn push_param_arg(
             source,
         })?;
     Ok(())
+}
+
+/// Reads every `--param` argument in `args`, in order, into one list (see [`push_param_arg`]).
+///
+/// # Errors
+/// The first argument that cannot be read, quoted.
+pub fn param_list(args: &[String], plugin: &str, table: &[ParamDecl]) -> Result<ParamList, ParamArgError> {
+    let mut list = ParamList::new();
+    for arg in args {
+        push_param_arg(&mut list, arg, plugin, table)?;
+    }
+    Ok(list)
+}
+
+/// Adds the `--param` arguments `args` to `list` (a calibration's parameters), each replacing the
+/// entries of the same name ([`merge_params`]).
+///
+/// # Errors
+/// The first argument that cannot be read, quoted.
+pub fn merge_param_args(
+    list: &mut ParamList,
+    args: &[String],
+    plugin: &str,
+    table: &[ParamDecl],
+) -> Result<(), String> {
+    let extra = param_list(args, plugin, table).map_err(|e| e.to_string())?;
+    merge_params(list, &extra).map_err(|e| e.to_string())
 }
 
 /// `"type name" [v v v]` or `"type name" v` → (declaration, values). Strings may be quoted.

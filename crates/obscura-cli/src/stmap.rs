@@ -3,9 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::params::push_param_arg;
+use crate::args::{load_calibration, parse_format};
+use crate::params::{merge_param_args, param_list};
 use clap::Args;
 use obscura_plugins::loader::{PluginSearch, ensure};
+use obscura_render::job::CALIBRATED;
 use obscura_render::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
 use obscura_sdk::{Format, ParamList, Registry};
 
@@ -41,10 +43,10 @@ pub struct StmapArgs {
     to_params: Vec<String>,
     /// B's image size (the map's size), WIDTHxHEIGHT [default: the image size of --to-calibration,
     /// else of --from-calibration (a plate's undistorted twin), else 1920x1080].
-    #[arg(long, value_parser = crate::parse_format)]
+    #[arg(long, value_parser = parse_format)]
     format: Option<(u32, u32)>,
     /// A's image size, WIDTHxHEIGHT [default: --from-calibration's image size, else B's].
-    #[arg(long, value_parser = crate::parse_format)]
+    #[arg(long, value_parser = parse_format)]
     from_format: Option<(u32, u32)>,
     /// Distance along B's rays (scene units) of the point A's inverse is asked for. Only matters for
     /// projections whose rays do not all leave one point (stereo, orthographic).
@@ -76,18 +78,19 @@ fn side(
     args: &[String],
 ) -> Result<Side, String> {
     if let Some(path) = calibration {
-        let (c, mut params) =
-            crate::load_calibration(path, camera, true).map_err(|e| format!("{flag}-calibration: {e}"))?;
+        let calibrated =
+            load_calibration(path, camera, true).map_err(|e| format!("{flag}-calibration: {e}"))?;
+        let (c, mut params) = (&calibrated.calibration, calibrated.params.clone());
         if let Some(note) = c.selection_note() {
             eprintln!("note: {}", note.replace("--camera", &format!("{flag}-camera")));
         }
-        let factory = registry.find(crate::CALIBRATED).map_err(|e| e.to_string())?;
-        crate::merge_param_args(&mut params, args, factory.name(), factory.param_table())
+        let factory = registry.find(CALIBRATED).map_err(|e| e.to_string())?;
+        merge_param_args(&mut params, args, factory.name(), factory.param_table())
             .map_err(|e| format!("{flag}-param: {e}"))?;
         return Ok(Side {
-            name: crate::CALIBRATED.to_string(),
+            name: CALIBRATED.to_string(),
             params,
-            calibrated_size: Some((c.width, c.height)),
+            calibrated_size: Some(calibrated.size()),
             label: match &c.camera {
                 Some(id) => format!("{} camera {id}", c.file),
                 None => c.file.clone(),
@@ -101,11 +104,8 @@ fn side(
     let factory = registry
         .find(&registered)
         .map_err(|e| format!("{flag} {name}: {e}"))?;
-    let mut params = ParamList::new();
-    for p in args {
-        push_param_arg(&mut params, p, factory.name(), factory.param_table())
-            .map_err(|e| format!("{flag}-param: {e}"))?;
-    }
+    let params =
+        param_list(args, factory.name(), factory.param_table()).map_err(|e| format!("{flag}-param: {e}"))?;
     Ok(Side {
         name: registered,
         params,
@@ -120,29 +120,24 @@ fn side(
 /// # Errors
 /// A message naming the option at fault, the projection or the file.
 pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Result<(), String> {
-    // Either side may be a plugin on the plugin path, a path to one, or a calibration file.
-    let from_side = side(
-        registry,
-        search,
-        "--from",
+    // Either side may be a plugin on the plugin path, a path to one, or a calibration file; A is
+    // resolved (and any error about it reported) before B.
+    let options = [
         (
-            a.from.as_deref(),
-            a.from_calibration.as_deref(),
-            a.from_camera.as_deref(),
+            "--from",
+            &a.from,
+            &a.from_calibration,
+            &a.from_camera,
+            &a.from_params,
         ),
-        &a.from_params,
-    )?;
-    let to_side = side(
-        registry,
-        search,
-        "--to",
-        (
-            a.to.as_deref(),
-            a.to_calibration.as_deref(),
-            a.to_camera.as_deref(),
-        ),
-        &a.to_params,
-    )?;
+        ("--to", &a.to, &a.to_calibration, &a.to_camera, &a.to_params),
+    ];
+    let mut sides = Vec::with_capacity(2);
+    for (flag, name, calibration, camera, params) in options {
+        let given = (name.as_deref(), calibration.as_deref(), camera.as_deref());
+        sides.push(side(registry, search, flag, given, params)?);
+    }
+    let (from_side, to_side) = (&sides[0], &sides[1]);
     let (tw, th) = a
         .format
         .or(to_side.calibrated_size)

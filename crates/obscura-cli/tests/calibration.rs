@@ -4,40 +4,14 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use exr::prelude::{FlatImage, FlatSamples, read_all_flat_layers_from_file};
+use exr::prelude::{FlatImage, read_all_flat_layers_from_file};
 
 mod support;
 
-fn obscura(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_obscura"))
-        .args(args)
-        .output()
-        .expect("the obscura binary runs")
-}
-
-fn fixture(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../obscura-calibration/tests/fixtures")
-        .join(name)
-        .to_str()
-        .unwrap()
-        .to_string()
-}
+use support::{channel, fixture, obscura};
 
 fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn channel<'a>(image: &'a FlatImage, name: &str) -> &'a [f32] {
-    let ch = image.layer_data[0]
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name.to_string() == name);
-    match ch.map(|c| &c.sample_data) {
-        Some(FlatSamples::F32(v)) => v,
-        other => panic!("channel {name}: {other:?}"),
-    }
+    support::text(&o.stderr)
 }
 
 /// Runs `obscura rays` with `args` into `out` and reads the result back.

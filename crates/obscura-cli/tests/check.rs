@@ -1,17 +1,10 @@
 //! End to end: `obscura check` as a plugin author runs it.
 
-use std::process::{Command, Output};
+use std::process::Command;
 
-fn obscura(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_obscura"))
-        .args(args)
-        .output()
-        .expect("the obscura binary runs")
-}
+mod support;
 
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+use support::{fixture, obscura, text};
 
 #[test]
 fn a_builtin_passes_with_exit_code_zero_and_an_ok_line_per_check() {
@@ -151,15 +144,6 @@ fn bad_sampling_options_are_refused() {
         assert_ne!(run.status.code(), Some(0), "{args:?}");
         assert!(!text(&run.stderr).is_empty(), "{args:?}");
     }
-}
-
-fn fixture(name: &str) -> String {
-    concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../obscura-calibration/tests/fixtures/"
-    )
-    .to_string()
-        + name
 }
 
 /// Every camera of every calibration fixture keeps the contract (its fold regions culled, its

@@ -16,6 +16,10 @@ mod plugin_build;
 
 use plugin_build::{compile_c_fisheye, copy_rust_plugin, lib_name};
 
+mod support;
+
+use support::screen;
+
 /// A directory holding `TinyPlanet.so`, `Panicking.so` and `CFisheye.so`.
 fn plugin_dir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
@@ -42,20 +46,6 @@ fn channel(image: &exr::prelude::FlatImage, name: &str) -> Vec<f32> {
         .find(|c| c.name.to_string() == name)
         .map(|c| c.sample_data.values_as_f32().collect())
         .unwrap_or_else(|| panic!("no channel {name}"))
-}
-
-/// Pixel centre (x, y) of a w×h image in the default screen window.
-fn screen(w: u32, h: u32, x: u32, y: u32) -> (f64, f64) {
-    let a = f64::from(w) / f64::from(h);
-    let (l, r, b, t) = if a >= 1.0 {
-        (-a, a, -1.0, 1.0)
-    } else {
-        (-1.0, 1.0, -1.0 / a, 1.0 / a)
-    };
-    (
-        l + (f64::from(x) + 0.5) / f64::from(w) * (r - l),
-        t - (f64::from(y) + 0.5) / f64::from(h) * (t - b),
-    )
 }
 
 /// Reads the chief-ray directions of `obscura rays`.

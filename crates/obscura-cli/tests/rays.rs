@@ -1,31 +1,13 @@
 //! End to end: `obscura rays` and `obscura plugins` as a user runs them.
 
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Command;
 
-use exr::prelude::{FlatSamples, read_all_flat_layers_from_file};
+use exr::prelude::read_all_flat_layers_from_file;
 
 mod support;
 
-fn obscura(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_obscura"))
-        .args(args)
-        .output()
-        .expect("the obscura binary runs")
-}
-
-fn channel<'a>(image: &'a exr::prelude::FlatImage, name: &str) -> &'a [f32] {
-    let layer = &image.layer_data[0];
-    let ch = layer
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name.to_string() == name);
-    match ch.map(|c| &c.sample_data) {
-        Some(FlatSamples::F32(v)) => v,
-        other => panic!("channel {name}: {other:?}"),
-    }
-}
+use support::{channel, obscura};
 
 fn pinhole_direction(fov: f64, w: u32, h: u32, x: u32, y: u32) -> [f64; 3] {
     let a = w as f64 / h as f64;

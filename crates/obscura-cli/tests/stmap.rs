@@ -1,50 +1,12 @@
 //! End to end: `obscura stmap` as a user runs it, and `obscura plugins --names`.
 
-use std::process::{Command, Output};
+use std::process::Command;
 
-use exr::prelude::{AttributeValue, FlatImage, FlatSamples, Text, read_all_flat_layers_from_file};
+use exr::prelude::read_all_flat_layers_from_file;
 
 mod support;
 
-fn obscura(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_obscura"))
-        .args(args)
-        .output()
-        .expect("the obscura binary runs")
-}
-
-fn channel<'a>(image: &'a FlatImage, name: &str) -> &'a [f32] {
-    let ch = image.layer_data[0]
-        .channel_data
-        .list
-        .iter()
-        .find(|c| c.name.to_string() == name);
-    match ch.map(|c| &c.sample_data) {
-        Some(FlatSamples::F32(v)) => v,
-        other => panic!("channel {name}: {other:?}"),
-    }
-}
-
-fn text_attribute(image: &FlatImage, key: &str) -> Option<String> {
-    match image.layer_data[0].attributes.other.get(&Text::from(key)) {
-        Some(AttributeValue::Text(t)) => Some(t.to_string()),
-        _ => None,
-    }
-}
-
-/// Screen position of pixel centre (i, j) with the default window of a w×h image.
-fn screen(w: u32, h: u32, i: u32, j: u32) -> (f64, f64) {
-    let a = w as f64 / h as f64;
-    let (l, r, b, t) = if a >= 1.0 {
-        (-a, a, -1.0, 1.0)
-    } else {
-        (-1.0, 1.0, -1.0 / a, 1.0 / a)
-    };
-    (
-        l + (i as f64 + 0.5) / w as f64 * (r - l),
-        t - (j as f64 + 0.5) / h as f64 * (t - b),
-    )
-}
+use support::{channel, fixture, obscura, screen, text_attribute};
 
 #[test]
 fn stmap_exr_holds_the_closed_form_perspective_map() {
@@ -298,15 +260,6 @@ sys.exit(0 if ok else 1)
         String::from_utf8_lossy(&r.stdout),
         String::from_utf8_lossy(&r.stderr)
     );
-}
-
-fn fixture(name: &str) -> String {
-    std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../obscura-calibration/tests/fixtures")
-        .join(name)
-        .to_str()
-        .unwrap()
-        .to_string()
 }
 
 /// opencv_calibration.yml's camera for opencv_stmap.py: MODEL FX FY CX CY W H, then k1 k2 p1 p2 k3.

@@ -25,7 +25,8 @@ use miniz_oxide::deflate::compress_to_vec_zlib;
 use obscura_host::PixelRect;
 use rayon::prelude::*;
 
-use crate::output::{OutputError, write_atomically, write_file};
+use crate::atomic::write_atomically;
+use crate::output::OutputError;
 
 /// One sample of a deep pixel: a slab from `z` to `z_back` with premultiplied colour and alpha.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,14 +86,15 @@ const VERSION_FIELD: i32 = 2 | 0x800;
 const FLOAT: i32 = 2;
 const ZLIB_LEVEL: u8 = 6;
 
-/// Writes `image` as a single-part deep-scanline OpenEXR, atomically (temporary sibling + rename).
+/// Writes `image` as a single-part deep-scanline OpenEXR, atomically
+/// ([`crate::atomic::write_atomically`]).
 ///
 /// Samples are written in the order given; OpenEXR expects them sorted by `z`.
 ///
 /// # Errors
 /// [`OutputError::InvalidDeepImage`] when the data window is empty, its pixel count differs from
 /// `pixels.len()`, a coordinate or a sample count does not fit OpenEXR's `i32`s, or the format is
-/// empty; [`OutputError::Io`] or [`OutputError::Rename`] when writing fails. All name `path`.
+/// empty; [`OutputError::Write`] when writing fails. All name `path`.
 pub fn write_deep_exr(
     path: &Path,
     image: &DeepImage,
@@ -135,24 +137,19 @@ pub fn write_deep_exr(
         .ok_or_else(|| invalid("a scanline holds more than 2^31 − 1 samples".into()))?;
     let header = header(image, compression, max_samples.min(i32::MAX as usize) as i32);
 
-    write_atomically(path, |tmp| {
-        write_file(path, tmp, |out| {
-            let io = |source| OutputError::Io {
-                path: path.to_path_buf(),
-                source,
-            };
-            out.write_all(&header).map_err(io)?;
-            let mut offset = (header.len() + 8 * chunks.len()) as u64;
-            for c in &chunks {
-                out.write_all(&offset.to_le_bytes()).map_err(io)?;
-                offset += c.len() as u64;
-            }
-            for c in &chunks {
-                out.write_all(c).map_err(io)?;
-            }
-            Ok(())
-        })
-    })
+    write_atomically(path, |out| {
+        out.write_all(&header)?;
+        let mut offset = (header.len() + 8 * chunks.len()) as u64;
+        for c in &chunks {
+            out.write_all(&offset.to_le_bytes())?;
+            offset += c.len() as u64;
+        }
+        for c in &chunks {
+            out.write_all(c)?;
+        }
+        Ok(())
+    })?;
+    Ok(())
 }
 
 /// Magic, version field and header.
@@ -271,7 +268,6 @@ mod tests {
     //! Python's `OpenEXR` (the reference C++ library) through `tests/deep_read.py`.
 
     use super::*;
-    use crate::raymap::temporary_sibling;
     use miniz_oxide::inflate::decompress_to_vec_zlib;
     use proptest::prelude::*;
     use std::collections::HashMap;
@@ -500,7 +496,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("deep.exr");
         write_deep_exr(&path, image, compression).unwrap();
-        assert!(!temporary_sibling(&path).exists());
+        assert!(crate::atomic::temporaries(&path).is_empty());
         parse(&std::fs::read(&path).unwrap())
     }
 
@@ -626,7 +622,7 @@ mod tests {
         let missing = dir.path().join("no/such/dir/deep.exr");
         let err = write_deep_exr(&missing, &good, DeepCompression::None).unwrap_err();
         assert!(err.to_string().contains(&missing.display().to_string()), "{err}");
-        assert!(!temporary_sibling(&missing).exists() && !path.exists());
+        assert!(crate::atomic::temporaries(&missing).is_empty() && !path.exists());
     }
 
     /// Sample values per (x, y, channel).

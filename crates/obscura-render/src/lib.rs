@@ -12,10 +12,12 @@
 //! | [`motion`] | transforms keyed in time (camera and instances), interpolated at a ray's time |
 //! | [`material`], [`light`], [`integrator`] | shading: BSDFs, the four lights, the path tracer |
 //! | [`filter`], [`film`], [`output`], [`deep`] | pixel filters, AOV accumulation, EXR/PNG/deep EXR |
+//! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
+pub mod atomic;
 pub mod bvh;
 pub mod deep;
 pub mod dice;

@@ -1,14 +1,11 @@
 //! Flat image files: OpenEXR (through the `exr` crate) and 8-bit sRGB PNG previews.
 //!
-//! Both are written to a hidden temporary file beside the target
-//! ([`crate::raymap::temporary_sibling`]) and renamed into place, so a reader never sees half
-//! a file and a failed write leaves nothing behind.
+//! Both are written with [`crate::atomic::write_atomically`], so a reader never sees half a file
+//! and a failed write leaves nothing behind.
 
-use std::fs::File;
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use crate::raymap::temporary_sibling;
+use crate::atomic::{AtomicWriteError, write_atomically};
 use exr::image::Blocks;
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Compression, Encoding, FlatSamples, Image, IntegerBounds, Layer,
@@ -21,38 +18,9 @@ use crate::film::{Film, SampleValues};
 /// An image file could not be written. Every variant names the file.
 #[derive(Debug, thiserror::Error)]
 pub enum OutputError {
-    /// Creating, writing or flushing the temporary file failed.
-    #[error("cannot write {path}: {source}")]
-    Io {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// The `exr` crate refused the image or failed to write it.
-    #[error("cannot write {path}: {source}")]
-    Exr {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: exr::error::Error,
-    },
-    /// The PNG encoder failed.
-    #[error("cannot write {path}: {source}")]
-    Png {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: png::EncodingError,
-    },
-    /// Renaming the finished file into place failed.
-    #[error("cannot move the finished file into place at {path}: {source}")]
-    Rename {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
+    /// Creating, writing, syncing or renaming the file failed.
+    #[error(transparent)]
+    Write(#[from] AtomicWriteError),
     /// The crop window (data window) holds no pixel: image files cannot be empty.
     #[error("cannot write {path}: the image has no pixels (empty crop window)")]
     EmptyImage {
@@ -85,41 +53,30 @@ pub enum OutputError {
     },
 }
 
-/// Writes through `write` into a temporary sibling of `path`, then renames it into place; on any
-/// failure the temporary file is removed.
-pub(crate) fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), OutputError>,
-) -> Result<(), OutputError> {
-    let tmp = temporary_sibling(path);
-    if let Err(e) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
+/// One OpenEXR layer of channels (`f32` or `f16`), as the writers here build them.
+pub type FloatExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
+
+/// Stores `attributes` as header strings of `layer` (the projection's name and parameters, for the
+/// record).
+pub fn add_text_attributes(layer: &mut LayerAttributes, attributes: &[(&str, String)]) {
+    for (k, v) in attributes {
+        layer
+            .other
+            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
     }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        OutputError::Rename {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
 }
 
-/// Streams `bytes` produced by `fill` into a new file at `tmp`, flushed and synced; I/O errors name
-/// `path` (the target, not the temporary).
-pub(crate) fn write_file(
-    path: &Path,
-    tmp: &Path,
-    fill: impl FnOnce(&mut BufWriter<File>) -> Result<(), OutputError>,
-) -> Result<(), OutputError> {
-    let io = |source| OutputError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let mut out = BufWriter::new(File::create(tmp).map_err(io)?);
-    fill(&mut out)?;
-    out.flush().map_err(io)?;
-    out.get_ref().sync_all().map_err(io)
+/// Writes `image` to `path` with [`write_atomically`].
+///
+/// # Errors
+/// An [`AtomicWriteError`] naming `path`; the `exr` crate's own errors become its message.
+pub fn write_exr_image(image: FloatExrImage, path: &Path) -> Result<(), AtomicWriteError> {
+    write_atomically(path, |out| {
+        image.write().to_buffered(out).map_err(|e| match e {
+            exr::error::Error::Io(e) => e,
+            other => std::io::Error::other(other),
+        })
+    })
 }
 
 /// Attribute names the writer sets itself (or that OpenEXR reserves); callers may not override them.
@@ -185,8 +142,8 @@ fn resolve(film: &Film) -> Vec<SampleValues> {
 /// bytes); names must be non-empty, at most 255 bytes, free of NUL and not one of OpenEXR's own.
 ///
 /// # Errors
-/// [`OutputError::EmptyImage`], [`OutputError::NoChannels`], [`OutputError::Attribute`],
-/// [`OutputError::Exr`] or [`OutputError::Rename`], each naming `path`.
+/// [`OutputError::EmptyImage`], [`OutputError::NoChannels`], [`OutputError::Attribute`] or
+/// [`OutputError::Write`], each naming `path`.
 pub fn write_exr(
     path: &Path,
     film: &Film,
@@ -274,12 +231,7 @@ pub fn write_exr(
     image.attributes.display_window = IntegerBounds::new((0, 0), (w as usize, h as usize));
     image.attributes.pixel_aspect = pixel_aspect;
 
-    write_atomically(path, |tmp| {
-        image.write().to_file(tmp).map_err(|source| OutputError::Exr {
-            path: path.to_path_buf(),
-            source,
-        })
-    })
+    Ok(write_exr_image(image, path)?)
 }
 
 /// The sRGB transfer function (IEC 61966-2-1) of `linear`, clamped to [0, 1] first (NaN → 0):
@@ -315,8 +267,7 @@ fn quantize(v: f32) -> u8 {
 /// `sRGB` chunk.
 ///
 /// # Errors
-/// [`OutputError::EmptyImage`], [`OutputError::Io`], [`OutputError::Png`] or
-/// [`OutputError::Rename`], each naming `path`.
+/// [`OutputError::EmptyImage`] or [`OutputError::Write`], each naming `path`.
 pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
     let crop = film.crop();
     if crop.is_empty() {
@@ -332,21 +283,20 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
             quantize(srgb_encode(v.ci.b)),
         ]);
     }
-    let png_err = |source| OutputError::Png {
-        path: path.to_path_buf(),
-        source,
+    let png_err = |e| match e {
+        png::EncodingError::IoError(e) => e,
+        other => std::io::Error::other(other),
     };
-    write_atomically(path, |tmp| {
-        write_file(path, tmp, |out| {
-            let mut encoder = png::Encoder::new(out, crop.width(), crop.height());
-            encoder.set_color(png::ColorType::Rgb);
-            encoder.set_depth(png::BitDepth::Eight);
-            encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
-            let mut writer = encoder.write_header().map_err(png_err)?;
-            writer.write_image_data(&data).map_err(png_err)?;
-            writer.finish().map_err(png_err)
-        })
-    })
+    write_atomically(path, |out| {
+        let mut encoder = png::Encoder::new(out, crop.width(), crop.height());
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = encoder.write_header().map_err(png_err)?;
+        writer.write_image_data(&data).map_err(png_err)?;
+        writer.finish().map_err(png_err)
+    })?;
+    Ok(())
 }
 
 /// Runs the Python script `tests/<script>` on `path` with the reference OpenEXR library (PyPI
@@ -470,7 +420,7 @@ mod tests {
             ("note", "ünïcode ok".to_string()),
         ];
         write_exr(&path, &f, &aovs, false, 1.5, &attrs).unwrap();
-        assert!(!temporary_sibling(&path).exists());
+        assert!(crate::atomic::temporaries(&path).is_empty());
 
         let image = read_back(&path);
         assert_eq!(
@@ -687,7 +637,7 @@ mod tests {
                 write_png(&path, &f).unwrap_err()
             };
             assert!(err.to_string().contains(&path.display().to_string()), "{err}");
-            assert!(!temporary_sibling(&path).exists());
+            assert!(crate::atomic::temporaries(&path).is_empty());
             assert!(!path.exists());
         }
     }
@@ -741,9 +691,9 @@ mod tests {
         }
         film.merge(t);
         write_png(&path, &film).unwrap();
-        assert!(!temporary_sibling(&path).exists());
+        assert!(crate::atomic::temporaries(&path).is_empty());
 
-        let decoder = png::Decoder::new(std::io::BufReader::new(File::open(&path).unwrap()));
+        let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
         let mut reader = decoder.read_info().unwrap();
         let mut buf = vec![0; reader.output_buffer_size().unwrap()];
         let info = reader.next_frame(&mut buf).unwrap();

@@ -7,13 +7,12 @@
 //! layers `sample1` … `sampleN` hold the same channels for the renderer's own N samples of every pixel
 //! (Owen-scrambled Sobol positions inside the pixel, warped lens and time samples), plus `screen.{X,Y}`
 //! and `time`. The data window is the crop; the display window the full format. The file is written
-//! to a temporary name beside the target and renamed, so a reader never sees half a file.
+//! with [`crate::atomic::write_atomically`], so a reader never sees half a file.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use exr::prelude::{
-    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, IntegerBounds, Layer,
-    LayerAttributes, Text, Vec2, WritableImage,
+    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, IntegerBounds, Layer, LayerAttributes, Vec2,
 };
 use obscura_sdk::{Point2, RayGeometry, Rgb, Vec3};
 use rayon::prelude::*;
@@ -21,6 +20,9 @@ use rayon::prelude::*;
 use obscura_host::camera::PixelRect;
 use obscura_host::driver::{Batch, CameraStage, ContractReport};
 use obscura_host::sampler::{MAX_SAMPLES, Sampler};
+
+use crate::atomic::AtomicWriteError;
+use crate::output::{add_text_attributes, write_exr_image};
 
 /// One layer of a ray map: one ray per pixel of the crop, row by row.
 #[derive(Debug, Clone, PartialEq)]
@@ -54,64 +56,7 @@ pub enum RayMapError {
     TooManySamples(u32),
     /// Writing the file failed.
     #[error(transparent)]
-    Output(#[from] ExrWriteError),
-}
-
-/// An OpenEXR file could not be written into place (ray maps, ST-maps).
-#[derive(Debug, thiserror::Error)]
-pub enum ExrWriteError {
-    /// Writing failed.
-    #[error("cannot write {path}: {source}")]
-    Write {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: exr::error::Error,
-    },
-    /// Renaming the finished file into place failed.
-    #[error("cannot move the finished file into place at {path}: {source}")]
-    Rename {
-        /// The target file.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-}
-
-/// One OpenEXR layer of float channels, as the map writers build them.
-pub type FloatExrImage = Image<Layer<AnyChannels<FlatSamples>>>;
-
-/// Stores `attributes` as header strings of `layer` (the projection's name and parameters, for the
-/// record).
-pub fn add_text_attributes(layer: &mut LayerAttributes, attributes: &[(&str, String)]) {
-    for (k, v) in attributes {
-        layer
-            .other
-            .insert(Text::from(*k), AttributeValue::Text(Text::from(v.as_str())));
-    }
-}
-
-/// Writes `image` to [`temporary_sibling`]`(path)` and renames it into place, so a reader never sees
-/// half a file; on failure the temporary file is removed.
-///
-/// # Errors
-/// [`ExrWriteError::Write`] or [`ExrWriteError::Rename`] naming `path`.
-pub fn write_exr_atomically(image: &FloatExrImage, path: &Path) -> Result<(), ExrWriteError> {
-    let tmp = temporary_sibling(path);
-    if let Err(source) = image.write().to_file(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(ExrWriteError::Write {
-            path: path.to_path_buf(),
-            source,
-        });
-    }
-    std::fs::rename(&tmp, path).map_err(|source| {
-        let _ = std::fs::remove_file(&tmp);
-        ExrWriteError::Rename {
-            path: path.to_path_buf(),
-            source,
-        }
-    })
+    Output(#[from] AtomicWriteError),
 }
 
 /// Computes the chief-ray layer and `samples` sample layers over the stage's crop window.
@@ -251,17 +196,7 @@ pub fn write_exr(
     image.attributes.display_window =
         IntegerBounds::new((0, 0), (format.width as usize, format.height as usize));
     image.attributes.pixel_aspect = format.pixel_aspect;
-    Ok(write_exr_atomically(&image, path)?)
-}
-
-/// `dir/.name.tmp-PID`: same directory (so the rename is atomic), hidden, unique per process.
-#[must_use]
-pub fn temporary_sibling(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+    Ok(write_exr_image(image, path)?)
 }
 
 #[cfg(test)]
@@ -355,6 +290,6 @@ mod tests {
         let path = Path::new("/nonexistent-dir/rays.exr");
         let err = write_exr(&map, cam.format, cam.screen_window(), &[], path).unwrap_err();
         assert!(err.to_string().contains("/nonexistent-dir/rays.exr"), "{err}");
-        assert!(!temporary_sibling(path).exists());
+        assert!(crate::atomic::temporaries(path).is_empty());
     }
 }

@@ -58,7 +58,8 @@ use obscura_sdk::contract::panic_message;
 use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Registry, Vec3};
 use rayon::prelude::*;
 
-use crate::raymap::{ExrWriteError, add_text_attributes, write_exr_atomically};
+use crate::atomic::AtomicWriteError;
+use crate::output::{add_text_attributes, write_exr_image};
 use obscura_host::camera::CameraDesc;
 use obscura_host::driver::{Batch, CameraStage, ContractReport, HostError};
 
@@ -215,7 +216,7 @@ pub enum StMapError {
     },
     /// Writing the file failed.
     #[error(transparent)]
-    Output(#[from] ExrWriteError),
+    Output(#[from] AtomicWriteError),
 }
 
 /// A's `unproject(p, 0)`, with a panic (or a plugin's failed call, which its adapter raises as one)
@@ -433,7 +434,7 @@ fn map_row(from: &CameraStage, to: &CameraStage, distance: f32, y: u32) -> (Vec<
 }
 
 /// Writes `map` as a 32-bit float OpenEXR (ZIP compressed) with channels R = s, G = t, B = 0, A = alpha,
-/// atomically (a temporary file beside the target, then a rename). The display and data windows are
+/// atomically ([`crate::atomic::write_atomically`]). The display and data windows are
 /// B's format; `attributes` are stored as header strings (the projections and their parameters).
 ///
 /// # Errors
@@ -457,13 +458,12 @@ pub fn write_stmap_exr(map: &StMap, attributes: &[(&str, String)], path: &Path) 
     let mut image = Image::from_layer(layer);
     image.attributes.display_window = IntegerBounds::new((0, 0), size);
     image.attributes.pixel_aspect = map.format.pixel_aspect;
-    Ok(write_exr_atomically(&image, path)?)
+    Ok(write_exr_image(image, path)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raymap::temporary_sibling;
     use obscura_plugins::builtin_registry;
     use obscura_sdk::{
         DeepMetric, DicingHint, Projection, ProjectionContext, ProjectionProperty, PropertyValue,
@@ -885,7 +885,7 @@ mod tests {
                 other => panic!("{name}: {other:?}"),
             }
         }
-        assert!(!temporary_sibling(&path).exists());
+        assert!(crate::atomic::temporaries(&path).is_empty());
         std::fs::remove_dir_all(&dir).unwrap();
         let bad = Path::new("/nonexistent-dir/map.exr");
         let e = write_stmap_exr(&map, &[], bad).unwrap_err().to_string();
