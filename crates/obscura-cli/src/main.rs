@@ -1,5 +1,10 @@
 //! The `obscura` command. Argument parsing only: every job lives in the library crates.
 
+#![forbid(unsafe_code)]
+// The argument structs' doc comments are clap's `--help` text, shown as written: `[60]` and `<Name>`
+// there are RIB and shell notation, not rustdoc links or HTML.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
