@@ -202,7 +202,7 @@
 //! Panics are caught with `catch_unwind`; the default panic hook still prints each one to stderr (the
 //! `obscura check` command silences it while checking).
 
-#![warn(missing_docs)]
+#![forbid(unsafe_code)]
 
 mod checks;
 mod json;
