@@ -7,6 +7,10 @@
 //! - [`loader`]: projection plugins loaded from shared libraries through the C ABI of
 //!   `include/obscura/projection.h` — the search path, the descriptor checks and the adapter that makes
 //!   a plugin an ordinary [`obscura_sdk::ProjectionFactory`];
+//! - [`decode`] and [`encode`]: the host's side of that ABI — reading what a plugin sends (its
+//!   parameter table, its property values) and building what the host sends it (parameter lists,
+//!   environments, an error sink). The plugin's side is in [`obscura_sdk::abi`], which a Rust plugin
+//!   compiles in;
 //! - [`listing`]: the text of `obscura plugins`.
 //!
 //! A host asks for a projection by name ([`loader::ensure`]): a registered name is used as is, an
@@ -14,6 +18,8 @@
 //! and a built-in go through the same [`obscura_sdk::Registry`] and the same camera stage.
 
 pub mod builtins;
+pub mod decode;
+pub mod encode;
 pub mod listing;
 pub mod loader;
 

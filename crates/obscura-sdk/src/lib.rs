@@ -22,7 +22,8 @@
 //!
 //! Beyond the interface: [`contract`] checks a projection against the whole contract (what
 //! `obscura check` runs: call it from your own tests), and [`abi`] with [`export_projection!`] turns a
-//! factory into a shared library the host loads through the C ABI of `include/obscura/projection.h`.
+//! factory into a shared library the host loads through the C ABI of `include/obscura/projection.h`
+//! (the plugin's side of that ABI only: the host's side is in `obscura-plugins`).
 //!
 //! A minimal projection:
 //!

@@ -1,5 +1,5 @@
 /*
- * "Broken": a test plugin for crates/obscura-host/tests/abi.rs, compiled once per defect with -D.
+ * "Broken": a test plugin for crates/obscura-plugins/tests/abi.rs, compiled once per defect with -D.
  *
  * Without a define it is a well-behaved modifier (RenderMan's sense): it reports a 90-degree field of
  * view and leaves the host's default pinhole rays alone. Each define breaks exactly one promise:
@@ -21,6 +21,8 @@
  *   PROJECT_ERROR     project returns OBSCURA_ERROR with a message on every batch
  *   SIZEOF_DEFAULT    default_count is sizeof the default array (4) instead of its length (1)
  *   HUGE_CHOICES      num_choices is absurd (and choices NULL): refused before anything is read
+ *   UNKNOWN_RANGE_BIT range_flags has a bit the header does not define (8)
+ *   INCLUSIVE_WITHOUT_LIMITED  range_flags has both INCLUSIVE bits but not LIMITED: no range (loads)
  */
 #include <math.h>
 #include <stddef.h>
@@ -49,7 +51,13 @@ static const ObscuraParamDecl PARAMS[] = {
         .range_max = 10.0,
         .type = OBSCURA_PARAM_FLOAT,
         .array_len = OBSCURA_ARRAY_SINGLE,
+#if defined(UNKNOWN_RANGE_BIT)
+        .range_flags = OBSCURA_RANGE_LIMITED | OBSCURA_RANGE_MIN_INCLUSIVE | OBSCURA_RANGE_MAX_INCLUSIVE | 8u,
+#elif defined(INCLUSIVE_WITHOUT_LIMITED)
+        .range_flags = OBSCURA_RANGE_MIN_INCLUSIVE | OBSCURA_RANGE_MAX_INCLUSIVE,
+#else
         .range_flags = OBSCURA_RANGE_LIMITED | OBSCURA_RANGE_MIN_INCLUSIVE | OBSCURA_RANGE_MAX_INCLUSIVE,
+#endif
 #ifdef HUGE_CHOICES
         .num_choices = (size_t)-1 / 2, /* never read: refused before the (NULL) array is touched */
 #endif
