@@ -96,7 +96,8 @@
 //! - DeepMetric RayLength when some valid ray may point at or behind the camera plane, else CameraZ.
 //! - Rays start at the origin (`origin_radius` 0); `ray_spread = ½·sqrt(αx·αy)` with αx, αy the
 //!   angle the direction turns per render pixel along x and y, from the analytic Jacobian.
-//! - Clipping: planes (`near/D.z`, `far/D.z`) for the Perspective hint, spheres otherwise.
+//! - Clipping follows the deep metric (`obscura_sdk::contract::clipping_distances`): planes
+//!   (`near/D.z`, `far/D.z`) for CameraZ, spheres (`near`, `far`) for RayLength.
 
 use std::sync::LazyLock;
 
@@ -235,6 +236,8 @@ pub struct CalibratedCamera {
     /// `sqrt` of the product of the calibration pixels per render pixel along x and y.
     pixel_scale: f64,
     planar: bool,
+    /// Clipping planes (DeepMetric CameraZ) rather than spheres (RayLength).
+    clip_planes: bool,
     near: f32,
     far: f32,
     fov: f32,
@@ -271,6 +274,7 @@ impl CalibratedCamera {
             ov: t * hc / (t - b) + shift,
             pixel_scale: (wc / env.width() as f64 * hc / env.height() as f64).sqrt(),
             planar,
+            clip_planes: deep_metric == DeepMetric::CameraZ,
             near: env.clipping_near(),
             far: env.clipping_far(),
             fov: 90.0,
@@ -367,7 +371,7 @@ impl CalibratedCamera {
         let product = (turn(0) * turn(1) * i4 * i4) as f32;
         let spread = 0.5 * product.sqrt().sqrt() * self.pixel_scale as f32;
         let direction = Vec3::new((x * inv) as f32, -(y * inv) as f32, (z * inv) as f32);
-        let (min_dist, max_dist) = if self.planar {
+        let (min_dist, max_dist) = if self.clip_planes {
             let k = 1.0 / direction.z;
             (self.near * k, self.far * k)
         } else {
@@ -430,7 +434,7 @@ impl Batch<'_> {
         let c = self.camera;
         let (rays, screen) = (self.rays, self.screen);
         let ps = c.pixel_scale as f32;
-        let (near, far, planar) = (c.near, c.far, c.planar);
+        let (near, far, planar) = (c.near, c.far, c.clip_planes);
         simd::run(
             #[inline(always)]
             move || {
