@@ -8,6 +8,8 @@
 //! - [`sampler`]: Owen-scrambled Sobol pixel, lens and time samples;
 //! - [`aperture`]: the aperture warp of lens samples into `[−1, 1]²` (bokeh shape, density, anamorphic);
 //! - [`shutter`]: the shutter-opening warp of time samples;
+//! - [`distribution`]: the tabulated 1-D distribution (built from weights, sampled by inverse CDF) behind
+//!   the aperture and shutter warps and the renderer's dome-light importance sampling;
 //! - [`driver`]: the camera stage — fills a batch, pre-fills the renderer's default rays, calls
 //!   `project`, validates every ray and culls what breaks the contract, counting it;
 //! - [`raymap`]: the per-pixel ray map written by `obscura rays`;
@@ -20,6 +22,7 @@
 pub mod aperture;
 pub mod camera;
 pub mod cli_params;
+pub mod distribution;
 pub mod driver;
 pub mod listing;
 pub mod plugins;

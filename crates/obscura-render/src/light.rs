@@ -45,6 +45,7 @@ use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3A, Mat4, Vec3A};
+use obscura_host::distribution::Distribution1D;
 use obscura_scene::Light;
 
 use crate::material::{Frame, color, sanitize};
@@ -130,93 +131,38 @@ impl EnvMap {
     }
 }
 
-/// A piecewise-constant density on `[0, 1)` with `n` equal cells.
-#[derive(Debug, Clone)]
-struct Distribution1D {
-    func: Vec<f32>,
-    cdf: Vec<f32>,
-    integral: f32,
-}
-
-impl Distribution1D {
-    fn new(func: Vec<f32>) -> Self {
-        let n = func.len().max(1);
-        let mut cdf = Vec::with_capacity(n + 1);
-        cdf.push(0.0f32);
-        let mut acc = 0.0f64;
-        for &f in &func {
-            acc += f64::from(f) / n as f64;
-            cdf.push(acc as f32);
-        }
-        let integral = acc as f32;
-        if integral > 0.0 && integral.is_finite() {
-            for c in &mut cdf {
-                *c /= integral;
-            }
-        } else {
-            for (i, c) in cdf.iter_mut().enumerate() {
-                *c = i as f32 / n as f32;
-            }
-        }
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
-        Distribution1D { func, cdf, integral }
-    }
-
-    fn len(&self) -> usize {
-        self.func.len()
-    }
-
-    /// The density of cell `i` (relative to the uniform density 1).
-    fn pdf(&self, i: usize) -> f32 {
-        if self.integral > 0.0 && self.integral.is_finite() {
-            self.func.get(i).copied().unwrap_or(0.0) / self.integral
-        } else {
-            1.0
-        }
-    }
-
-    /// `(x in [0, 1), cell, density)`.
-    fn sample(&self, u: f32) -> (f32, usize, f32) {
-        let n = self.len();
-        let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
-        let (c0, c1) = (self.cdf[i], self.cdf[i + 1]);
-        let du = if c1 > c0 {
-            ((u - c0) / (c1 - c0)).clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        let x = ((i as f32 + du) / n as f32).min(1.0 - f32::EPSILON);
-        (x, i, self.pdf(i))
-    }
-}
-
-/// A 2-D piecewise-constant density on `[0, 1)²`: a marginal over rows, a conditional per row.
+/// A 2-D piecewise-constant density on `[0, 1)²`: a marginal over rows, a conditional per row (each a
+/// [`Distribution1D`] in `f32`).
 #[derive(Debug, Clone)]
 struct Distribution2D {
-    rows: Vec<Distribution1D>,
-    marginal: Distribution1D,
+    rows: Vec<Distribution1D<f32>>,
+    marginal: Distribution1D<f32>,
 }
 
 impl Distribution2D {
+    /// The density proportional to `weight(x, y)` on a `width × height` grid (both at least 1), every
+    /// weight a number ≥ 0 (`+∞` allowed: its row, and the marginal, become uniform).
     fn new(width: usize, height: usize, weight: impl Fn(usize, usize) -> f32) -> Self {
-        let rows: Vec<Distribution1D> = (0..height)
-            .map(|y| Distribution1D::new((0..width).map(|x| weight(x, y)).collect()))
+        let table = |weights: Vec<f32>| {
+            Distribution1D::new(weights).expect("a non-empty grid of weights that are numbers >= 0")
+        };
+        let rows: Vec<Distribution1D<f32>> = (0..height)
+            .map(|y| table((0..width).map(|x| weight(x, y)).collect()))
             .collect();
-        let marginal = Distribution1D::new(rows.iter().map(|r| r.integral).collect());
+        let marginal = table(rows.iter().map(Distribution1D::integral).collect());
         Distribution2D { rows, marginal }
     }
 
-    /// `((u, v), density in (u, v))`.
+    /// `((u, v), density in (u, v))`, both coordinates below `1 − ε`.
     fn sample(&self, u: (f32, f32)) -> ((f32, f32), f32) {
-        let (v, y, pv) = self.marginal.sample(u.1);
-        let (x, _, pu) = self.rows[y].sample(u.0);
-        ((x, v), pu * pv)
+        let below_one = |x: f32| x.min(1.0 - f32::EPSILON);
+        let (v, pv, y) = self.marginal.sample_continuous(u.1);
+        let (x, pu, _) = self.rows[y].sample_continuous(u.0);
+        ((below_one(x), below_one(v)), pu * pv)
     }
 
     fn pdf(&self, x: usize, y: usize) -> f32 {
-        self.marginal.pdf(y) * self.rows[y].pdf(x)
+        self.marginal.cell_pdf(y) * self.rows[y].cell_pdf(x)
     }
 }
 
@@ -1333,22 +1279,5 @@ mod tests {
         assert!(lights.is_empty());
         assert!(lights.sample(Vec3A::ZERO, Vec3A::Y, (0.5, 0.5), 0.5).is_none());
         assert_eq!(lights.escaped(Vec3A::Y), (Vec3A::ZERO, 0.0));
-    }
-
-    #[test]
-    fn piecewise_constant_distribution_samples_its_density() {
-        let d = Distribution1D::new(vec![0.0, 3.0, 0.0, 1.0]);
-        let mut hist = [0usize; 4];
-        let n = 100_000;
-        let mut rng = Rng::new(2, 2);
-        for _ in 0..n {
-            let (x, i, pdf) = d.sample(rng.next_f32());
-            assert_eq!(i, (x * 4.0) as usize);
-            assert!(pdf > 0.0);
-            hist[i] += 1;
-        }
-        assert_eq!(hist[0] + hist[2], 0);
-        assert!((hist[1] as f64 / n as f64 - 0.75).abs() < 0.01);
-        assert_eq!(d.pdf(1), 3.0);
     }
 }
