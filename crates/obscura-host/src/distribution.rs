@@ -302,15 +302,7 @@ impl<T: Real> Distribution1D<T> {
     /// The cell i with `Fᵢ ≤ u < F_{i+1}` (for `u = 1`, the last cell with `Fᵢ < 1`) and the fraction
     /// `(u − Fᵢ)/(F_{i+1} − Fᵢ) ∈ [0, 1]` of the way through it.
     fn locate(&self, u: T) -> (usize, T) {
-        let u = if u.is_nan() {
-            T::ZERO
-        } else if u < T::ZERO {
-            T::ZERO
-        } else if u > T::ONE {
-            T::ONE
-        } else {
-            u
-        };
+        let u = if u.is_nan() { T::ZERO } else { clamp_unit(u) };
         // F₀ = 0 ≤ u, so both searches find at least one entry; F_n = 1 bounds the first one for u < 1,
         // and the second one stops at the first entry equal to 1, so zero-weight trailing cells are
         // never chosen.
