@@ -323,29 +323,14 @@ fn unit_interval(v: f32) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::distribution::test_samples::Rng;
     use proptest::prelude::*;
-
-    /// A small deterministic generator (SplitMix64) for uniform test samples in `[0, 1)`.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_f32(&mut self) -> f32 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            (z >> 40) as f32 / (1u64 << 24) as f32
-        }
-
-        fn point(&mut self) -> Point2 {
-            Point2::new(self.next_f32(), self.next_f32())
-        }
-    }
 
     fn random_points(n: usize, seed: u64) -> Vec<Point2> {
         let mut rng = Rng(seed);
-        (0..n).map(|_| rng.point()).collect()
+        (0..n)
+            .map(|_| Point2::new(rng.next_f32(), rng.next_f32()))
+            .collect()
     }
 
     /// Cell-centred stratified samples on a `k × k` grid.

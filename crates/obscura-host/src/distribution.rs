@@ -335,27 +335,31 @@ fn clamp_unit<T: Real>(v: T) -> T {
     }
 }
 
+/// Deterministic uniform samples for the tests of this table and of the warps built on it.
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    /// A small deterministic generator (SplitMix64) for uniform test samples in `[0, 1)`.
-    struct Rng(u64);
+pub(crate) mod test_samples {
+    /// A small deterministic generator (SplitMix64) for uniform test samples in `[0, 1)`; the state is
+    /// the seed.
+    pub(crate) struct Rng(pub(crate) u64);
 
     impl Rng {
-        fn next_u64(&mut self) -> u64 {
+        /// The next uniform `f32` in `[0, 1)`, on the 2⁻²⁴ grid.
+        pub(crate) fn next_f32(&mut self) -> f32 {
             self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
             let mut z = self.0;
             z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
             z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        fn next_f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
+            z ^= z >> 31;
+            (z >> 40) as f32 / (1u64 << 24) as f32
         }
     }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::test_samples::Rng;
+    use super::*;
+    use proptest::prelude::*;
 
     #[test]
     fn piecewise_constant_distribution_samples_its_density() {

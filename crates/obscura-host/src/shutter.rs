@@ -411,21 +411,8 @@ impl ShutterWarp {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::distribution::test_samples::Rng;
     use proptest::prelude::*;
-
-    /// A small deterministic generator (SplitMix64) for uniform test samples in `[0, 1)`.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_f32(&mut self) -> f32 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            (z >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
 
     fn shutter(a: f32, b: f32, opening: [f32; 8]) -> ShutterWarp {
         ShutterWarp::new(&ShutterDesc {

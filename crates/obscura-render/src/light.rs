@@ -370,6 +370,28 @@ enum Emitter {
     Sphere(SphereLight),
 }
 
+impl Emitter {
+    /// `S`, the light's strength.
+    fn strength(&self) -> Vec3A {
+        match self {
+            Emitter::Dome(d) => d.strength,
+            Emitter::Distant(d) => d.strength,
+            Emitter::Rect(r) => r.strength,
+            Emitter::Sphere(s) => s.strength,
+        }
+    }
+
+    /// The ray parameter of the nearest hit with `t_min < t < t_max` along `o + t·d` for an area
+    /// light (rect or sphere); `None` for infinite lights.
+    fn intersect_area(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+        match self {
+            Emitter::Rect(r) => r.intersect(o, d, t_min, t_max),
+            Emitter::Sphere(s) => s.intersect(o, d, t_min, t_max),
+            Emitter::Dome(_) | Emitter::Distant(_) => None,
+        }
+    }
+}
+
 /// All lights of a scene, in world space, ready for sampling.
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
@@ -505,13 +527,7 @@ impl Lights {
                 })
             }
         };
-        let strength = match &e {
-            Emitter::Dome(d) => d.strength,
-            Emitter::Distant(d) => d.strength,
-            Emitter::Rect(r) => r.strength,
-            Emitter::Sphere(s) => s.strength,
-        };
-        Ok((strength != Vec3A::ZERO).then_some(e))
+        Ok((e.strength() != Vec3A::ZERO).then_some(e))
     }
 
     /// Number of lights that can emit.
@@ -563,10 +579,7 @@ impl Lights {
                         mis: false,
                     }
                 } else {
-                    let cos_t = 1.0 - u.0 * d.one_minus_cos;
-                    let sin_t = (u.0 * d.one_minus_cos * (1.0 + cos_t)).max(0.0).sqrt();
-                    let phi = TAU * u.1;
-                    let local = Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+                    let (local, _, _) = sample_cone(u, d.one_minus_cos);
                     let wi = d.frame.to_world(local).normalize_or(d.to_light);
                     if d.mis {
                         self.infinite_sample(wi)?
@@ -606,13 +619,8 @@ impl Lights {
                 let to_c = s.center - p;
                 let dc = to_c.length();
                 let frame = Frame::new(to_c / dc);
-                let one_minus = u.0 * omc;
-                let cos_t = 1.0 - one_minus;
-                let sin_t = (one_minus * (1.0 + cos_t)).max(0.0).sqrt();
-                let phi = TAU * u.1;
-                let wi = frame
-                    .to_world(Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t))
-                    .normalize();
+                let (local, cos_t, sin_t) = sample_cone(u, omc);
+                let wi = frame.to_world(local).normalize();
                 // Distance to the near side: d cos θ − √(r² − d² sin²θ).
                 let h2 = (s.radius * s.radius - dc * dc * sin_t * sin_t).max(0.0);
                 let dist = (dc * cos_t - h2.sqrt()).max(0.0);
@@ -658,14 +666,10 @@ impl Lights {
         } else {
             f32::INFINITY
         };
-        self.emitters.iter().enumerate().any(|(i, e)| {
-            i != except
-                && match e {
-                    Emitter::Rect(r) => r.intersect(p, wi, 0.0, t_max).is_some(),
-                    Emitter::Sphere(s) => s.intersect(p, wi, 0.0, t_max).is_some(),
-                    _ => false,
-                }
-        })
+        self.emitters
+            .iter()
+            .enumerate()
+            .any(|(i, e)| i != except && e.intersect_area(p, wi, 0.0, t_max).is_some())
     }
 
     /// Radiance arriving along a ray that leaves the scene in direction `ray_dir` (any length), and
@@ -732,36 +736,23 @@ impl Lights {
         let mut best: Option<(f32, usize)> = None;
         for (i, e) in self.emitters.iter().enumerate() {
             let limit = best.map_or(t_max, |b| b.0);
-            let t = match e {
-                Emitter::Rect(r) => r.intersect(o, d, ray.t_min, limit),
-                Emitter::Sphere(s) => s.intersect(o, d, ray.t_min, limit),
-                _ => None,
-            };
-            if let Some(t) = t {
+            if let Some(t) = e.intersect_area(o, d, ray.t_min, limit) {
                 best = Some((t, i));
             }
         }
         let (t, i) = best?;
         let wi = d / len;
         let select = self.select_pdf();
-        let (radiance, pdf) = match &self.emitters[i] {
-            Emitter::Rect(r) => {
-                let pdf = r.pdf(wi, t * len);
-                if pdf > 0.0 {
-                    (r.strength, pdf * select)
-                } else {
-                    (Vec3A::ZERO, 0.0)
-                }
-            }
-            Emitter::Sphere(s) => {
-                let pdf = s.pdf(o);
-                if pdf > 0.0 {
-                    (s.strength, pdf * select)
-                } else {
-                    (Vec3A::ZERO, 0.0)
-                }
-            }
-            _ => (Vec3A::ZERO, 0.0),
+        let emitter = &self.emitters[i];
+        let pdf = match emitter {
+            Emitter::Rect(r) => r.pdf(wi, t * len),
+            Emitter::Sphere(s) => s.pdf(o),
+            Emitter::Dome(_) | Emitter::Distant(_) => 0.0,
+        };
+        let (radiance, pdf) = if pdf > 0.0 {
+            (emitter.strength(), pdf * select)
+        } else {
+            (Vec3A::ZERO, 0.0)
         };
         Some(AreaHit {
             t,
@@ -769,6 +760,21 @@ impl Lights {
             pdf: finite_or_zero(pdf),
         })
     }
+}
+
+/// A direction drawn uniformly in the cone of `1 − cos θ_max = one_minus_cos` around local `+Z`:
+/// `cos θ = 1 − u₀·(1 − cos θ_max)`, `φ = 2π·u₁`, with `sin θ` taken from `1 − cos θ` (no cancellation
+/// for narrow cones). Returns `(direction, cos θ, sin θ)`.
+fn sample_cone(u: (f32, f32), one_minus_cos: f32) -> (Vec3A, f32, f32) {
+    let one_minus = u.0 * one_minus_cos;
+    let cos_t = 1.0 - one_minus;
+    let sin_t = (one_minus * (1.0 + cos_t)).max(0.0).sqrt();
+    let phi = TAU * u.1;
+    (
+        Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t),
+        cos_t,
+        sin_t,
+    )
 }
 
 fn finite_or_zero(x: f32) -> f32 {
