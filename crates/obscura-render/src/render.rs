@@ -5,10 +5,10 @@
 //!    BVH is built over the meshes with object motion as instance transforms in shutter-normalised
 //!    time; the lights are prepared (the dome's map importance-sampled).
 //! 2. **Tiles** (rayon, 16×16 pixels) — for each pixel, `spp` Owen-scrambled Sobol samples go through
-//!    the camera stage in one batch per tile: aperture and shutter warps, default-ray pre-fill,
-//!    `project`, validation. Culled samples contribute nothing (RenderMan: a culled ray never writes its
-//!    pixel) and are counted. Each camera-space ray is taken to world space with the camera's motion at
-//!    that ray's own time; `min_dist`/`max_dist` bound the trace.
+//!    the camera stage in batches of at most 4096 samples per tile: aperture and shutter warps,
+//!    default-ray pre-fill, `project`, validation. Culled samples contribute nothing (RenderMan: a culled
+//!    ray never writes its pixel) and are counted. Each camera-space ray is taken to world space with the
+//!    camera's motion at that ray's own time; `min_dist`/`max_dist` bound the trace.
 //! 3. **Shading** — the path tracer returns radiance and the first hit. The beauty `Ci` is radiance ×
 //!    the projection's tint, *before* the pixel filter; alpha, z, N, P and cameraDirection are untinted.
 //!    `z` is camera-space z of the hit (DeepMetric CameraZ) or the distance along the camera ray
@@ -16,6 +16,12 @@
 //! 4. **Film** — the samples are splatted into a per-tile film with the pixel filter and merged.
 //!
 //! A cancel flag is checked between tiles: a cancelled render keeps what it finished.
+//!
+//! The code follows the same levels as Mitsuba's sampling integrator: `Prepared::render` runs the tiles
+//! (in parallel, with progress and cancel) and merges each into a shared `Accumulator`;
+//! `TileIntegrator::render_tile` runs one tile's camera batches into its film tile (`render_batch`:
+//! generate, camera stage); `TileIntegrator::render_sample` is one sample's physics (`world_ray`,
+//! `trace_path`, `aovs`, splat, deep).
 
 use std::path::Path;
 use std::sync::Mutex;
@@ -23,6 +29,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
+use obscura_host::driver::Properties;
 use obscura_host::sampler::Sampler;
 use obscura_host::{Batch, CameraDesc, CameraStage, ContractReport, HostError, PixelRect};
 use obscura_scene::Scene;
@@ -206,53 +213,10 @@ pub fn prepare(
         &scene.camera,
     )?;
     let props = *stage.properties();
-    let env = stage.environment();
     let shutter = scene.camera.shutter;
-
-    let camera_to_world: Vec<(f32, Affine3A)> = env
-        .world_to_camera()
-        .iter()
-        .map(|s| {
-            (
-                normalise_time(s.time, shutter),
-                Affine3A::from_mat4(glam_from_sdk(&s.world_to_camera).inverse()),
-            )
-        })
-        .collect();
-    if let Some((t, m)) = camera_to_world
-        .iter()
-        .find(|(_, m)| !m.is_finite() || m.matrix3.determinant() == 0.0)
-    {
-        return Err(RenderError::Camera(format!(
-            "the camera transform at time {t} is singular or not finite ({m:?}): check the transforms before WorldBegin"
-        )));
-    }
-    let camera_to_world = Motion::new(&camera_to_world);
+    let camera_to_world = camera_motion(&stage, shutter)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
-
-    let diced: Vec<Result<TriangleMesh, RenderError>> = scene
-        .objects
-        .par_iter()
-        .map(|o| {
-            let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
-            let ctx = DicingContext {
-                hint: props.dicing_hint,
-                field_of_view: props.field_of_view.unwrap_or(90.0),
-                format: scene.camera.format,
-                screen_window: scene.camera.screen_window(),
-                object_to_camera: Mat4::from(world_to_camera_open) * object_to_world,
-                micropolygon_length: o.micropolygon_length,
-            };
-            dice(&o.shape, &ctx).map_err(|error| RenderError::Dice {
-                source_location: o.source.clone(),
-                error,
-            })
-        })
-        .collect();
-    let mut meshes = Vec::with_capacity(diced.len());
-    for m in diced {
-        meshes.push(m?);
-    }
+    let meshes = dice_objects(scene, &props, world_to_camera_open)?;
     let instances: Vec<Instance> = scene
         .objects
         .iter()
@@ -289,6 +253,66 @@ pub fn prepare(
     })
 }
 
+/// Camera-to-world over the shutter (shutter-normalised time), from the camera stage's world-to-camera
+/// motion samples.
+///
+/// # Errors
+/// [`RenderError::Camera`] when a sample's transform is singular or not finite.
+fn camera_motion(stage: &CameraStage, shutter: (f32, f32)) -> Result<Motion, RenderError> {
+    let camera_to_world: Vec<(f32, Affine3A)> = stage
+        .environment()
+        .world_to_camera()
+        .iter()
+        .map(|s| {
+            (
+                normalise_time(s.time, shutter),
+                Affine3A::from_mat4(glam_from_sdk(&s.world_to_camera).inverse()),
+            )
+        })
+        .collect();
+    if let Some((t, m)) = camera_to_world
+        .iter()
+        .find(|(_, m)| !m.is_finite() || m.matrix3.determinant() == 0.0)
+    {
+        return Err(RenderError::Camera(format!(
+            "the camera transform at time {t} is singular or not finite ({m:?}): check the transforms before WorldBegin"
+        )));
+    }
+    Ok(Motion::new(&camera_to_world))
+}
+
+/// Every object of `scene` diced (in parallel) at the rate the projection's DicingHint and FieldOfView
+/// ask for, seen from the camera at shutter open.
+///
+/// # Errors
+/// [`RenderError::Dice`] for the first object (in scene order) that cannot be diced.
+fn dice_objects(
+    scene: &Scene,
+    props: &Properties,
+    world_to_camera_open: Affine3A,
+) -> Result<Vec<TriangleMesh>, RenderError> {
+    let diced: Vec<Result<TriangleMesh, RenderError>> = scene
+        .objects
+        .par_iter()
+        .map(|o| {
+            let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
+            let ctx = DicingContext {
+                hint: props.dicing_hint,
+                field_of_view: props.field_of_view.unwrap_or(90.0),
+                format: scene.camera.format,
+                screen_window: scene.camera.screen_window(),
+                object_to_camera: Mat4::from(world_to_camera_open) * object_to_world,
+                micropolygon_length: o.micropolygon_length,
+            };
+            dice(&o.shape, &ctx).map_err(|error| RenderError::Dice {
+                source_location: o.source.clone(),
+                error,
+            })
+        })
+        .collect();
+    diced.into_iter().collect()
+}
+
 /// The finished (or cancelled) render.
 #[derive(Debug)]
 pub struct RenderOutput {
@@ -316,8 +340,8 @@ impl Prepared {
     /// Renders every tile of the crop. `progress(done, total)` is called after each tile; `cancel` is
     /// checked before each tile.
     ///
-    /// The tiles run in parallel ([`TileIntegrator::render_tile`]); each finished tile is merged into the
-    /// shared [`Accumulator`] in whatever order the tiles finish.
+    /// The tiles run in parallel (`TileIntegrator::render_tile`); each finished tile is merged into the
+    /// shared `Accumulator` in whatever order the tiles finish.
     pub fn render(
         &self,
         opts: &RenderOptions,
@@ -337,7 +361,7 @@ impl Prepared {
             let done = accumulator.merge(tile);
             progress(done, tiles.len());
         });
-        accumulator.finish(self, start.elapsed(), tiles.len())
+        accumulator.finish(self, start, tiles.len())
     }
 }
 
@@ -434,8 +458,8 @@ impl Accumulator {
         self.done.fetch_add(1, Ordering::Relaxed) + 1
     }
 
-    /// The output of a render of `total` tiles that took `elapsed` (setup excluded).
-    fn finish(self, prepared: &Prepared, elapsed: Duration, total: usize) -> RenderOutput {
+    /// The output of a render of `total` tiles that started at `start` (after setup).
+    fn finish(self, prepared: &Prepared, start: Instant, total: usize) -> RenderOutput {
         let cam = prepared.stage.camera();
         let finished = self.done.into_inner();
         let seconds = |ns: AtomicU64| ns.into_inner() as f64 * 1e-9;
@@ -456,7 +480,7 @@ impl Accumulator {
             stats: RenderStats {
                 triangles: prepared.accel.triangle_count(),
                 setup_seconds: prepared.setup_seconds,
-                render_seconds: elapsed.as_secs_f64(),
+                render_seconds: start.elapsed().as_secs_f64(),
                 camera_stage_seconds: seconds(self.camera_ns),
                 sampling_seconds: seconds(self.sampling_ns),
                 rays_traced: self.rays_traced.into_inner(),
