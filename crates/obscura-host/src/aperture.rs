@@ -24,8 +24,8 @@
 //! - `u.x → φ`: the inverse CDF of the angular density `p(φ) ∝ R(φ)²` (the area of a thin wedge). For
 //!   the disk this is exactly `φ = α + 2π·u.x`. For a polygon, `k = ⌊N·u.x⌋` picks the sector between
 //!   vertex k and k + 1 and `w = N·u.x − k` is inverted through a table of the cumulative
-//!   `∫₀^θ R² dθ'` over one sector (2048 cells, Simpson's rule per cell, linear interpolation within a
-//!   cell): `φ = α + 2πk/N + θ(w)`.
+//!   `∫₀^θ R² dθ'` over one sector (a [`Distribution1D`] of 2048 cells, Simpson's rule per cell, linear
+//!   interpolation within a cell): `φ = α + 2πk/N + θ(w)`.
 //! - `u.y → q ∈ [0, 1]`, the fraction of the wedge's area inside radius r, then `r = R(φ)·√q`.
 //!
 //! # Density
@@ -50,6 +50,8 @@
 use obscura_sdk::Point2;
 use std::f64::consts::{PI, TAU};
 use std::fmt;
+
+use crate::distribution::Distribution1D;
 
 /// Cells of the per-sector angular CDF table.
 const SECTOR_CELLS: usize = 2048;
@@ -135,9 +137,9 @@ pub struct ApertureWarp {
     sector: f64,
     /// `cos(π/N)`, the inradius of the straight polygon (polygon only).
     cos_half: f64,
-    /// Normalised cumulative `∫ R² dθ` over one sector at `SECTOR_CELLS + 1` equally spaced angles;
-    /// empty for the disk.
-    sector_cdf: Vec<f64>,
+    /// The distribution of `∫ R² dθ` over one sector's `SECTOR_CELLS` equal cells of angle; `None` for
+    /// the disk.
+    sector_table: Option<Distribution1D>,
 }
 
 impl fmt::Debug for ApertureWarp {
@@ -187,13 +189,13 @@ impl ApertureWarp {
             aspect: f64::from(desc.dof_aspect),
             sector: 0.0,
             cos_half: 1.0,
-            sector_cdf: Vec::new(),
+            sector_table: None,
         };
         if !disk {
             let n = f64::from(sides);
             warp.sector = TAU / n;
             warp.cos_half = (PI / n).cos();
-            warp.sector_cdf = warp.build_sector_cdf();
+            warp.sector_table = Some(warp.build_sector_table());
         }
         Ok(warp)
     }
@@ -262,49 +264,34 @@ impl ApertureWarp {
         }
     }
 
-    /// The normalised cumulative `∫₀^θ R² dθ'` table over one sector.
-    fn build_sector_cdf(&self) -> Vec<f64> {
+    /// The distribution of `∫₀^θ R² dθ'` over one sector: each cell's Simpson integral times
+    /// `SECTOR_CELLS` as its weight (a power of two, so the table's running sums are the cells'
+    /// integrals bit for bit).
+    fn build_sector_table(&self) -> Distribution1D {
         let h = self.sector / SECTOR_CELLS as f64;
         let density = |theta: f64| {
             let r = self.radius_in_sector(theta);
             r * r
         };
-        let mut cdf = Vec::with_capacity(SECTOR_CELLS + 1);
-        cdf.push(0.0);
-        let mut total = 0.0;
+        let mut weights = Vec::with_capacity(SECTOR_CELLS);
         let mut lo = density(0.0);
         for j in 0..SECTOR_CELLS {
             let t0 = j as f64 * h;
             let mid = density(t0 + 0.5 * h);
             let hi = density(t0 + h);
-            total += h / 6.0 * (lo + 4.0 * mid + hi);
-            cdf.push(total);
+            weights.push(h / 6.0 * (lo + 4.0 * mid + hi) * SECTOR_CELLS as f64);
             lo = hi;
         }
-        // R ≥ cos³(π/3) > 0, so the total is positive and every cell has positive mass.
-        for c in &mut cdf {
-            *c /= total;
-        }
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
-        cdf
+        // R ≥ cos³(π/3) > 0, so every weight is positive and finite.
+        Distribution1D::new(weights).expect("R² > 0 on the whole sector")
     }
 
-    /// The angle `θ ∈ [0, 2π/N]` from the sector's first vertex whose cumulative mass is `w ∈ [0, 1]`.
+    /// The angle `θ ∈ [0, 2π/N]` from the sector's first vertex whose cumulative mass is `w ∈ [0, 1]`
+    /// (0 for the disk, which has no sectors).
     fn sector_angle(&self, w: f64) -> f64 {
-        let cdf = &self.sector_cdf;
-        let j = cdf
-            .partition_point(|&c| c <= w)
-            .saturating_sub(1)
-            .min(SECTOR_CELLS - 1);
-        let (c0, c1) = (cdf[j], cdf[j + 1]);
-        let f = if c1 > c0 {
-            ((w - c0) / (c1 - c0)).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (j as f64 + f) * (self.sector / SECTOR_CELLS as f64)
+        self.sector_table
+            .as_ref()
+            .map_or(0.0, |table| table.sample_continuous(w).0 * self.sector)
     }
 
     /// The area fraction `q = F⁻¹(ξ)` for the density ramp `pdf(q) = 1 + d·(2q − 1)`.
@@ -336,29 +323,14 @@ fn unit_interval(v: f32) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::distribution::test_samples::Rng;
     use proptest::prelude::*;
-
-    /// A small deterministic generator (SplitMix64) for uniform test samples in `[0, 1)`.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_f32(&mut self) -> f32 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            (z >> 40) as f32 / (1u64 << 24) as f32
-        }
-
-        fn point(&mut self) -> Point2 {
-            Point2::new(self.next_f32(), self.next_f32())
-        }
-    }
 
     fn random_points(n: usize, seed: u64) -> Vec<Point2> {
         let mut rng = Rng(seed);
-        (0..n).map(|_| rng.point()).collect()
+        (0..n)
+            .map(|_| Point2::new(rng.next_f32(), rng.next_f32()))
+            .collect()
     }
 
     /// Cell-centred stratified samples on a `k × k` grid.

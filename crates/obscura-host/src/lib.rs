@@ -9,6 +9,8 @@
 //! - [`sampler`]: Owen-scrambled Sobol pixel, lens and time samples;
 //! - [`aperture`]: the aperture warp of lens samples into `[−1, 1]²` (bokeh shape, density, anamorphic);
 //! - [`shutter`]: the shutter-opening warp of time samples;
+//! - [`distribution`]: the tabulated 1-D distribution (built from weights, sampled by inverse CDF) behind
+//!   the aperture and shutter warps and the renderer's dome-light importance sampling;
 //! - [`driver`]: the camera stage — fills a batch, pre-fills the renderer's default rays, calls
 //!   `project`, validates every ray and culls what breaks the contract, counting it (the rules
 //!   themselves are [`obscura_sdk::contract`]).
@@ -17,6 +19,7 @@
 
 pub mod aperture;
 pub mod camera;
+pub mod distribution;
 pub mod driver;
 pub mod sampler;
 pub mod shutter;

@@ -31,10 +31,11 @@
 //! # Warp
 //!
 //! The CDF `F(t) = ∫₀ᵗ e / ∫₀¹ e` is tabulated at `t_j = j/4096`, each cell integrated with 5-point
-//! Gauss–Legendre after splitting it at a and b (where e has kinks). The warp is its inverse: a binary
-//! search for the cell with `F(t_j) ≤ u < F(t_{j+1})` and linear interpolation within it:
-//! `t = (j + (u − F_j)/(F_{j+1} − F_j)) / 4096`, clamped to `[0, 1 − 2⁻²⁴]` so it never reaches 1.
-//! The box shutter skips the table and returns u bit for bit.
+//! Gauss–Legendre after splitting it at a and b (where e has kinks), in a
+//! [`Distribution1D`](crate::distribution::Distribution1D) (whose weights are the cells' mean
+//! efficiencies). The warp is its inverse: a binary search for the cell with `F(t_j) ≤ u < F(t_{j+1})`
+//! and linear interpolation within it: `t = (j + (u − F_j)/(F_{j+1} − F_j)) / 4096`, clamped to
+//! `[0, 1 − 2⁻²⁴]` so it never reaches 1. The box shutter skips the table and returns u bit for bit.
 //!
 //! # Validation
 //!
@@ -43,6 +44,8 @@
 //! it is checked anyway so that a table that could not be normalised is never built.
 
 use std::fmt;
+
+use crate::distribution::Distribution1D;
 
 /// Cells of the CDF table over `[0, 1]`.
 const CELLS: usize = 4096;
@@ -224,12 +227,11 @@ pub struct ShutterWarp {
     rise: Edge,
     /// The closing edge, over `[b, 1]`.
     fall: Edge,
-    /// `a = 0` and `b = 1`: the efficiency is 1 on `[0, 1]`.
-    identity: bool,
     /// `∫₀¹ e` (1 for the identity).
     area: f64,
-    /// `F(j/CELLS)` for `j = 0..=CELLS`, normalised so that the last entry is 1; empty for the identity.
-    cdf: Vec<f64>,
+    /// The tabulated CDF over `CELLS` cells; `None` when `a = 0` and `b = 1` (the efficiency is 1 on
+    /// `[0, 1]`, the warp the identity).
+    table: Option<Distribution1D>,
 }
 
 impl fmt::Debug for ShutterWarp {
@@ -239,7 +241,7 @@ impl fmt::Debug for ShutterWarp {
             .field("close", &self.close)
             .field("rise", &self.rise)
             .field("fall", &self.fall)
-            .field("identity", &self.identity)
+            .field("identity", &self.is_identity())
             .field("area", &self.area)
             .finish_non_exhaustive()
     }
@@ -280,31 +282,31 @@ impl ShutterWarp {
                 x: [0.0, o[4], o[6], 1.0],
                 y: [1.0, 1.0 - o[5], 1.0 - o[7], 0.0],
             },
-            identity: a == 0.0 && b == 1.0,
             area: 1.0,
-            cdf: Vec::new(),
+            table: None,
         };
-        if !warp.identity {
-            let mut cdf = Vec::with_capacity(CELLS + 1);
-            cdf.push(0.0);
-            let mut total = 0.0;
-            for j in 0..CELLS {
-                total += warp.integral(j as f64 / CELLS as f64, (j + 1) as f64 / CELLS as f64);
-                cdf.push(total);
-            }
-            if !(total.is_finite() && total > 0.0) {
-                return Err(ShutterError::NeverOpens { area: total });
-            }
-            for c in &mut cdf {
-                *c /= total;
-            }
-            if let Some(last) = cdf.last_mut() {
-                *last = 1.0;
-            }
-            warp.area = total;
-            warp.cdf = cdf;
+        if !(a == 0.0 && b == 1.0) {
+            let table = warp.tabulate()?;
+            warp.area = table.integral();
+            warp.table = Some(table);
         }
         Ok(warp)
+    }
+
+    /// The CDF table of the efficiency: each cell's integral times `CELLS` as its weight (a power of two,
+    /// so the table's running sums are the cells' integrals bit for bit).
+    fn tabulate(&self) -> Result<Distribution1D, ShutterError> {
+        let weights = (0..CELLS)
+            .map(|j| self.integral(j as f64 / CELLS as f64, (j + 1) as f64 / CELLS as f64) * CELLS as f64)
+            .collect();
+        // The efficiency is clamped to [0, 1], so every weight is a number ≥ 0 and the table is built;
+        // NaN stands for the impossible rejection.
+        let table = Distribution1D::new(weights).map_err(|_| ShutterError::NeverOpens { area: f64::NAN })?;
+        let area = table.integral();
+        if !(area.is_finite() && area > 0.0) {
+            return Err(ShutterError::NeverOpens { area });
+        }
+        Ok(table)
     }
 
     /// Whether the efficiency is 1 on all of `[0, 1]` (`shutterOpenTime 0`, `shutterCloseTime 1`, the
@@ -312,7 +314,7 @@ impl ShutterWarp {
     #[inline]
     #[must_use]
     pub fn is_identity(&self) -> bool {
-        self.identity
+        self.table.is_none()
     }
 
     /// The efficiency `e(t) ∈ [0, 1]`: the fraction of the shutter that is open at normalised time t
@@ -331,12 +333,12 @@ impl ShutterWarp {
         if t >= 1.0 {
             return 1.0;
         }
-        if self.identity {
+        let Some(table) = &self.table else {
             return t;
-        }
+        };
         let t = f64::from(t);
-        let j = ((t * CELLS as f64).floor() as usize).min(CELLS - 1);
-        let value = self.cdf[j] + self.integral(j as f64 / CELLS as f64, t) / self.area;
+        let j = table.cell(t);
+        let value = table.cdf()[j] + self.integral(j as f64 / CELLS as f64, t) / self.area;
         value.clamp(0.0, 1.0) as f32
     }
 
@@ -350,19 +352,10 @@ impl ShutterWarp {
         } else {
             u.clamp(0.0, ONE_MINUS_ULP)
         };
-        if self.identity {
+        let Some(table) = &self.table else {
             return u;
-        }
-        let v = f64::from(u);
-        let cdf = &self.cdf;
-        let j = cdf.partition_point(|&c| c <= v).saturating_sub(1).min(CELLS - 1);
-        let (c0, c1) = (cdf[j], cdf[j + 1]);
-        let f = if c1 > c0 {
-            ((v - c0) / (c1 - c0)).clamp(0.0, 1.0)
-        } else {
-            0.0
         };
-        let t = (j as f64 + f) / CELLS as f64;
+        let (t, _, _) = table.sample_continuous(f64::from(u));
         (t as f32).clamp(0.0, ONE_MINUS_ULP)
     }
 
@@ -418,21 +411,8 @@ impl ShutterWarp {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::distribution::test_samples::Rng;
     use proptest::prelude::*;
-
-    /// A small deterministic generator (SplitMix64) for uniform test samples in `[0, 1)`.
-    struct Rng(u64);
-
-    impl Rng {
-        fn next_f32(&mut self) -> f32 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^= z >> 31;
-            (z >> 40) as f32 / (1u64 << 24) as f32
-        }
-    }
 
     fn shutter(a: f32, b: f32, opening: [f32; 8]) -> ShutterWarp {
         ShutterWarp::new(&ShutterDesc {

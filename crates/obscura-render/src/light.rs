@@ -45,6 +45,7 @@ use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
 use glam::{Mat3A, Mat4, Vec3A};
+use obscura_host::distribution::Distribution1D;
 use obscura_scene::Light;
 
 use crate::material::{Frame, color, sanitize};
@@ -130,93 +131,38 @@ impl EnvMap {
     }
 }
 
-/// A piecewise-constant density on `[0, 1)` with `n` equal cells.
-#[derive(Debug, Clone)]
-struct Distribution1D {
-    func: Vec<f32>,
-    cdf: Vec<f32>,
-    integral: f32,
-}
-
-impl Distribution1D {
-    fn new(func: Vec<f32>) -> Self {
-        let n = func.len().max(1);
-        let mut cdf = Vec::with_capacity(n + 1);
-        cdf.push(0.0f32);
-        let mut acc = 0.0f64;
-        for &f in &func {
-            acc += f64::from(f) / n as f64;
-            cdf.push(acc as f32);
-        }
-        let integral = acc as f32;
-        if integral > 0.0 && integral.is_finite() {
-            for c in &mut cdf {
-                *c /= integral;
-            }
-        } else {
-            for (i, c) in cdf.iter_mut().enumerate() {
-                *c = i as f32 / n as f32;
-            }
-        }
-        if let Some(last) = cdf.last_mut() {
-            *last = 1.0;
-        }
-        Distribution1D { func, cdf, integral }
-    }
-
-    fn len(&self) -> usize {
-        self.func.len()
-    }
-
-    /// The density of cell `i` (relative to the uniform density 1).
-    fn pdf(&self, i: usize) -> f32 {
-        if self.integral > 0.0 && self.integral.is_finite() {
-            self.func.get(i).copied().unwrap_or(0.0) / self.integral
-        } else {
-            1.0
-        }
-    }
-
-    /// `(x in [0, 1), cell, density)`.
-    fn sample(&self, u: f32) -> (f32, usize, f32) {
-        let n = self.len();
-        let i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
-        let (c0, c1) = (self.cdf[i], self.cdf[i + 1]);
-        let du = if c1 > c0 {
-            ((u - c0) / (c1 - c0)).clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
-        let x = ((i as f32 + du) / n as f32).min(1.0 - f32::EPSILON);
-        (x, i, self.pdf(i))
-    }
-}
-
-/// A 2-D piecewise-constant density on `[0, 1)²`: a marginal over rows, a conditional per row.
+/// A 2-D piecewise-constant density on `[0, 1)²`: a marginal over rows, a conditional per row (each a
+/// [`Distribution1D`] in `f32`).
 #[derive(Debug, Clone)]
 struct Distribution2D {
-    rows: Vec<Distribution1D>,
-    marginal: Distribution1D,
+    rows: Vec<Distribution1D<f32>>,
+    marginal: Distribution1D<f32>,
 }
 
 impl Distribution2D {
+    /// The density proportional to `weight(x, y)` on a `width × height` grid (both at least 1), every
+    /// weight a number ≥ 0 (`+∞` allowed: its row, and the marginal, become uniform).
     fn new(width: usize, height: usize, weight: impl Fn(usize, usize) -> f32) -> Self {
-        let rows: Vec<Distribution1D> = (0..height)
-            .map(|y| Distribution1D::new((0..width).map(|x| weight(x, y)).collect()))
+        let table = |weights: Vec<f32>| {
+            Distribution1D::new(weights).expect("a non-empty grid of weights that are numbers >= 0")
+        };
+        let rows: Vec<Distribution1D<f32>> = (0..height)
+            .map(|y| table((0..width).map(|x| weight(x, y)).collect()))
             .collect();
-        let marginal = Distribution1D::new(rows.iter().map(|r| r.integral).collect());
+        let marginal = table(rows.iter().map(Distribution1D::integral).collect());
         Distribution2D { rows, marginal }
     }
 
-    /// `((u, v), density in (u, v))`.
+    /// `((u, v), density in (u, v))`, both coordinates below `1 − ε`.
     fn sample(&self, u: (f32, f32)) -> ((f32, f32), f32) {
-        let (v, y, pv) = self.marginal.sample(u.1);
-        let (x, _, pu) = self.rows[y].sample(u.0);
-        ((x, v), pu * pv)
+        let below_one = |x: f32| x.min(1.0 - f32::EPSILON);
+        let (v, pv, y) = self.marginal.sample_continuous(u.1);
+        let (x, pu, _) = self.rows[y].sample_continuous(u.0);
+        ((below_one(x), below_one(v)), pu * pv)
     }
 
     fn pdf(&self, x: usize, y: usize) -> f32 {
-        self.marginal.pdf(y) * self.rows[y].pdf(x)
+        self.marginal.cell_pdf(y) * self.rows[y].cell_pdf(x)
     }
 }
 
@@ -424,6 +370,28 @@ enum Emitter {
     Sphere(SphereLight),
 }
 
+impl Emitter {
+    /// `S`, the light's strength.
+    fn strength(&self) -> Vec3A {
+        match self {
+            Emitter::Dome(d) => d.strength,
+            Emitter::Distant(d) => d.strength,
+            Emitter::Rect(r) => r.strength,
+            Emitter::Sphere(s) => s.strength,
+        }
+    }
+
+    /// The ray parameter of the nearest hit with `t_min < t < t_max` along `o + t·d` for an area
+    /// light (rect or sphere); `None` for infinite lights.
+    fn intersect_area(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
+        match self {
+            Emitter::Rect(r) => r.intersect(o, d, t_min, t_max),
+            Emitter::Sphere(s) => s.intersect(o, d, t_min, t_max),
+            Emitter::Dome(_) | Emitter::Distant(_) => None,
+        }
+    }
+}
+
 /// All lights of a scene, in world space, ready for sampling.
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
@@ -559,13 +527,7 @@ impl Lights {
                 })
             }
         };
-        let strength = match &e {
-            Emitter::Dome(d) => d.strength,
-            Emitter::Distant(d) => d.strength,
-            Emitter::Rect(r) => r.strength,
-            Emitter::Sphere(s) => s.strength,
-        };
-        Ok((strength != Vec3A::ZERO).then_some(e))
+        Ok((e.strength() != Vec3A::ZERO).then_some(e))
     }
 
     /// Number of lights that can emit.
@@ -617,10 +579,7 @@ impl Lights {
                         mis: false,
                     }
                 } else {
-                    let cos_t = 1.0 - u.0 * d.one_minus_cos;
-                    let sin_t = (u.0 * d.one_minus_cos * (1.0 + cos_t)).max(0.0).sqrt();
-                    let phi = TAU * u.1;
-                    let local = Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t);
+                    let (local, _, _) = sample_cone(u, d.one_minus_cos);
                     let wi = d.frame.to_world(local).normalize_or(d.to_light);
                     if d.mis {
                         self.infinite_sample(wi)?
@@ -660,13 +619,8 @@ impl Lights {
                 let to_c = s.center - p;
                 let dc = to_c.length();
                 let frame = Frame::new(to_c / dc);
-                let one_minus = u.0 * omc;
-                let cos_t = 1.0 - one_minus;
-                let sin_t = (one_minus * (1.0 + cos_t)).max(0.0).sqrt();
-                let phi = TAU * u.1;
-                let wi = frame
-                    .to_world(Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t))
-                    .normalize();
+                let (local, cos_t, sin_t) = sample_cone(u, omc);
+                let wi = frame.to_world(local).normalize();
                 // Distance to the near side: d cos θ − √(r² − d² sin²θ).
                 let h2 = (s.radius * s.radius - dc * dc * sin_t * sin_t).max(0.0);
                 let dist = (dc * cos_t - h2.sqrt()).max(0.0);
@@ -712,14 +666,10 @@ impl Lights {
         } else {
             f32::INFINITY
         };
-        self.emitters.iter().enumerate().any(|(i, e)| {
-            i != except
-                && match e {
-                    Emitter::Rect(r) => r.intersect(p, wi, 0.0, t_max).is_some(),
-                    Emitter::Sphere(s) => s.intersect(p, wi, 0.0, t_max).is_some(),
-                    _ => false,
-                }
-        })
+        self.emitters
+            .iter()
+            .enumerate()
+            .any(|(i, e)| i != except && e.intersect_area(p, wi, 0.0, t_max).is_some())
     }
 
     /// Radiance arriving along a ray that leaves the scene in direction `ray_dir` (any length), and
@@ -786,36 +736,23 @@ impl Lights {
         let mut best: Option<(f32, usize)> = None;
         for (i, e) in self.emitters.iter().enumerate() {
             let limit = best.map_or(t_max, |b| b.0);
-            let t = match e {
-                Emitter::Rect(r) => r.intersect(o, d, ray.t_min, limit),
-                Emitter::Sphere(s) => s.intersect(o, d, ray.t_min, limit),
-                _ => None,
-            };
-            if let Some(t) = t {
+            if let Some(t) = e.intersect_area(o, d, ray.t_min, limit) {
                 best = Some((t, i));
             }
         }
         let (t, i) = best?;
         let wi = d / len;
         let select = self.select_pdf();
-        let (radiance, pdf) = match &self.emitters[i] {
-            Emitter::Rect(r) => {
-                let pdf = r.pdf(wi, t * len);
-                if pdf > 0.0 {
-                    (r.strength, pdf * select)
-                } else {
-                    (Vec3A::ZERO, 0.0)
-                }
-            }
-            Emitter::Sphere(s) => {
-                let pdf = s.pdf(o);
-                if pdf > 0.0 {
-                    (s.strength, pdf * select)
-                } else {
-                    (Vec3A::ZERO, 0.0)
-                }
-            }
-            _ => (Vec3A::ZERO, 0.0),
+        let emitter = &self.emitters[i];
+        let pdf = match emitter {
+            Emitter::Rect(r) => r.pdf(wi, t * len),
+            Emitter::Sphere(s) => s.pdf(o),
+            Emitter::Dome(_) | Emitter::Distant(_) => 0.0,
+        };
+        let (radiance, pdf) = if pdf > 0.0 {
+            (emitter.strength(), pdf * select)
+        } else {
+            (Vec3A::ZERO, 0.0)
         };
         Some(AreaHit {
             t,
@@ -823,6 +760,21 @@ impl Lights {
             pdf: finite_or_zero(pdf),
         })
     }
+}
+
+/// A direction drawn uniformly in the cone of `1 − cos θ_max = one_minus_cos` around local `+Z`:
+/// `cos θ = 1 − u₀·(1 − cos θ_max)`, `φ = 2π·u₁`, with `sin θ` taken from `1 − cos θ` (no cancellation
+/// for narrow cones). Returns `(direction, cos θ, sin θ)`.
+fn sample_cone(u: (f32, f32), one_minus_cos: f32) -> (Vec3A, f32, f32) {
+    let one_minus = u.0 * one_minus_cos;
+    let cos_t = 1.0 - one_minus;
+    let sin_t = (one_minus * (1.0 + cos_t)).max(0.0).sqrt();
+    let phi = TAU * u.1;
+    (
+        Vec3A::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t),
+        cos_t,
+        sin_t,
+    )
 }
 
 fn finite_or_zero(x: f32) -> f32 {
@@ -1333,22 +1285,5 @@ mod tests {
         assert!(lights.is_empty());
         assert!(lights.sample(Vec3A::ZERO, Vec3A::Y, (0.5, 0.5), 0.5).is_none());
         assert_eq!(lights.escaped(Vec3A::Y), (Vec3A::ZERO, 0.0));
-    }
-
-    #[test]
-    fn piecewise_constant_distribution_samples_its_density() {
-        let d = Distribution1D::new(vec![0.0, 3.0, 0.0, 1.0]);
-        let mut hist = [0usize; 4];
-        let n = 100_000;
-        let mut rng = Rng::new(2, 2);
-        for _ in 0..n {
-            let (x, i, pdf) = d.sample(rng.next_f32());
-            assert_eq!(i, (x * 4.0) as usize);
-            assert!(pdf > 0.0);
-            hist[i] += 1;
-        }
-        assert_eq!(hist[0] + hist[2], 0);
-        assert!((hist[1] as f64 / n as f64 - 0.75).abs() < 0.01);
-        assert_eq!(d.pdf(1), 3.0);
     }
 }

@@ -5,10 +5,10 @@
 //!    BVH is built over the meshes with object motion as instance transforms in shutter-normalised
 //!    time; the lights are prepared (the dome's map importance-sampled).
 //! 2. **Tiles** (rayon, 16×16 pixels) — for each pixel, `spp` Owen-scrambled Sobol samples go through
-//!    the camera stage in one batch per tile: aperture and shutter warps, default-ray pre-fill,
-//!    `project`, validation. Culled samples contribute nothing (RenderMan: a culled ray never writes its
-//!    pixel) and are counted. Each camera-space ray is taken to world space with the camera's motion at
-//!    that ray's own time; `min_dist`/`max_dist` bound the trace.
+//!    the camera stage in batches of at most 4096 samples per tile: aperture and shutter warps,
+//!    default-ray pre-fill, `project`, validation. Culled samples contribute nothing (RenderMan: a culled
+//!    ray never writes its pixel) and are counted. Each camera-space ray is taken to world space with the
+//!    camera's motion at that ray's own time; `min_dist`/`max_dist` bound the trace.
 //! 3. **Shading** — the path tracer returns radiance and the first hit. The beauty `Ci` is radiance ×
 //!    the projection's tint, *before* the pixel filter; alpha, z, N, P and cameraDirection are untinted.
 //!    `z` is camera-space z of the hit (DeepMetric CameraZ) or the distance along the camera ray
@@ -16,25 +16,32 @@
 //! 4. **Film** — the samples are splatted into a per-tile film with the pixel filter and merged.
 //!
 //! A cancel flag is checked between tiles: a cancelled render keeps what it finished.
+//!
+//! The code follows the same levels as Mitsuba's sampling integrator: `Prepared::render` runs the tiles
+//! (in parallel, with progress and cancel) and merges each into a shared `Accumulator`;
+//! `TileIntegrator::render_tile` runs one tile's camera batches into its film tile (`render_batch`:
+//! generate, camera stage); `TileIntegrator::render_sample` is one sample's physics (`world_ray`,
+//! `trace_path`, `aovs`, splat, deep).
 
 use std::path::Path;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
+use obscura_host::driver::Properties;
 use obscura_host::sampler::Sampler;
-use obscura_host::{Batch, CameraStage, ContractReport, HostError, PixelRect};
+use obscura_host::{Batch, CameraDesc, CameraStage, ContractReport, HostError, PixelRect};
 use obscura_scene::Scene;
-use obscura_sdk::{DeepMetric, Matrix4, Registry};
+use obscura_sdk::{DeepMetric, Matrix4, RayGeometry, Registry, Rgb};
 use rayon::prelude::*;
 
 use crate::bvh::{Instance, SceneAccel};
 use crate::deep::{DeepImage, DeepSample};
 use crate::dice::{DiceError, DicingContext, dice};
-use crate::film::{Film, SampleValues};
+use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
-use crate::integrator::{PathOptions, ShadingScene, trace_path};
+use crate::integrator::{PathOptions, PathResult, ShadingScene, trace_path};
 use crate::light::{Lights, ShadeError};
 use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
@@ -207,53 +214,10 @@ pub fn prepare(
         &scene.camera,
     )?;
     let props = *stage.properties();
-    let env = stage.environment();
     let shutter = scene.camera.shutter;
-
-    let camera_to_world: Vec<(f32, Affine3A)> = env
-        .world_to_camera()
-        .iter()
-        .map(|s| {
-            (
-                normalise_time(s.time, shutter),
-                Affine3A::from_mat4(glam_from_sdk(&s.world_to_camera).inverse()),
-            )
-        })
-        .collect();
-    if let Some((t, m)) = camera_to_world
-        .iter()
-        .find(|(_, m)| !m.is_finite() || m.matrix3.determinant() == 0.0)
-    {
-        return Err(RenderError::Camera(format!(
-            "the camera transform at time {t} is singular or not finite ({m:?}): check the transforms before WorldBegin"
-        )));
-    }
-    let camera_to_world = Motion::new(&camera_to_world);
+    let camera_to_world = camera_motion(&stage, shutter)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
-
-    let diced: Vec<Result<TriangleMesh, RenderError>> = scene
-        .objects
-        .par_iter()
-        .map(|o| {
-            let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
-            let ctx = DicingContext {
-                hint: props.dicing_hint,
-                field_of_view: props.field_of_view.unwrap_or(90.0),
-                format: scene.camera.format,
-                screen_window: scene.camera.screen_window(),
-                object_to_camera: Mat4::from(world_to_camera_open) * object_to_world,
-                micropolygon_length: o.micropolygon_length,
-            };
-            dice(&o.shape, &ctx).map_err(|error| RenderError::Dice {
-                source_location: o.source.clone(),
-                error,
-            })
-        })
-        .collect();
-    let mut meshes = Vec::with_capacity(diced.len());
-    for m in diced {
-        meshes.push(m?);
-    }
+    let meshes = dice_objects(scene, &props, world_to_camera_open)?;
     let instances: Vec<Instance> = scene
         .objects
         .iter()
@@ -290,6 +254,66 @@ pub fn prepare(
     })
 }
 
+/// Camera-to-world over the shutter (shutter-normalised time), from the camera stage's world-to-camera
+/// motion samples.
+///
+/// # Errors
+/// [`RenderError::Camera`] when a sample's transform is singular or not finite.
+fn camera_motion(stage: &CameraStage, shutter: (f32, f32)) -> Result<Motion, RenderError> {
+    let camera_to_world: Vec<(f32, Affine3A)> = stage
+        .environment()
+        .world_to_camera()
+        .iter()
+        .map(|s| {
+            (
+                normalise_time(s.time, shutter),
+                Affine3A::from_mat4(glam_from_sdk(&s.world_to_camera).inverse()),
+            )
+        })
+        .collect();
+    if let Some((t, m)) = camera_to_world
+        .iter()
+        .find(|(_, m)| !m.is_finite() || m.matrix3.determinant() == 0.0)
+    {
+        return Err(RenderError::Camera(format!(
+            "the camera transform at time {t} is singular or not finite ({m:?}): check the transforms before WorldBegin"
+        )));
+    }
+    Ok(Motion::new(&camera_to_world))
+}
+
+/// Every object of `scene` diced (in parallel) at the rate the projection's DicingHint and FieldOfView
+/// ask for, seen from the camera at shutter open.
+///
+/// # Errors
+/// [`RenderError::Dice`] for the first object (in scene order) that cannot be diced.
+fn dice_objects(
+    scene: &Scene,
+    props: &Properties,
+    world_to_camera_open: Affine3A,
+) -> Result<Vec<TriangleMesh>, RenderError> {
+    let diced: Vec<Result<TriangleMesh, RenderError>> = scene
+        .objects
+        .par_iter()
+        .map(|o| {
+            let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
+            let ctx = DicingContext {
+                hint: props.dicing_hint,
+                field_of_view: props.field_of_view.unwrap_or(90.0),
+                format: scene.camera.format,
+                screen_window: scene.camera.screen_window(),
+                object_to_camera: Mat4::from(world_to_camera_open) * object_to_world,
+                micropolygon_length: o.micropolygon_length,
+            };
+            dice(&o.shape, &ctx).map_err(|error| RenderError::Dice {
+                source_location: o.source.clone(),
+                error,
+            })
+        })
+        .collect();
+    diced.into_iter().collect()
+}
+
 /// The finished (or cancelled) render.
 #[derive(Debug)]
 pub struct RenderOutput {
@@ -316,6 +340,9 @@ impl Prepared {
 
     /// Renders every tile of the crop. `progress(done, total)` is called after each tile; `cancel` is
     /// checked before each tile.
+    ///
+    /// The tiles run in parallel (`TileIntegrator::render_tile`); each finished tile is merged into the
+    /// shared `Accumulator` in whatever order the tiles finish.
     pub fn render(
         &self,
         opts: &RenderOptions,
@@ -324,222 +351,423 @@ impl Prepared {
     ) -> RenderOutput {
         let start = Instant::now();
         let cam = self.stage.camera();
-        let crop = cam.pixels();
-        let ts = opts.tile_size.max(1);
-        let mut tiles = Vec::new();
-        let mut y = crop.y0;
-        while y < crop.y1 {
-            let mut x = crop.x0;
-            while x < crop.x1 {
-                tiles.push(PixelRect {
-                    x0: x,
-                    x1: (x + ts).min(crop.x1),
-                    y0: y,
-                    y1: (y + ts).min(crop.y1),
-                });
-                x += ts;
-            }
-            y += ts;
-        }
-        let total = tiles.len();
-        let film = Mutex::new(Film::new(cam.format.width, cam.format.height, crop, self.filter));
-        let deep_pixels: Mutex<Vec<(Vec<DeepSample>, u32)>> = Mutex::new(if opts.deep {
-            vec![(Vec::new(), 0); crop.len()]
-        } else {
-            Vec::new()
-        });
-        let report = Mutex::new(ContractReport::default());
-        let done = AtomicU64::new(0);
-        let camera_ns = AtomicU64::new(0);
-        let sampling_ns = AtomicU64::new(0);
-        let traced = AtomicU64::new(0);
-        let shading_ns = AtomicU64::new(0);
-        let sampler = Sampler::new(opts.seed);
-        let spp = self.samples_per_pixel;
-        let (fx, fy) = self.filter.radius();
-        let margin = ((fx.max(fy) - 0.5).max(0.0)).ceil() as u32;
-
+        let tiles = tile_grid(cam.pixels(), opts.tile_size);
+        let integrator = TileIntegrator::new(self, opts);
+        let accumulator = Accumulator::new(cam, self.filter, opts.deep);
         tiles.par_iter().for_each(|rect| {
             if cancel.load(Ordering::Relaxed) {
                 return;
             }
-            let t0 = Instant::now();
-            let pixels = sample_pixels(rect, &crop, margin, cam.format);
-            let mut tile = film.lock().expect("no panics while holding the film").tile(*rect);
-            // (pixel index in the crop, the sample's deep value when it hit something): one entry per
-            // sample that survived the camera stage, so deep coverage counts exactly those.
-            let mut deep_tile: Vec<(usize, Option<DeepSample>)> = Vec::new();
-            let tracer = CountingTracer {
-                inner: &self.accel,
-                rays: AtomicU64::new(0),
-            };
-            let mut tile_report = ContractReport::default();
-            let (mut sampling, mut camera) = (Duration::ZERO, Duration::ZERO);
-            // The camera stage runs on bounded batches, whatever the sample count.
-            let chunk_pixels = (CHUNK_SAMPLES / spp as usize).max(1);
-            let mut batch = Batch::with_capacity(chunk_pixels * spp as usize);
-            let mut rasters: Vec<(f32, f32)> = Vec::with_capacity(chunk_pixels * spp as usize);
-            for chunk in pixels.chunks(chunk_pixels) {
-                let ta = Instant::now();
-                batch.clear();
-                rasters.clear();
-                for &(px, py) in chunk {
-                    for s in 0..spp {
-                        let c = sampler.sample(px, py, s);
-                        let raster = (px as f64 + c.pixel.0 as f64, py as f64 + c.pixel.1 as f64);
-                        rasters.push((raster.0 as f32, raster.1 as f32));
-                        batch.push(
-                            cam.raster_to_screen(raster.0, raster.1),
-                            obscura_sdk::Point2::new(c.lens.0, c.lens.1),
-                            c.time,
-                        );
-                    }
-                }
-                let tb = Instant::now();
-                tile_report.merge(&self.stage.run(&mut batch));
-                let tc = Instant::now();
-                sampling += tb - ta;
-                camera += tc - tb;
-                let mut i = 0;
-                for &(px, py) in chunk {
-                    {
-                        for s in 0..spp {
-                            let r = batch.rays[i];
-                            let time = batch.time[i];
-                            let tint = batch.tint[i];
-                            i += 1;
-                            if r.is_culled() {
-                                continue;
-                            }
-                            let (rx, ry) = rasters[i - 1];
-                            let c2w = self.camera_to_world.object_to_world(time);
-                            let o_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
-                            // Normalised here so that a ray length is exact even for a projection whose
-                            // directions are unit only to the contract's tolerance.
-                            let d_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
-                            let d_world = c2w.transform_vector3a(d_cam);
-                            let stretch = d_world.length();
-                            if !(stretch > 0.0 && stretch.is_finite()) {
-                                continue;
-                            }
-                            let ray = Ray {
-                                origin: c2w.transform_point3a(o_cam),
-                                direction: d_world / stretch,
-                                t_min: r.min_dist * stretch,
-                                t_max: r.max_dist * stretch,
-                                time,
-                            };
-                            let mut rng = Rng::new(
-                                ((px as u64) << 32 | py as u64) ^ mix64(opts.seed as u64),
-                                s as u64,
-                            );
-                            let path = trace_path(&self.shading, &tracer, &ray, &mut rng, &opts.path);
-                            let radiance = path.radiance;
-                            let ci = obscura_sdk::Rgb::new(
-                                radiance.x * tint.r,
-                                radiance.y * tint.g,
-                                radiance.z * tint.b,
-                            );
-                            let (z, n, p) = match path.first_hit {
-                                Some(h) => {
-                                    let t_cam = h.t / stretch;
-                                    let z = match self.deep_metric {
-                                        DeepMetric::CameraZ => o_cam.z + d_cam.z * t_cam,
-                                        DeepMetric::RayLength => t_cam,
-                                    };
-                                    (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
-                                }
-                                None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
-                            };
-                            let v = SampleValues {
-                                ci,
-                                alpha: path.alpha,
-                                z,
-                                n,
-                                p,
-                                camera_direction: Vec3::from(ray.direction),
-                            };
-                            tile.add_sample(rx, ry, &v);
-                            let inside = px >= crop.x0 && px < crop.x1 && py >= crop.y0 && py < crop.y1;
-                            if opts.deep && inside {
-                                let idx =
-                                    (py - crop.y0) as usize * crop.width() as usize + (px - crop.x0) as usize;
-                                deep_tile.push((
-                                    idx,
-                                    path.first_hit.is_some().then_some(DeepSample {
-                                        z,
-                                        z_back: z,
-                                        r: ci.r,
-                                        g: ci.g,
-                                        b: ci.b,
-                                        a: path.alpha,
-                                    }),
-                                ));
-                            }
-                        }
-                    }
-                }
-            }
-            let t2 = Instant::now();
-            traced.fetch_add(tracer.rays.load(Ordering::Relaxed), Ordering::Relaxed);
-            sampling_ns.fetch_add(sampling.as_nanos() as u64, Ordering::Relaxed);
-            camera_ns.fetch_add(camera.as_nanos() as u64, Ordering::Relaxed);
-            shading_ns.fetch_add(
-                ((t2 - t0).saturating_sub(sampling + camera)).as_nanos() as u64,
-                Ordering::Relaxed,
-            );
-            film.lock().expect("no panics while holding the film").merge(tile);
-            report
-                .lock()
-                .expect("no panics while holding the report")
-                .merge(&tile_report);
-            if opts.deep {
-                let mut d = deep_pixels
-                    .lock()
-                    .expect("no panics while holding the deep pixels");
-                for (idx, sample) in deep_tile {
-                    d[idx].1 += 1;
-                    if let Some(sample) = sample {
-                        d[idx].0.push(sample);
-                    }
-                }
-            }
-            let n = done.fetch_add(1, Ordering::Relaxed) as usize + 1;
-            progress(n, total);
+            let tile = integrator.render_tile(*rect, &accumulator);
+            let done = accumulator.merge(tile);
+            progress(done, tiles.len());
         });
+        accumulator.finish(self, start, tiles.len())
+    }
+}
 
-        let finished = done.load(Ordering::Relaxed) as usize;
-        let deep = opts.deep.then(|| {
-            let pixels = deep_pixels
-                .into_inner()
-                .expect("no panics while holding the deep pixels");
-            DeepImage {
-                width: cam.format.width,
-                height: cam.format.height,
-                data_window: crop,
-                pixels: pixels
-                    .into_iter()
-                    .map(|(samples, alive)| composite_deep(samples, alive))
-                    .collect(),
+/// The crop cut into tiles of `tile_size` pixels (at least 1), row by row; the last row and column of
+/// tiles are cut short at the crop's edge.
+fn tile_grid(crop: PixelRect, tile_size: u32) -> Vec<PixelRect> {
+    let ts = tile_size.max(1);
+    let mut tiles = Vec::new();
+    let mut y = crop.y0;
+    while y < crop.y1 {
+        let mut x = crop.x0;
+        while x < crop.x1 {
+            tiles.push(PixelRect {
+                x0: x,
+                x1: (x + ts).min(crop.x1),
+                y0: y,
+                y1: (y + ts).min(crop.y1),
+            });
+            x += ts;
+        }
+        y += ts;
+    }
+    tiles
+}
+
+/// One pixel's deep data while the render runs: the samples that hit something, and how many samples
+/// the camera stage kept in all (the coverage denominator of [`composite_deep`]).
+type DeepPixel = (Vec<DeepSample>, u32);
+
+/// What the tiles share: the film, the deep pixels, the contract report and the counters, each merged
+/// into once per finished tile.
+struct Accumulator {
+    film: Mutex<Film>,
+    /// One entry per crop pixel; `None` when no deep output was asked for.
+    deep: Option<Mutex<Vec<DeepPixel>>>,
+    report: Mutex<ContractReport>,
+    /// Tiles finished.
+    done: AtomicUsize,
+    rays_traced: AtomicU64,
+    sampling_ns: AtomicU64,
+    camera_ns: AtomicU64,
+    shading_ns: AtomicU64,
+}
+
+impl Accumulator {
+    /// An empty film (and deep image) over `cam`'s crop.
+    fn new(cam: &CameraDesc, filter: Filter, deep: bool) -> Self {
+        let crop = cam.pixels();
+        Accumulator {
+            film: Mutex::new(Film::new(cam.format.width, cam.format.height, crop, filter)),
+            deep: deep.then(|| Mutex::new(vec![(Vec::new(), 0); crop.len()])),
+            report: Mutex::new(ContractReport::default()),
+            done: AtomicUsize::new(0),
+            rays_traced: AtomicU64::new(0),
+            sampling_ns: AtomicU64::new(0),
+            camera_ns: AtomicU64::new(0),
+            shading_ns: AtomicU64::new(0),
+        }
+    }
+
+    /// An empty film tile for `rect`, to be filled by one thread.
+    fn film_tile(&self, rect: PixelRect) -> FilmTile {
+        self.film
+            .lock()
+            .expect("no panics while holding the film")
+            .tile(rect)
+    }
+
+    /// Adds a finished tile; returns how many tiles are finished now.
+    fn merge(&self, tile: FinishedTile) -> usize {
+        let add = |counter: &AtomicU64, value: u64| counter.fetch_add(value, Ordering::Relaxed);
+        add(&self.rays_traced, tile.rays_traced);
+        add(&self.sampling_ns, tile.sampling.as_nanos() as u64);
+        add(&self.camera_ns, tile.camera.as_nanos() as u64);
+        add(&self.shading_ns, tile.shading.as_nanos() as u64);
+        self.film
+            .lock()
+            .expect("no panics while holding the film")
+            .merge(tile.film);
+        self.report
+            .lock()
+            .expect("no panics while holding the report")
+            .merge(&tile.report);
+        if let Some(deep) = &self.deep {
+            let mut pixels = deep.lock().expect("no panics while holding the deep pixels");
+            for (index, sample) in tile.deep {
+                let pixel = &mut pixels[index];
+                pixel.1 += 1;
+                if let Some(sample) = sample {
+                    pixel.0.push(sample);
+                }
             }
+        }
+        self.done.fetch_add(1, Ordering::Relaxed) + 1
+    }
+
+    /// The output of a render of `total` tiles that started at `start` (after setup).
+    fn finish(self, prepared: &Prepared, start: Instant, total: usize) -> RenderOutput {
+        let cam = prepared.stage.camera();
+        let finished = self.done.into_inner();
+        let seconds = |ns: AtomicU64| ns.into_inner() as f64 * 1e-9;
+        let deep = self.deep.map(|pixels| DeepImage {
+            width: cam.format.width,
+            height: cam.format.height,
+            data_window: cam.pixels(),
+            pixels: pixels
+                .into_inner()
+                .expect("no panics while holding the deep pixels")
+                .into_iter()
+                .map(|(samples, alive)| composite_deep(samples, alive))
+                .collect(),
         });
         RenderOutput {
-            film: film.into_inner().expect("no panics while holding the film"),
+            film: self.film.into_inner().expect("no panics while holding the film"),
             deep,
             stats: RenderStats {
-                triangles: self.accel.triangle_count(),
-                setup_seconds: self.setup_seconds,
+                triangles: prepared.accel.triangle_count(),
+                setup_seconds: prepared.setup_seconds,
                 render_seconds: start.elapsed().as_secs_f64(),
-                camera_stage_seconds: camera_ns.load(Ordering::Relaxed) as f64 * 1e-9,
-                sampling_seconds: sampling_ns.load(Ordering::Relaxed) as f64 * 1e-9,
-                rays_traced: traced.load(Ordering::Relaxed),
-                shading_seconds: shading_ns.load(Ordering::Relaxed) as f64 * 1e-9,
-                contract: report.into_inner().expect("no panics while holding the report"),
+                camera_stage_seconds: seconds(self.camera_ns),
+                sampling_seconds: seconds(self.sampling_ns),
+                rays_traced: self.rays_traced.into_inner(),
+                shading_seconds: seconds(self.shading_ns),
+                contract: self
+                    .report
+                    .into_inner()
+                    .expect("no panics while holding the report"),
                 tiles: (finished, total),
                 cancelled: finished < total,
             },
         }
     }
+}
+
+/// What every tile reads: the prepared scene, the options and the sample sequences (Mitsuba's
+/// `render_block` / `render_sample` split: [`TileIntegrator::render_tile`] runs a tile's camera
+/// batches, [`TileIntegrator::render_sample`] is one camera sample's physics).
+struct TileIntegrator<'a> {
+    prepared: &'a Prepared,
+    opts: &'a RenderOptions,
+    sampler: Sampler,
+    /// The pixels rendered (and stored).
+    crop: PixelRect,
+    /// Pixels outside the crop whose samples the filter can still bring in (see [`sample_pixels`]).
+    margin: u32,
+    /// `mix64(seed)`: the part of every path's random stream that depends on the seed alone.
+    path_seed: u64,
+}
+
+/// One tile while it renders: its film tile, its deep samples, its own ray counter, its share of the
+/// contract report and its times.
+struct TileState<'a> {
+    film: FilmTile,
+    /// `(pixel index in the crop, the sample's deep value when it hit something)`: one entry per sample
+    /// inside the crop that survived the camera stage, so deep coverage counts exactly those.
+    deep: Vec<(usize, Option<DeepSample>)>,
+    tracer: CountingTracer<'a>,
+    report: ContractReport,
+    sampling: Duration,
+    camera: Duration,
+}
+
+/// A tile's results, ready to merge into the [`Accumulator`].
+struct FinishedTile {
+    film: FilmTile,
+    deep: Vec<(usize, Option<DeepSample>)>,
+    report: ContractReport,
+    rays_traced: u64,
+    /// Generating the Sobol samples.
+    sampling: Duration,
+    /// In the camera stage.
+    camera: Duration,
+    /// The rest of the tile's time: tracing, shading and splatting.
+    shading: Duration,
+}
+
+/// The camera samples of some pixels on their way through the camera stage, with each sample's raster
+/// position (where it is splatted).
+struct SampleBatch {
+    camera: Batch,
+    rasters: Vec<(f32, f32)>,
+}
+
+/// One camera sample as the camera stage left it: sample `index` of `pixel`, splatted at `raster`, with
+/// the projection's camera-space ray, time and tint.
+struct ProjectedSample {
+    pixel: (u32, u32),
+    index: u32,
+    raster: (f32, f32),
+    ray: RayGeometry,
+    time: f32,
+    tint: Rgb,
+}
+
+/// A camera ray taken to world space at its own time.
+struct WorldRay {
+    ray: Ray,
+    /// The camera-space origin and (normalised) direction the ray came from.
+    origin_cam: Vec3A,
+    direction_cam: Vec3A,
+    /// The length the camera-to-world transform gives a unit camera-space direction: camera-space
+    /// distances times `stretch` are world-space distances.
+    stretch: f32,
+}
+
+impl<'a> TileIntegrator<'a> {
+    fn new(prepared: &'a Prepared, opts: &'a RenderOptions) -> Self {
+        let (fx, fy) = prepared.filter.radius();
+        TileIntegrator {
+            prepared,
+            opts,
+            sampler: Sampler::new(opts.seed),
+            crop: prepared.stage.camera().pixels(),
+            margin: ((fx.max(fy) - 0.5).max(0.0)).ceil() as u32,
+            path_seed: mix64(opts.seed as u64),
+        }
+    }
+
+    /// Renders one tile: its pixels (and its share of the filter margin, [`sample_pixels`]) go through
+    /// the camera stage in batches of at most [`CHUNK_SAMPLES`] samples, whatever the sample count.
+    fn render_tile(&self, rect: PixelRect, accumulator: &Accumulator) -> FinishedTile {
+        let start = Instant::now();
+        let spp = self.prepared.samples_per_pixel as usize;
+        let pixels = sample_pixels(
+            &rect,
+            &self.crop,
+            self.margin,
+            self.prepared.stage.camera().format,
+        );
+        let mut tile = TileState {
+            film: accumulator.film_tile(rect),
+            deep: Vec::new(),
+            tracer: CountingTracer {
+                inner: &self.prepared.accel,
+                rays: AtomicU64::new(0),
+            },
+            report: ContractReport::default(),
+            sampling: Duration::ZERO,
+            camera: Duration::ZERO,
+        };
+        let chunk_pixels = (CHUNK_SAMPLES / spp).max(1);
+        let mut batch = SampleBatch {
+            camera: Batch::with_capacity(chunk_pixels * spp),
+            rasters: Vec::with_capacity(chunk_pixels * spp),
+        };
+        for chunk in pixels.chunks(chunk_pixels) {
+            self.render_batch(chunk, &mut batch, &mut tile);
+        }
+        let elapsed = start.elapsed();
+        FinishedTile {
+            shading: elapsed.saturating_sub(tile.sampling + tile.camera),
+            rays_traced: tile.tracer.rays.into_inner(),
+            film: tile.film,
+            deep: tile.deep,
+            report: tile.report,
+            sampling: tile.sampling,
+            camera: tile.camera,
+        }
+    }
+
+    /// Every sample of `pixels`: generated, run through the camera stage as one batch, then rendered
+    /// one by one (culled samples contribute nothing).
+    fn render_batch(&self, pixels: &[(u32, u32)], batch: &mut SampleBatch, tile: &mut TileState<'_>) {
+        let spp = self.prepared.samples_per_pixel;
+        let sampling = Instant::now();
+        self.generate(pixels, batch);
+        let camera = Instant::now();
+        tile.report.merge(&self.prepared.stage.run(&mut batch.camera));
+        let shading = Instant::now();
+        tile.sampling += camera - sampling;
+        tile.camera += shading - camera;
+        let samples = pixels
+            .iter()
+            .flat_map(|&pixel| (0..spp).map(move |index| (pixel, index)));
+        for (i, (pixel, index)) in samples.enumerate() {
+            let ray = batch.camera.rays[i];
+            if ray.is_culled() {
+                continue;
+            }
+            let sample = ProjectedSample {
+                pixel,
+                index,
+                raster: batch.rasters[i],
+                ray,
+                time: batch.camera.time[i],
+                tint: batch.camera.tint[i],
+            };
+            self.render_sample(tile, &sample);
+        }
+    }
+
+    /// Fills `batch` with the Sobol samples of `pixels`, pixel by pixel, `spp` each: raster position
+    /// (pixel + offset), screen position, lens sample and canonical time.
+    fn generate(&self, pixels: &[(u32, u32)], batch: &mut SampleBatch) {
+        let cam = self.prepared.stage.camera();
+        batch.camera.clear();
+        batch.rasters.clear();
+        for &(px, py) in pixels {
+            for s in 0..self.prepared.samples_per_pixel {
+                let c = self.sampler.sample(px, py, s);
+                let raster = (px as f64 + c.pixel.0 as f64, py as f64 + c.pixel.1 as f64);
+                batch.rasters.push((raster.0 as f32, raster.1 as f32));
+                batch.camera.push(
+                    cam.raster_to_screen(raster.0, raster.1),
+                    obscura_sdk::Point2::new(c.lens.0, c.lens.1),
+                    c.time,
+                );
+            }
+        }
+    }
+
+    /// One camera sample: its ray to world space at its own time, the path traced, its AOVs splatted
+    /// (and its deep value kept, when asked for).
+    fn render_sample(&self, tile: &mut TileState<'_>, sample: &ProjectedSample) {
+        let Some(world) = self.world_ray(&sample.ray, sample.time) else {
+            return;
+        };
+        let (px, py) = sample.pixel;
+        let mut rng = Rng::new(
+            ((px as u64) << 32 | py as u64) ^ self.path_seed,
+            sample.index as u64,
+        );
+        let path = trace_path(
+            &self.prepared.shading,
+            &tile.tracer,
+            &world.ray,
+            &mut rng,
+            &self.opts.path,
+        );
+        let values = self.aovs(&path, &world, sample.tint);
+        tile.film.add_sample(sample.raster.0, sample.raster.1, &values);
+        if self.opts.deep
+            && let Some(pixel_index) = crop_index(&self.crop, px, py)
+        {
+            let deep = path.first_hit.is_some().then_some(DeepSample {
+                z: values.z,
+                z_back: values.z,
+                r: values.ci.r,
+                g: values.ci.g,
+                b: values.ci.b,
+                a: path.alpha,
+            });
+            tile.deep.push((pixel_index, deep));
+        }
+    }
+
+    /// The camera-space ray taken to world space with the camera's motion at `time`; its `min_dist` and
+    /// `max_dist` become world-space bounds. `None` when the transform collapses or blows up the
+    /// direction.
+    fn world_ray(&self, r: &RayGeometry, time: f32) -> Option<WorldRay> {
+        let c2w = self.prepared.camera_to_world.object_to_world(time);
+        let origin_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
+        // Normalised here so that a ray length is exact even for a projection whose directions are unit
+        // only to the contract's tolerance.
+        let direction_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
+        let d_world = c2w.transform_vector3a(direction_cam);
+        let stretch = d_world.length();
+        if !(stretch > 0.0 && stretch.is_finite()) {
+            return None;
+        }
+        Some(WorldRay {
+            ray: Ray {
+                origin: c2w.transform_point3a(origin_cam),
+                direction: d_world / stretch,
+                t_min: r.min_dist * stretch,
+                t_max: r.max_dist * stretch,
+                time,
+            },
+            origin_cam,
+            direction_cam,
+            stretch,
+        })
+    }
+
+    /// The sample's AOVs: `Ci` is the radiance times the projection's tint; alpha, z (camera units, in
+    /// the projection's deep metric), N, P and cameraDirection are untinted.
+    fn aovs(&self, path: &PathResult, world: &WorldRay, tint: Rgb) -> SampleValues {
+        let radiance = path.radiance;
+        let ci = Rgb::new(radiance.x * tint.r, radiance.y * tint.g, radiance.z * tint.b);
+        let (z, n, p) = match path.first_hit {
+            Some(h) => {
+                let t_cam = h.t / world.stretch;
+                let z = match self.prepared.deep_metric {
+                    DeepMetric::CameraZ => world.origin_cam.z + world.direction_cam.z * t_cam,
+                    DeepMetric::RayLength => t_cam,
+                };
+                (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
+            }
+            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
+        };
+        SampleValues {
+            ci,
+            alpha: path.alpha,
+            z,
+            n,
+            p,
+            camera_direction: Vec3::from(world.ray.direction),
+        }
+    }
+}
+
+/// The index of pixel `(x, y)` in `crop`'s row-major pixels; `None` outside it.
+fn crop_index(crop: &PixelRect, x: u32, y: u32) -> Option<usize> {
+    let inside = x >= crop.x0 && x < crop.x1 && y >= crop.y0 && y < crop.y1;
+    inside.then(|| (y - crop.y0) as usize * crop.width() as usize + (x - crop.x0) as usize)
 }
 
 /// The pixels whose samples tile `rect` takes: its own, plus the pixels outside the crop (within the
