@@ -20,8 +20,10 @@
 //! Camera space is RenderMan's: the camera at the origin looking down +Z, +Y up, +X right. Screen space
 //! is the screen window's (y up); see [`ScreenWindow`].
 //!
-//! Beyond the interface: [`contract`] checks a projection against the whole contract (what
-//! `obscura check` runs: call it from your own tests), and [`abi`] with [`export_projection!`] turns a
+//! Beyond the interface: [`contract`] is the contract itself, written once — the per-ray rules and
+//! tolerances, the property defaults and the default rays a host pre-fills, exactly what the host
+//! enforces (the checker `obscura check` runs is the `obscura-check` crate: add it as a
+//! dev-dependency to test your projection) — and [`abi`] with [`export_projection!`] turns a
 //! factory into a shared library the host loads through the C ABI of `include/obscura/projection.h`
 //! (the plugin's side of that ABI only: the host's side is in `obscura-plugins`).
 //!
