@@ -184,7 +184,7 @@ impl CubemapFace {
 
     #[inline(always)]
     fn ray(&self, s: Point2) -> RayGeometry {
-        let (u, v) = self.window.uv(s);
+        let (u, v) = self.window.uv_unclamped(s);
         if !(u.abs() < 2.0 && v.abs() < 2.0) {
             return RayGeometry::CULLED;
         }

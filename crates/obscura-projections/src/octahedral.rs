@@ -145,7 +145,7 @@ impl Octahedral {
 
     #[inline(always)]
     fn ray(&self, s: Point2) -> RayGeometry {
-        let (mut u, mut v) = self.window.uv(s);
+        let (mut u, mut v) = self.window.uv_unclamped(s);
         if u > 1.0 {
             (u, v) = (2.0 - u, -v);
         } else if u < -1.0 {

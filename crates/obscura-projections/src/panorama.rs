@@ -111,6 +111,15 @@ impl SweepWindow {
         0.5 * (du * dv).sqrt()
     }
 
+    /// `(u, v)` of a screen point, unclamped: for maps that handle far-outside points themselves (the
+    /// octahedral fold, the cube face's own clip), where the clamp of [`SweepWindow::uv`] would cost
+    /// time for nothing.
+    #[inline(always)]
+    #[must_use]
+    pub fn uv_unclamped(&self, s: Point2) -> (f32, f32) {
+        ((s.x - self.cx) / self.hw, (s.y - self.cy) / self.hh)
+    }
+
     /// `(u, v)` of a screen point, each clamped to ±64 (NaN stays NaN).
     #[inline(always)]
     #[must_use]
