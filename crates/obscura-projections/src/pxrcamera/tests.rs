@@ -21,17 +21,7 @@ fn run(
     aperture: &[Point2],
     time: &[f32],
 ) -> (Vec<RayGeometry>, Vec<f32>, Vec<Rgb>) {
-    let n = screen.len();
-    let lens: Vec<Point2> = aperture
-        .iter()
-        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
-        .collect();
-    let mut time = time.to_vec();
-    let mut rays = vec![RayGeometry::CULLED; n];
-    let mut tint = vec![Rgb::WHITE; n];
-    let mut ctx = ProjectionContext::new(screen, &lens, aperture, &mut time, &mut rays, &mut tint).unwrap();
-    p.project(&mut ctx);
-    (rays, time, tint)
+    testing::project_batch(p, screen, aperture, time)
 }
 
 fn one(p: &dyn Projection, s: Point2, a: Point2, t: f32) -> (RayGeometry, f32, Rgb) {
