@@ -32,7 +32,7 @@
 //!
 //! The CDF `F(t) = ∫₀ᵗ e / ∫₀¹ e` is tabulated at `t_j = j/4096`, each cell integrated with 5-point
 //! Gauss–Legendre after splitting it at a and b (where e has kinks), in a
-//! [`Distribution1D`](crate::distribution::Distribution1D) (whose weights are the cells' mean
+//! [`Distribution1D`] (whose weights are the cells' mean
 //! efficiencies). The warp is its inverse: a binary search for the cell with `F(t_j) ≤ u < F(t_{j+1})`
 //! and linear interpolation within it: `t = (j + (u − F_j)/(F_{j+1} − F_j)) / 4096`, clamped to
 //! `[0, 1 − 2⁻²⁴]` so it never reaches 1. The box shutter skips the table and returns u bit for bit.
