@@ -44,6 +44,8 @@
 //! DicingHint Spherical; DeepMetric RayLength; FieldOfView the angle across the screen window's
 //! shorter side through the centre, `2·θ(min(r − l, t − b)/2)` (exactly `fov` with the default window).
 
+#![forbid(unsafe_code)]
+
 use std::sync::LazyLock;
 
 use obscura_sdk::{

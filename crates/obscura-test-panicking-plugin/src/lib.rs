@@ -6,6 +6,8 @@
 //! rendering the other batches. Its `unproject` (the 90° pinhole's inverse, `(x/z, y/z)`) panics in
 //! the same region, so `obscura stmap --from Panicking` must count the pixels and go on.
 
+#![forbid(unsafe_code)]
+
 use std::sync::LazyLock;
 
 use obscura_sdk::{
