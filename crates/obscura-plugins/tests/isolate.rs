@@ -1,6 +1,6 @@
 //! Plugin isolation's promises: an isolated plugin behaves exactly like the same library in process
 //! (rays bit for bit at every batch size, properties, the deep metric, parameters, unproject, the
-//! lifecycle), and a plugin that crashes, aborts, exits or hangs costs the call it was serving —
+//! lifecycle: tests/lifecycle.rs), and a plugin that crashes, aborts, exits or hangs costs the call it was serving —
 //! counted — never the host, with a new worker taking the next call.
 //!
 //! The worker is this crate's `obscura-plugin-worker` binary (the `obscura` binary is its own worker).
@@ -174,51 +174,6 @@ fn concurrent_batches_each_get_a_worker_and_the_same_rays() {
             });
         }
     });
-}
-
-/// The recorder's record, as the worker's copy of the plugin wrote it beside the library.
-fn record(library: &Path) -> Vec<String> {
-    let log = PathBuf::from(format!("{}.calls", library.canonicalize().unwrap().display()));
-    std::fs::read_to_string(log)
-        .unwrap_or_default()
-        .lines()
-        .map(str::to_string)
-        .collect()
-}
-
-#[test]
-fn the_lifecycle_reaches_an_isolated_plugin_in_the_documented_order() {
-    let dir = tempfile::tempdir().unwrap();
-    let p = compile("recorder.c", &[], dir.path(), "Recorder");
-    let mut reg = Registry::new();
-    ensure(
-        &mut reg,
-        "Recorder",
-        &isolated(dir.path(), Duration::from_secs(10)),
-    )
-    .unwrap();
-    let mut env = obscura_sdk::ProjectionEnvironment::for_format(Format::new(8, 8));
-    let a = reg.create("Recorder", &mut env, &ParamList::new()).unwrap();
-    let b = reg.create("Recorder", &mut env, &ParamList::new()).unwrap();
-    reg.end_render();
-    drop((a, b));
-    drop(reg);
-    // The same sequence as tests/lifecycle.rs sees in process.
-    let path = p.canonicalize().unwrap();
-    assert_eq!(
-        record(&p),
-        [
-            "entry".to_string(),
-            format!("init {}", path.display()),
-            "synchronize RenderBegin params".into(),
-            "create".into(),
-            "create".into(),
-            "synchronize RenderEnd null".into(),
-            "destroy".into(),
-            "destroy".into(),
-            "finalize".into(),
-        ]
-    );
 }
 
 /// One hazard: a batch left of centre passes, one right of it is lost with `expect` in the report,

@@ -52,6 +52,8 @@ pub struct Worker {
     child: Child,
     socket: UnixStream,
     shm: Shm,
+    /// The socket's read timeout as last set (setting it is a system call).
+    read_timeout: Option<Duration>,
     /// How many events of the factory's log this worker has replayed.
     pub replayed: usize,
 }
@@ -103,6 +105,7 @@ impl Worker {
             child,
             socket: ours,
             shm,
+            read_timeout: None,
             replayed: 0,
         };
         let library = library.to_string_lossy().into_owned();
@@ -128,12 +131,13 @@ impl Worker {
         if sent.is_err() {
             return Err(Death::Ended(self.reap()));
         }
-        if let Err(e) = self
-            .socket
-            .set_read_timeout(Some(timeout.max(Duration::from_millis(1))))
-        {
-            self.kill();
-            return Err(Death::Broken(e.to_string()));
+        let timeout = timeout.max(Duration::from_millis(1));
+        if self.read_timeout != Some(timeout) {
+            if let Err(e) = self.socket.set_read_timeout(Some(timeout)) {
+                self.kill();
+                return Err(Death::Broken(e.to_string()));
+            }
+            self.read_timeout = Some(timeout);
         }
         match wire::receive(&mut self.socket) {
             Ok(body) => Reply::decode(&body).map_err(|e| {
