@@ -255,6 +255,49 @@ fn an_infinite_loop_in_project_costs_its_batch_after_the_timeout() {
     assert!(start.elapsed() < Duration::from_secs(8), "{:?}", start.elapsed());
 }
 
+/// A worker that cannot come up again (its `init` now crashes) costs the batch; after three such
+/// starts in a row the factory stops starting workers, and each later batch fails at once.
+#[test]
+fn workers_that_cannot_come_up_are_not_started_forever() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/plugins/hostile.c");
+    compile_c(&src, &["SEGV_PROJECT", "INIT_ONCE"], dir.path(), "Hostile", true);
+    let mut reg = Registry::new();
+    ensure(
+        &mut reg,
+        "Hostile",
+        &isolated(dir.path(), Duration::from_secs(10)),
+    )
+    .unwrap();
+    let cam = camera(8, 8);
+    let stage = CameraStage::new(&mut reg, "Hostile", &ParamList::new(), &cam).unwrap();
+    let run = |x: f32| {
+        let mut b = Batch::with_capacity(4);
+        for _ in 0..4 {
+            b.push(Point2::new(x, 0.0), Point2::new(0.5, 0.5), 0.0);
+        }
+        let r = stage.run(&mut b);
+        r.example(Violation::Failed).map(|e| e.detail.clone())
+    };
+    assert_eq!(run(-0.5), None);
+    let crash = run(0.5).unwrap();
+    assert!(crash.contains("SIGSEGV"), "{crash}");
+    for _ in 0..3 {
+        let e = run(-0.5).unwrap();
+        assert!(
+            e.contains("killed by signal 11 (SIGSEGV: segmentation fault) while catching up with the host"),
+            "{e}"
+        );
+    }
+    let start = Instant::now();
+    let e = run(-0.5).unwrap();
+    assert!(
+        e.contains("no worker is started any more: the last 3 could not be brought up"),
+        "{e}"
+    );
+    assert!(start.elapsed() < Duration::from_millis(50), "fails at once");
+}
+
 #[test]
 fn a_crash_in_property_is_a_warning_and_rays_still_flow() {
     let dir = tempfile::tempdir().unwrap();

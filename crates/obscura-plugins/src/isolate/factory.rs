@@ -40,6 +40,17 @@ enum Event {
 }
 
 impl Event {
+    /// The call, for messages.
+    fn name(&self) -> String {
+        match self {
+            Event::Init(_) => "init".into(),
+            Event::Sync(m, _) => format!("synchronize({m:?})"),
+            Event::Create(..) => "create_projection".into(),
+            Event::Destroy(_) => "destroy_projection".into(),
+            Event::Finalize => "finalize".into(),
+        }
+    }
+
     fn request(&self) -> Request {
         match self {
             Event::Init(p) => Request::Init(p.clone()),
@@ -63,7 +74,13 @@ struct Shared {
     next_id: AtomicU64,
     /// Workers that crashed, hung or broke.
     deaths: AtomicU64,
+    /// New workers in a row that could not be brought up, and the last reason.
+    failed_starts: Mutex<(u32, String)>,
 }
+
+/// New workers in a row that may fail to come up (a plugin whose `init` now crashes every time)
+/// before the factory stops starting them: each later call fails at once instead of paying a start.
+const MAX_FAILED_STARTS: u32 = 3;
 
 fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     m.lock().unwrap_or_else(PoisonError::into_inner)
@@ -73,19 +90,34 @@ impl Shared {
     /// An idle worker brought up to date with `log`, or a new one.
     fn take(&self, log: &[Event]) -> Result<Worker, String> {
         let idle = lock(&self.idle).pop();
-        let mut w = match idle {
-            Some(w) => w,
-            None => {
-                let (w, d) = Worker::spawn(&self.isolation.worker, &self.path, self.isolation.timeout)?;
-                if d.name != self.description.name {
-                    return Err(format!(
-                        "a new worker found projection \"{}\" in the library, not \"{}\": was the file replaced?",
-                        d.name, self.description.name
-                    ));
-                }
-                w
-            }
-        };
+        if let Some(mut w) = idle {
+            self.catch_up(&mut w, log)?;
+            return Ok(w);
+        }
+        let mut failed = lock(&self.failed_starts);
+        if failed.0 >= MAX_FAILED_STARTS {
+            return Err(format!(
+                "no worker is started any more: the last {MAX_FAILED_STARTS} could not be brought up ({})",
+                failed.1
+            ));
+        }
+        let started = self.start(log);
+        match &started {
+            Ok(_) => failed.0 = 0,
+            Err(why) => *failed = (failed.0 + 1, why.clone()),
+        }
+        started
+    }
+
+    /// A new worker, caught up with `log`.
+    fn start(&self, log: &[Event]) -> Result<Worker, String> {
+        let (mut w, d) = Worker::spawn(&self.isolation.worker, &self.path, self.isolation.timeout)?;
+        if d.name != self.description.name {
+            return Err(format!(
+                "a new worker found projection \"{}\" in the library, not \"{}\": was the file replaced?",
+                d.name, self.description.name
+            ));
+        }
         self.catch_up(&mut w, log)?;
         Ok(w)
     }
@@ -95,8 +127,12 @@ impl Shared {
         while let Some(event) = log.get(w.replayed) {
             match w.call(&event.request(), self.isolation.timeout) {
                 Ok(Reply::Done | Reply::Created(_)) => w.replayed += 1,
-                Ok(Reply::Plugin(e)) => return Err(format!("replaying {event:?} in a new worker: {e}")),
-                Ok(other) => return Err(format!("replaying {event:?} in a new worker: {other:?}")),
+                Ok(Reply::Plugin(e)) => {
+                    return Err(format!("replaying {} in a new worker: {e}", event.name()));
+                }
+                Ok(other) => {
+                    return Err(format!("replaying {} in a new worker: {other:?}", event.name()));
+                }
                 Err(death) => {
                     self.deaths.fetch_add(1, Ordering::Relaxed);
                     return Err(format!("{death} while catching up with the host"));
@@ -199,6 +235,7 @@ impl IsolatedFactory {
                 idle: Mutex::new(vec![worker]),
                 next_id: AtomicU64::new(1),
                 deaths: AtomicU64::new(0),
+                failed_starts: Mutex::new((0, String::new())),
             }),
             initialized: false,
         })
@@ -339,7 +376,8 @@ impl Projection for IsolatedProjection {
                 "{why} in project: the batch of {n} samples is lost; a new worker takes the next call"
             ))))
         };
-        let mut w = match self.shared.take(&lock(&self.shared.log)) {
+        let taken = self.shared.take(&lock(&self.shared.log));
+        let mut w = match taken {
             Ok(w) => w,
             Err(why) => lost(why),
         };

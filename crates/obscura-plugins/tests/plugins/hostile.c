@@ -16,9 +16,12 @@
  *   HANG_PROJECT      project spins forever on those batches
  *   EXIT_PROJECT      project calls exit(3) on those batches
  *   SEGV_PROPERTY     property dereferences NULL
+ *   INIT_ONCE         init succeeds once per plugin path, then crashes (it leaves `<plugin_path>.init`):
+ *                     a restarted worker cannot come up
  */
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 #include "obscura/projection.h"
@@ -70,6 +73,18 @@ static ObscuraStatus hostile_init(const ObscuraProjectionDescriptor *self, const
     (void)self;
     (void)plugin_path;
     (void)error;
+#if defined(INIT_ONCE)
+    char marker[4096];
+    snprintf(marker, sizeof(marker), "%s.init", plugin_path);
+    FILE *seen = fopen(marker, "r");
+    if (seen) {
+        *(volatile int *)(uintptr_t)0 = 1;
+    }
+    FILE *mark = fopen(marker, "w");
+    if (mark) {
+        fclose(mark);
+    }
+#endif
     *factory = &FACTORY_STATE;
     return OBSCURA_OK;
 }
