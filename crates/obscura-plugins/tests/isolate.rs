@@ -341,6 +341,25 @@ fn a_library_that_crashes_while_loading_is_named_and_the_others_listed() {
     );
 }
 
+/// A descriptor the loader refuses is refused in the worker with the in-process message, word for word.
+#[test]
+fn a_refused_descriptor_reads_the_same_from_a_worker() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/plugins/broken.c");
+    for defect in ["BAD_VERSION", "NULL_PROJECT", "BAD_DEFAULT", "NULL_DESCRIPTOR"] {
+        let dir = tempfile::tempdir().unwrap();
+        let p = compile_c(&src, &[defect], dir.path(), "Broken", false);
+        let e1 = load_file(&mut Registry::new(), &p).unwrap_err().to_string();
+        let e2 = ensure(
+            &mut Registry::new(),
+            "Broken",
+            &isolated(dir.path(), Duration::from_secs(10)),
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(e1, e2, "{defect}");
+    }
+}
+
 /// Validation runs in the host before any worker starts: the same message as in process.
 #[test]
 fn an_isolated_search_still_refuses_broken_files_with_the_same_message() {
