@@ -297,6 +297,40 @@ fn check_and_stmap_run_an_isolated_plugin() {
     assert!(dir.path().join("m.exr").exists());
 }
 
+/// `obscura check` of a crashing plugin, isolated, is a failed check naming the signal (exit 1), not a
+/// crashed checker.
+#[test]
+fn check_reports_an_isolated_crash_as_a_failed_check() {
+    let dir = tempfile::tempdir().unwrap();
+    hostile("SEGV_PROJECT", dir.path(), "Hostile");
+    let pp = dir.path().to_str().unwrap();
+    let r = obscura(
+        &[
+            "check",
+            "--isolate-plugins",
+            "--plugin-path",
+            pp,
+            "Hostile",
+            "--format",
+            "16x16",
+            "--threads",
+            "2",
+        ],
+        dir.path(),
+        None,
+    );
+    let out = String::from_utf8_lossy(&r.stdout);
+    assert_eq!(r.status.code(), Some(1), "{out}");
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("FAILED       no errors returned by project"))
+        .unwrap_or_else(|| panic!("{out}"));
+    assert!(
+        line.contains("killed by signal 11 (SIGSEGV: segmentation fault) in project"),
+        "{line}"
+    );
+}
+
 #[test]
 fn a_plugin_timeout_that_is_not_positive_seconds_is_refused() {
     let dir = tempfile::tempdir().unwrap();
