@@ -342,3 +342,76 @@ fn a_plugin_timeout_that_is_not_positive_seconds_is_refused() {
         "{err}"
     );
 }
+
+/// The worker processes that have `marker` (a path) among their mapped files.
+fn workers_mapping(marker: &str) -> Vec<u32> {
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| std::fs::read_to_string(format!("/proc/{pid}/maps")).is_ok_and(|m| m.contains(marker)))
+        .collect()
+}
+
+/// A worker stuck in a plugin's infinite loop does not outlive its host: killed with SIGKILL (no
+/// chance to clean up), the host's workers end within moments anyway.
+#[test]
+fn a_hung_worker_does_not_outlive_a_killed_host() {
+    let dir = tempfile::tempdir().unwrap();
+    hostile("HANG_PROJECT", dir.path(), "Hostile");
+    let pp = dir.path().to_str().unwrap();
+    let mut host = Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args([
+            "render",
+            "--isolate-plugins",
+            "--plugin-timeout",
+            "600",
+            "--plugin-path",
+            pp,
+            "-p",
+            "Hostile",
+            "--format",
+            "32x32",
+            "--spp",
+            "1",
+            "--threads",
+            "1",
+            "-o",
+            "h.exr",
+        ])
+        .current_dir(dir.path())
+        .env_remove("OBSCURA_ISOLATE_PLUGINS")
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let marker = dir.path().join("Hostile.so").display().to_string();
+    let start = std::time::Instant::now();
+    while workers_mapping(&marker).is_empty() {
+        assert!(start.elapsed().as_secs() < 30, "no worker started");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    // Wait until a worker is in the loop: it has spent 0.3 s of CPU time (utime + stime, in clock
+    // ticks of 1/100 s, fields 14 and 15 of /proc/PID/stat).
+    let cpu_ticks = |pid: u32| -> u64 {
+        let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+        let after_name = stat.rsplit_once(')').map_or("", |(_, rest)| rest);
+        let fields: Vec<&str> = after_name.split_whitespace().collect();
+        fields.get(11).and_then(|u| u.parse::<u64>().ok()).unwrap_or(0)
+            + fields.get(12).and_then(|s| s.parse::<u64>().ok()).unwrap_or(0)
+    };
+    while !workers_mapping(&marker).into_iter().any(|pid| cpu_ticks(pid) >= 30) {
+        assert!(start.elapsed().as_secs() < 60, "no worker entered the loop");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    host.kill().unwrap();
+    host.wait().unwrap();
+    let killed = std::time::Instant::now();
+    while !workers_mapping(&marker).is_empty() {
+        assert!(
+            killed.elapsed().as_secs() < 5,
+            "workers still running: {:?}",
+            workers_mapping(&marker)
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}

@@ -17,6 +17,9 @@
 //! | crashes while loading (a constructor that aborts, an entry point that crashes) | the library: an error naming the file and the signal; other plugins are listed and used |
 //! | crashes in `init` or `create_projection` | that creation: an error naming the projection |
 //!
+//! A worker ends when its host closes the socket, and within 0.1 s of its host's death even while
+//! stuck in a plugin call (it watches its parent process), so a killed host leaves no worker spinning.
+//!
 //! Each rendering thread that calls the plugin at once gets a worker of its own. A worker started
 //! later (a second thread, or after a crash) first replays the host's lifecycle calls — `init`,
 //! `synchronize`, the projections created and destroyed, `finalize` — so every worker holds the state

@@ -39,6 +39,7 @@ pub fn serve() -> i32 {
         return 2;
     };
     let mut socket = UnixStream::from(stdin);
+    watch_host();
     // SAFETY: the host passed this descriptor, open and ours alone, under this variable (it clears
     // close-on-exec on exactly that descriptor before starting us).
     let file = unsafe { File::from_raw_fd(fd) };
@@ -61,6 +62,29 @@ pub fn serve() -> i32 {
             return 0;
         }
     }
+}
+
+/// How often a worker looks whether its host is still there.
+const HOST_CHECK: std::time::Duration = std::time::Duration::from_millis(100);
+
+/// Ends this worker soon after its host dies, even while the plugin is stuck in a call (which the
+/// closed socket cannot interrupt): a thread watches the parent process and exits when it changes
+/// (the worker was handed to init or a subreaper). Without it, a plugin in an infinite loop would
+/// outlive a host killed with SIGKILL.
+fn watch_host() {
+    let host = std::os::unix::process::parent_id();
+    let watcher = std::thread::Builder::new()
+        .name("host-watch".into())
+        .spawn(move || {
+            loop {
+                std::thread::sleep(HOST_CHECK);
+                if std::os::unix::process::parent_id() != host {
+                    std::process::exit(0);
+                }
+            }
+        });
+    // Without the thread the worker still ends when the socket closes; only a stuck call outlives.
+    drop(watcher);
 }
 
 fn unwound(message: String) -> Reply {
