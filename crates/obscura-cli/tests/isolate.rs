@@ -399,7 +399,10 @@ fn a_hung_worker_does_not_outlive_a_killed_host() {
         fields.get(11).and_then(|u| u.parse::<u64>().ok()).unwrap_or(0)
             + fields.get(12).and_then(|s| s.parse::<u64>().ok()).unwrap_or(0)
     };
-    while !workers_mapping(&marker).into_iter().any(|pid| cpu_ticks(pid) >= 30) {
+    while !workers_mapping(&marker)
+        .into_iter()
+        .any(|pid| cpu_ticks(pid) >= 30)
+    {
         assert!(start.elapsed().as_secs() < 60, "no worker entered the loop");
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
