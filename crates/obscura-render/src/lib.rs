@@ -15,6 +15,7 @@
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
+//! | [`truth`], [`flow`] | ground truth: both depths, camera-space P and N, IDs; optical flow through `unproject` |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -23,6 +24,7 @@ pub mod deep;
 pub mod dice;
 pub mod film;
 pub mod filter;
+pub mod flow;
 pub mod integrator;
 pub mod job;
 pub mod light;
@@ -34,3 +36,4 @@ pub mod raymap;
 pub mod render;
 pub mod rng;
 pub mod stmap;
+pub mod truth;
