@@ -15,7 +15,7 @@
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
-//! | [`truth`], [`flow`] | ground truth: both depths, camera-space P and N, IDs; optical flow through `unproject` |
+//! | [`truth`], [`flow`], [`metadata`] | ground truth: both depths, camera-space P and N, IDs; optical flow through `unproject`; per-frame camera JSON and ID sidecar |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -29,6 +29,7 @@ pub mod integrator;
 pub mod job;
 pub mod light;
 pub mod material;
+pub mod metadata;
 pub mod motion;
 pub mod output;
 pub mod ray;
