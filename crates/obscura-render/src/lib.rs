@@ -16,6 +16,7 @@
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
 //! | [`truth`], [`flow`], [`metadata`] | ground truth: both depths, camera-space P and N, IDs; optical flow through `unproject`; per-frame camera JSON and ID sidecar |
+//! | [`sequence`] | frame selections (`--frames 1-24`) and each frame's output path |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -36,5 +37,6 @@ pub mod ray;
 pub mod raymap;
 pub mod render;
 pub mod rng;
+pub mod sequence;
 pub mod stmap;
 pub mod truth;
