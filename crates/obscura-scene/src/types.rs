@@ -432,6 +432,9 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
     pub warnings: Vec<String>,
+    /// Seconds of animation the file holds (glTF animations); `None` for a still scene. An animated
+    /// scene is posed per frame by its reader ([`crate::gltf_scene::load_gltf_at`]).
+    pub animation_seconds: Option<f32>,
 }
 
 impl Scene {
@@ -449,6 +452,7 @@ impl Scene {
             materials: vec![Material::default()],
             lights: Vec::new(),
             warnings: Vec::new(),
+            animation_seconds: None,
         }
     }
 }
