@@ -121,6 +121,8 @@ pub struct RenderStats {
     pub rays_traced: u64,
     /// Seconds spent tracing and shading (summed over threads).
     pub shading_seconds: f64,
+    /// Wall-clock seconds of the flow pass (0 when no flow was asked for).
+    pub flow_seconds: f64,
     /// Camera samples handed to the projection, culled ones and contract breaches.
     pub contract: ContractReport,
     /// Tiles finished / all tiles.
@@ -526,6 +528,7 @@ impl Accumulator {
                 sampling_seconds: seconds(self.sampling_ns),
                 rays_traced: self.rays_traced.into_inner(),
                 shading_seconds: seconds(self.shading_ns),
+                flow_seconds: 0.0,
                 contract: self
                     .report
                     .into_inner()
