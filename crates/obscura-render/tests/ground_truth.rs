@@ -510,3 +510,150 @@ fn a_static_scene_has_zero_flow_and_the_same_point_at_both_ends() {
         assert_eq!(p.backward_valid, 1.0);
     }
 }
+
+/// A quad in the plane z = `z` spanning `x0..x1` × `y0..y1`, facing the camera.
+fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, name: &str) -> Object {
+    Object {
+        shape: Shape::Mesh(obscura_scene::Mesh {
+            positions: vec![
+                glam::Vec3::new(x0, y0, z),
+                glam::Vec3::new(x1, y0, z),
+                glam::Vec3::new(x1, y1, z),
+                glam::Vec3::new(x0, y1, z),
+            ],
+            normals: None,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+        }),
+        transform: MotionTransform::default(),
+        material: 0,
+        micropolygon_length: 1.0,
+        source: name.into(),
+        identity: Identity {
+            object: name.into(),
+            instance: name.into(),
+        },
+    }
+}
+
+/// A camera translating by `travel` over the shutter through `PxrRollingShutter` (fov 90, sweep down).
+fn rolling_scene(duration: &str, travel: DVec3, format: Format) -> Scene {
+    let mut cam = CameraDesc::new(format);
+    cam.shutter = (0.0, 1.0);
+    let w2c = |m: DMat4| Matrix4(m.inverse().as_mat4().to_cols_array_2d());
+    cam.world_to_camera = vec![
+        MotionSample {
+            time: 0.0,
+            world_to_camera: w2c(DMat4::IDENTITY),
+        },
+        MotionSample {
+            time: 1.0,
+            world_to_camera: w2c(DMat4::from_translation(travel)),
+        },
+    ];
+    let mut s = Scene::new(cam);
+    s.projection = "PxrRollingShutter".into();
+    for (decl, v) in [
+        ("float fov", "90"),
+        ("float duration", duration),
+        ("string sweep", "down"),
+    ] {
+        s.projection_params.push_text(decl, &[v], None).unwrap();
+    }
+    s.samples_per_pixel = 4;
+    s
+}
+
+/// A camera panning fast past a vertical pole under an ideal rolling shutter (each line read at one
+/// instant, top first): the pole leans, each row showing it where the camera was when that row was read.
+#[test]
+fn a_rolling_shutter_renders_the_skew_of_a_fast_pan() {
+    let format = Format::new(64, 64);
+    let mut s = rolling_scene("0", DVec3::new(2.0, 0.0, 0.0), format);
+    s.objects.push(quad(-0.2, 0.2, -10.0, 10.0, 4.0, "pole"));
+    s.objects.push(quad(-50.0, 50.0, -50.0, 50.0, 8.0, "wall"));
+    s.lights.push(Light::Dome {
+        color: Rgb::WHITE,
+        intensity: 1.0,
+        exposure: 0.0,
+        map: None,
+        transform: Mat4::IDENTITY,
+    });
+    let prepared = prepare(
+        &s,
+        &mut builtin_registry(),
+        Path::new("."),
+        &RenderOptions::default(),
+    )
+    .unwrap();
+    let out = prepared.render(&RenderOptions::default(), &|_, _| {}, &AtomicBool::new(false));
+    for y in (4..60).step_by(4) {
+        let columns: Vec<f64> = (0..64)
+            .filter(|&x| out.film.pixel(x, y).truth.object_id == 1)
+            .map(|x| x as f64 + 0.5)
+            .collect();
+        assert!(!columns.is_empty(), "row {y} does not see the pole");
+        let seen = columns.iter().sum::<f64>() / columns.len() as f64;
+        // Row y is read at t = (y + ½)/H; the camera is then at x = 2t, so the pole (x = 0, z = 4) is
+        // at screen x = −2t/4 (d = 1 at fov 90), raster 32·(1 + sx).
+        let t = (y as f64 + 0.5) / 64.0;
+        let want = 32.0 * (1.0 - 2.0 * t / 4.0);
+        assert!(
+            (seen - want).abs() < 1.0,
+            "row {y}: pole at {seen}, expected {want}"
+        );
+    }
+}
+
+/// Under a rolling shutter with exposure `duration` 0.5 and a camera moving diagonally, each pixel's
+/// flow goes from its own line's open to the close of the line the point lands in: the closed form
+/// solves that line's time, written here, against the renderer's fixed point.
+#[test]
+fn rolling_shutter_flow_uses_each_pixels_own_time() {
+    let format = Format::new(48, 48);
+    let (vx, vy) = (0.8, 0.6);
+    let mut s = rolling_scene("0.5", DVec3::new(vx, vy, 0.0), format);
+    s.objects.push(quad(-50.0, 50.0, -50.0, 50.0, 5.0, "wall"));
+    let prepared = prepare(
+        &s,
+        &mut builtin_registry(),
+        Path::new("."),
+        &RenderOptions::default(),
+    )
+    .unwrap();
+    let target = FlowTarget::new(&s, SHUTTER_CLOSE).unwrap();
+    let flow = prepared.flow(Some(&target), None);
+    let (d, z, dur) = (1.0f64, 5.0f64, 0.5f64);
+    let mut worst = 0.0f64;
+    for y in 0..48u32 {
+        for x in 0..48u32 {
+            let got = flow.pixels[(y * 48 + x) as usize];
+            let (sx, sy) = to_screen(format, x as f64 + 0.5, y as f64 + 0.5);
+            // Reference: the line's open, t0 = p·(1 − duration) with p = (1 − sy)/2; the wall point.
+            let t0 = (1.0 - sy) / 2.0 * (1.0 - dur);
+            let (px, py) = (vx * t0 + sx * z / d, vy * t0 + sy * z / d);
+            // Target line p' and its close t1 = p'(1 − duration) + duration, where
+            // p' = (1 − d(py − vy·t1)/z)/2: linear in p'.
+            let a = (1.0 - d * py / z) / 2.0;
+            let k = d * vy / (2.0 * z);
+            let p1 = (a + k * dur) / (1.0 - k * (1.0 - dur));
+            let t1 = p1 * (1.0 - dur) + dur;
+            let (tx, ty) = (d * (px - vx * t1) / z, d * (py - vy * t1) / z);
+            let (rx, ry) = to_raster(format, tx, ty);
+            if !(0.5..47.5).contains(&rx) || !(0.5..47.5).contains(&ry) {
+                continue;
+            }
+            assert_eq!(got.forward_valid, 1.0, "({x}, {y})");
+            let err = (got.forward[0] as f64 - (rx - x as f64 - 0.5))
+                .hypot(got.forward[1] as f64 - (ry - y as f64 - 0.5));
+            worst = worst.max(err);
+            assert!(
+                err < 0.01,
+                "({x}, {y}): {:?} vs ({}, {})",
+                got.forward,
+                rx - x as f64 - 0.5,
+                ry - y as f64 - 0.5
+            );
+        }
+    }
+    eprintln!("rolling shutter flow: worst error {worst:.2e} px");
+}
