@@ -73,11 +73,11 @@ impl Animation<'_> {
     }
 
     /// Renders `frames` in order; a frame whose files are complete is skipped. Flow crosses to the
-    /// neighbouring frames of the selection (`flowBackward` only where the previous frame is selected;
-    /// the last frame's `flowForward` goes to its own shutter close).
+    /// neighbouring frames of the animation, selected or not: `flowForward` to frame N + 1's shutter
+    /// open, `flowBackward` to frame N − 1's, written from frame 2 on (frame 1 is the animation's
+    /// start).
     pub fn render(&self, frames: &[u32], registry: &mut Registry) -> Result<(), String> {
         let several = frames.len() > 1;
-        let selected = |f: Option<u32>| f.filter(|f| frames.contains(f));
         let mut skipped = 0;
         for &n in frames {
             let displays = frame_displays(self.displays, n, several);
@@ -86,8 +86,8 @@ impl Animation<'_> {
                 continue;
             }
             let scene = self.scene(n)?;
-            let previous = selected(n.checked_sub(1)).map(|p| self.scene(p)).transpose()?;
-            let next = selected(n.checked_add(1)).map(|p| self.scene(p)).transpose()?;
+            let previous = (n > 1).then(|| self.scene(n - 1)).transpose()?;
+            let next = n.checked_add(1).map(|p| self.scene(p)).transpose()?;
             let prepared = prepare(&scene, registry, self.base_dir, self.opts).map_err(|e| e.to_string())?;
             for w in prepared.stage().setup_warnings() {
                 eprintln!("{w}");

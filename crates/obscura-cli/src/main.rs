@@ -456,6 +456,8 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
             if s.cancelled {
                 format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
+            } else if s.flow_seconds > 0.0 {
+                format!("; flow pass {:.3} s", s.flow_seconds)
             } else {
                 String::new()
             }

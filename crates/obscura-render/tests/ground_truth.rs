@@ -657,3 +657,52 @@ fn rolling_shutter_flow_uses_each_pixels_own_time() {
     }
     eprintln!("rolling shutter flow: worst error {worst:.2e} px");
 }
+
+/// PxrPerspective without its inverse.
+struct NoInverse(Box<dyn obscura_sdk::Projection>);
+
+impl obscura_sdk::Projection for NoInverse {
+    fn property(&self, p: obscura_sdk::ProjectionProperty) -> Option<obscura_sdk::PropertyValue> {
+        self.0.property(p)
+    }
+    fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
+        self.0.project(ctx);
+    }
+}
+
+struct NoInverseFactory;
+
+impl obscura_sdk::ProjectionFactory for NoInverseFactory {
+    fn name(&self) -> &str {
+        "NoInverse"
+    }
+    fn summary(&self) -> &str {
+        "a pinhole without unproject"
+    }
+    fn param_table(&self) -> &[obscura_sdk::ParamDecl] {
+        &[]
+    }
+    fn create_projection(
+        &self,
+        env: &mut obscura_sdk::ProjectionEnvironment,
+        _: &obscura_sdk::ParamList,
+    ) -> Result<Box<dyn obscura_sdk::Projection>, obscura_sdk::PluginError> {
+        let p =
+            obscura_projections::PerspectiveFactory.create_projection(env, &obscura_sdk::ParamList::new())?;
+        Ok(Box::new(NoInverse(p)))
+    }
+}
+
+#[test]
+fn a_projection_without_unproject_gets_a_warning_and_no_flow() {
+    let mut registry = builtin_registry();
+    registry.register(Box::new(NoInverseFactory), "").unwrap();
+    let s = scene("NoInverse", &[], Format::new(24, 16), 1.0);
+    let prepared = prepare(&s, &mut registry, Path::new("."), &RenderOptions::default()).unwrap();
+    let out = prepared.flow(Some(&FlowTarget::new(&s, SHUTTER_CLOSE).unwrap()), None);
+    assert_eq!(
+        out.warnings,
+        ["warning: NoInverse has no unproject (or it failed for every pixel): no flow (flowValid is 0)"]
+    );
+    assert!(out.pixels.iter().all(|p| p.forward_valid == 0.0));
+}
