@@ -427,7 +427,7 @@ fn check_depths(projection: &str, params: &[(&str, &[&str])], cf: &ClosedForm) {
             // ray as 1/cos toward the silhouette, so the 1e-4 holds over the sphere's face and is
             // scaled by that factor on its limb.
             let cos = (1.0 - miss2 / (radius * radius)).sqrt();
-            let tol = 1e-4 / cos.min(0.5).max(0.02) * 0.5;
+            let tol = 1e-4 / cos.clamp(0.02, 0.5) * 0.5;
             let rel = |got: f32, want: f64| (got as f64 - want).abs() / want.abs();
             worst = worst.max(rel(t.distance, exact) * cos.min(0.5) * 2.0);
             assert!(

@@ -368,25 +368,8 @@ impl Aov {
     /// The AOV a single name means (the names of [`Aov::name`]), `None` for anything else.
     #[must_use]
     pub fn from_name(name: &str) -> Option<Aov> {
-        const ALL: [Aov; 16] = [
-            Aov::Ci,
-            Aov::Alpha,
-            Aov::Z,
-            Aov::N,
-            Aov::P,
-            Aov::CameraDirection,
-            Aov::CameraZ,
-            Aov::Distance,
-            Aov::PCamera,
-            Aov::NCamera,
-            Aov::ObjectId,
-            Aov::InstanceId,
-            Aov::MaterialId,
-            Aov::FlowForward,
-            Aov::FlowBackward,
-            Aov::FlowValid,
-        ];
-        ALL.into_iter().find(|a| a.name() == name)
+        const RENDERMAN: [Aov; 6] = [Aov::Ci, Aov::Alpha, Aov::Z, Aov::N, Aov::P, Aov::CameraDirection];
+        (RENDERMAN.into_iter().chain(Aov::GROUND_TRUTH)).find(|a| a.name() == name)
     }
 
     /// True for the flow AOVs, which need the flow pass.

@@ -212,14 +212,14 @@ impl Loader<'_> {
                     .read_inputs()
                     .ok_or_else(|| bad("key times cannot be read".into()))?
                     .collect();
-                if let Some(w) = times.windows(2).find(|w| !(w[0] < w[1])) {
+                if times.iter().any(|t| !t.is_finite()) {
+                    return Err(bad("a key time is not finite".into()));
+                }
+                if let Some(w) = times.windows(2).find(|w| w[0] >= w[1]) {
                     return Err(bad(format!(
                         "key times must increase strictly, got {} then {}",
                         w[0], w[1]
                     )));
-                }
-                if times.iter().any(|t| !t.is_finite()) {
-                    return Err(bad("a key time is not finite".into()));
                 }
                 let values: Vec<Vec4> = match reader.read_outputs() {
                     Some(ReadOutputs::Translations(v)) | Some(ReadOutputs::Scales(v)) => {
