@@ -80,7 +80,7 @@ impl Animation<'_> {
         let several = frames.len() > 1;
         let mut skipped = 0;
         for &n in frames {
-            let displays = frame_displays(self.displays, n, several);
+            let displays = frame::without_backward_flow(&frame_displays(self.displays, n, several), n > 1);
             if frame::is_complete(&displays) {
                 skipped += 1;
                 continue;

@@ -324,6 +324,10 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     let mut displays = job::displays(&scene, a.output.as_deref());
     let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
     obscura_render::frame::add_aovs(&mut displays, &aovs);
+    if scene.animation_seconds.is_none() {
+        // A still scene has no previous frame.
+        displays = obscura_render::frame::without_backward_flow(&displays, false);
+    }
     let opts = RenderOptions {
         samples_per_pixel: a.spp,
         seed: a.seed,

@@ -44,6 +44,19 @@ pub fn add_aovs(displays: &mut [Display], aovs: &[Aov]) {
     }
 }
 
+/// `displays` without `flowBackward` when there is no previous frame (the issue: it is written only
+/// when a previous frame exists); `flowValid.backward` stays, all 0.
+#[must_use]
+pub fn without_backward_flow(displays: &[Display], has_previous: bool) -> Vec<Display> {
+    let mut out = displays.to_vec();
+    if !has_previous {
+        for d in &mut out {
+            d.aovs.retain(|a| *a != Aov::FlowBackward);
+        }
+    }
+    out
+}
+
 /// Runs the flow pass into `out`'s film when a display asks for flow: forward to the next frame's
 /// shutter open (or this frame's close), backward to the previous frame's open when there is one.
 /// Returns the pass's warnings (a projection without `unproject`).
