@@ -352,9 +352,11 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
         );
     });
+    // An animated scene is posed per frame (frame 1 without --frames), so its flow reaches the next.
     if scene.animation_seconds.is_some()
-        && let (Some(frames), Some(path)) = (&a.frames, a.scene.as_deref())
+        && let Some(path) = a.scene.as_deref()
     {
+        let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
         let job = animation::Animation {
             path,
             fps: a.fps,
@@ -366,7 +368,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             opts: &opts,
             quiet: a.quiet,
         };
-        return job.render(&frames.frames().collect::<Vec<_>>(), &mut registry);
+        return job.render(&frames, &mut registry);
     }
     let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
