@@ -103,6 +103,28 @@ fn ground_truth_channels_are_named_and_ids_are_exact_integers() {
         FlatSamples::F16(v) => assert_eq!((v[0].to_f32(), v[1].to_f32()), (0.0, 1.0)),
         other => panic!("{other:?}"),
     }
+    // The reference OpenEXR library reads the IDs as 32-bit unsigned integers, exactly.
+    let Some(out) = run_independent_reader("film_exr_read.py", &path) else {
+        return;
+    };
+    let line = |name: &str| {
+        out.lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("no {name} in {out}"))
+            .to_string()
+    };
+    assert!(
+        line("materialId").starts_with("materialId uint32 4000000000.0 "),
+        "{}",
+        line("materialId")
+    );
+    let instance: Vec<String> = line("instanceId")
+        .split(' ')
+        .skip(2)
+        .map(str::to_string)
+        .collect();
+    assert_eq!(instance[7], "101.0");
+    assert!(line("flowForward.X").starts_with("flowForward.X float16 0.0 1.0 2.0 "));
 }
 
 /// A film whose every crop pixel holds exactly `pixel_value` (one sample at each centre, width-1
