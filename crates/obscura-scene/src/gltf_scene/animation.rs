@@ -360,4 +360,35 @@ mod tests {
         // The ground does not move: one sample.
         assert_eq!(scene.objects[2].transform.samples.len(), 1);
     }
+
+    /// A sampler whose output holds fewer values than its input has key times is an error naming the
+    /// file, the animation and the channel (the example's hero translation, cut to one value).
+    #[test]
+    fn a_channel_with_too_few_values_is_an_error_naming_it() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/animated/boxes.gltf");
+        let text = std::fs::read_to_string(path).unwrap();
+        // Accessor 6 is the hero's translation output (2 values): declare 1.
+        let marker = "\"count\": 2,\n   \"type\": \"VEC3\"";
+        let at = text.match_indices(marker).nth(0).map(|(i, _)| i).unwrap();
+        let cut = format!(
+            "{}\"count\": 1,\n   \"type\": \"VEC3\"{}",
+            &text[..at],
+            &text[at + marker.len()..]
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let bad = dir.path().join("bad.gltf");
+        std::fs::write(&bad, cut).unwrap();
+        let e = super::super::load_gltf(
+            &bad,
+            obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("bad.gltf")
+                && e.contains("animation 0 channel 0: 1 output values for 2 key times; expected 2"),
+            "{e}"
+        );
+    }
 }
