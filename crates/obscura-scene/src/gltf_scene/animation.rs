@@ -370,7 +370,7 @@ mod tests {
         let text = std::fs::read_to_string(path).unwrap();
         // Accessor 6 is the hero's translation output (2 values): declare 1.
         let marker = "\"count\": 2,\n   \"type\": \"VEC3\"";
-        let at = text.match_indices(marker).nth(0).map(|(i, _)| i).unwrap();
+        let at = text.find(marker).unwrap();
         let cut = format!(
             "{}\"count\": 1,\n   \"type\": \"VEC3\"{}",
             &text[..at],
