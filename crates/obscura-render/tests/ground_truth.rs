@@ -13,9 +13,20 @@ use glam::{DMat4, DVec3, Mat4};
 use obscura_host::CameraDesc;
 use obscura_plugins::builtin_registry;
 use obscura_render::flow::{FlowTarget, SHUTTER_CLOSE};
-use obscura_render::render::{RenderOptions, prepare};
+use obscura_render::render::{Prepared, RenderOptions, prepare};
 use obscura_scene::{Identity, Light, Material, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{Format, Matrix4, MotionSample, Registry, Rgb};
+
+/// `scene` prepared with the built-in projections.
+fn prepared(scene: &Scene) -> Prepared {
+    prepare(
+        scene,
+        &mut builtin_registry(),
+        Path::new("."),
+        &RenderOptions::default(),
+    )
+    .unwrap()
+}
 
 /// A moving sphere: centre at shutter open and close, radius.
 #[derive(Clone, Copy)]
@@ -399,13 +410,7 @@ fn depth_scene(projection: &str, params: &[(&str, &[&str])]) -> (Scene, DVec3, f
 /// along the ray through that pixel's `Pcamera`, and `Pcamera` lies in that pixel.
 fn check_depths(projection: &str, params: &[(&str, &[&str])], cf: &ClosedForm) {
     let (s, centre, radius) = depth_scene(projection, params);
-    let prepared = prepare(
-        &s,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .unwrap();
+    let prepared = prepared(&s);
     let out = prepared.render(&RenderOptions::default(), &|_, _| {}, &AtomicBool::new(false));
     let (mut checked, mut worst) = (0, 0.0f64);
     for y in 0..72 {
@@ -493,13 +498,7 @@ fn a_static_scene_has_zero_flow_and_the_same_point_at_both_ends() {
     for o in &mut s.objects {
         o.transform.samples.truncate(1);
     }
-    let prepared = prepare(
-        &s,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .unwrap();
+    let prepared = prepared(&s);
     let target = FlowTarget::new(&s, SHUTTER_CLOSE).unwrap();
     let out = prepared.flow(Some(&target), Some(&target));
     let valid: Vec<_> = out.pixels.iter().filter(|p| p.forward_valid == 1.0).collect();
@@ -578,13 +577,7 @@ fn a_rolling_shutter_renders_the_skew_of_a_fast_pan() {
         map: None,
         transform: Mat4::IDENTITY,
     });
-    let prepared = prepare(
-        &s,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .unwrap();
+    let prepared = prepared(&s);
     let out = prepared.render(&RenderOptions::default(), &|_, _| {}, &AtomicBool::new(false));
     for y in (4..60).step_by(4) {
         let columns: Vec<f64> = (0..64)
@@ -613,13 +606,7 @@ fn rolling_shutter_flow_uses_each_pixels_own_time() {
     let (vx, vy) = (0.8, 0.6);
     let mut s = rolling_scene("0.5", DVec3::new(vx, vy, 0.0), format);
     s.objects.push(quad(-50.0, 50.0, -50.0, 50.0, 5.0, "wall"));
-    let prepared = prepare(
-        &s,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .unwrap();
+    let prepared = prepared(&s);
     let target = FlowTarget::new(&s, SHUTTER_CLOSE).unwrap();
     let flow = prepared.flow(Some(&target), None);
     let (d, z, dur) = (1.0f64, 5.0f64, 0.5f64);

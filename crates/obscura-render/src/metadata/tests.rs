@@ -6,7 +6,18 @@ use obscura_plugins::builtin_registry;
 use obscura_sdk::{Format, Matrix4, MotionSample, Vec3};
 
 use super::*;
-use crate::render::{RenderOptions, prepare};
+use crate::render::{Prepared, RenderOptions, prepare};
+
+/// `scene` prepared with the built-in projections.
+fn prepared(scene: &Scene) -> Prepared {
+    prepare(
+        scene,
+        &mut builtin_registry(),
+        Path::new("."),
+        &RenderOptions::default(),
+    )
+    .unwrap()
+}
 
 /// A scene through `projection` with a camera that moves from `open` to `close` (camera-to-world).
 fn scene(projection: &str, params: &[(&str, &[&str])], format: Format) -> Scene {
@@ -69,13 +80,7 @@ fn renderer_sees(prepared: &Prepared, j: &Value, world: DVec3, when: &str, time:
 
 fn reprojects(projection: &str, params: &[(&str, &[&str])], format: Format) -> Value {
     let s = scene(projection, params, format);
-    let prepared = prepare(
-        &s,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .unwrap();
+    let prepared = prepared(&s);
     let j = camera_json(&s, &prepared, Some(7)).unwrap();
     assert_eq!(j["schema"], SCHEMA);
     assert_eq!(j["frame"], 7);
@@ -127,13 +132,7 @@ fn a_calibrated_opencv_camera_keeps_its_model_and_reprojects_at_another_size() {
 #[test]
 fn a_projection_without_a_pinhole_equivalent_has_no_intrinsics() {
     let s = scene("Fisheye", &[], Format::new(32, 32));
-    let prepared = prepare(
-        &s,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .unwrap();
+    let prepared = prepared(&s);
     let j = camera_json(&s, &prepared, None).unwrap();
     assert!(j.get("opencv").is_none() && j.get("colmap").is_none());
     assert_eq!(j["deep_metric"], "RayLength");
