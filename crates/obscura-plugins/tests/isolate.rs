@@ -42,6 +42,15 @@ fn compile(file: &str, defines: &[&str], dir: &Path, name: &str) -> PathBuf {
     compile_c(&src, defines, dir, name, true)
 }
 
+/// The hostile plugin compiled with `defines` as `Hostile.so`, in a registry that runs it isolated.
+fn isolated_hostile(defines: &[&str], timeout: Duration) -> (tempfile::TempDir, Registry) {
+    let dir = tempfile::tempdir().unwrap();
+    compile("hostile.c", defines, dir.path(), "Hostile");
+    let mut reg = Registry::new();
+    ensure(&mut reg, "Hostile", &isolated(dir.path(), timeout)).unwrap();
+    (dir, reg)
+}
+
 fn camera(w: u32, h: u32) -> CameraDesc {
     let mut c = CameraDesc::new(Format::new(w, h));
     c.shutter = (0.0, 1.0);
@@ -179,10 +188,7 @@ fn concurrent_batches_each_get_a_worker_and_the_same_rays() {
 /// One hazard: a batch left of centre passes, one right of it is lost with `expect` in the report,
 /// and the next batch (on a new worker) passes again.
 fn survives(define: &str, timeout: Duration, expect: &str) {
-    let dir = tempfile::tempdir().unwrap();
-    compile("hostile.c", &[define], dir.path(), "Hostile");
-    let mut reg = Registry::new();
-    ensure(&mut reg, "Hostile", &isolated(dir.path(), timeout)).unwrap();
+    let (_dir, mut reg) = isolated_hostile(&[define], timeout);
     let cam = camera(32, 32);
     let stage = CameraStage::new(&mut reg, "Hostile", &ParamList::new(), &cam).unwrap();
     assert_eq!(stage.properties().field_of_view, Some(90.0));
@@ -259,16 +265,7 @@ fn an_infinite_loop_in_project_costs_its_batch_after_the_timeout() {
 /// starts in a row the factory stops starting workers, and each later batch fails at once.
 #[test]
 fn workers_that_cannot_come_up_are_not_started_forever() {
-    let dir = tempfile::tempdir().unwrap();
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/plugins/hostile.c");
-    compile_c(&src, &["SEGV_PROJECT", "INIT_ONCE"], dir.path(), "Hostile", true);
-    let mut reg = Registry::new();
-    ensure(
-        &mut reg,
-        "Hostile",
-        &isolated(dir.path(), Duration::from_secs(10)),
-    )
-    .unwrap();
+    let (_dir, mut reg) = isolated_hostile(&["SEGV_PROJECT", "INIT_ONCE"], Duration::from_secs(10));
     let cam = camera(8, 8);
     let stage = CameraStage::new(&mut reg, "Hostile", &ParamList::new(), &cam).unwrap();
     let run = |x: f32| {
@@ -300,15 +297,7 @@ fn workers_that_cannot_come_up_are_not_started_forever() {
 
 #[test]
 fn a_crash_in_property_is_a_warning_and_rays_still_flow() {
-    let dir = tempfile::tempdir().unwrap();
-    compile("hostile.c", &["SEGV_PROPERTY"], dir.path(), "Hostile");
-    let mut reg = Registry::new();
-    ensure(
-        &mut reg,
-        "Hostile",
-        &isolated(dir.path(), Duration::from_secs(10)),
-    )
-    .unwrap();
+    let (_dir, mut reg) = isolated_hostile(&["SEGV_PROPERTY"], Duration::from_secs(10));
     let stage = CameraStage::new(&mut reg, "Hostile", &ParamList::new(), &camera(8, 8)).unwrap();
     let warnings = stage.setup_warnings().join("\n");
     assert!(warnings.contains("SIGSEGV"), "{warnings}");
