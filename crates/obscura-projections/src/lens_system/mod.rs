@@ -384,6 +384,14 @@ impl LensSystem {
         Some((out, aimed.jacobian / ((1.0 + t2) * (1.0 + t2))))
     }
 
+    /// The film-side ray (lens frame) from film point `(r, 0)` toward stop point `a·R_stop`, from the
+    /// aiming table, before any surface: for diagrams of ray fans.
+    #[must_use]
+    pub fn film_side_ray(&self, r: f64, a: [f64; 2]) -> Option<Ray> {
+        let t = self.table.lookup(r, a)?.t;
+        Some(film_ray(r, t))
+    }
+
     /// The exact chief ray (d line) from film point `(r, 0)`, lens frame, or `None` when blocked.
     #[must_use]
     pub fn chief_ray(&self, r: f64) -> Option<Ray> {

@@ -128,7 +128,11 @@ fn parse_columns(name: &str, text: &str) -> Result<Prescription, String> {
     for (i, raw) in text.lines().enumerate() {
         let line = raw.trim();
         if let Some(c) = line.strip_prefix('#') {
-            source.push(c.trim().trim_matches('"').to_string());
+            // Comments are the design's source, but for the column headings.
+            let c = c.trim().trim_matches('"').trim();
+            if !c.to_ascii_lowercase().starts_with("radius") {
+                source.push(c.to_string());
+            }
             continue;
         }
         if line.is_empty() {

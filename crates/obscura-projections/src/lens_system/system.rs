@@ -165,6 +165,30 @@ impl Lens {
         Ok(ray)
     }
 
+    /// The points where `ray` (from the film, d line) meets each surface, rear to front, as far as it
+    /// gets, and the ray leaving the front surface when it passes (for lens diagrams).
+    #[must_use]
+    pub fn trace_path(&self, ray: Ray) -> (Vec<[f64; 3]>, Option<Ray>) {
+        let mut points = vec![ray.o];
+        let mut r = ray;
+        for i in (0..self.surfaces.len()).rev() {
+            match self.trace_range(r, i, i, (&self.n_before, &self.n_after), true) {
+                Ok(next) => {
+                    points.push(next.o);
+                    r = next;
+                }
+                Err(Blocked::Aperture(_)) => return (points, None),
+                Err(Blocked::Reflected(_)) => {
+                    if let Some((p, _)) = super::surface::intersect(&self.surfaces[i], self.z[i], &r) {
+                        points.push(p);
+                    }
+                    return (points, None);
+                }
+            }
+        }
+        (points, Some(r))
+    }
+
     /// Traces a ray from the film through every surface into the scene at the d line.
     ///
     /// # Errors
