@@ -84,7 +84,12 @@ pub fn run(a: &LensArgs) -> Result<(), String> {
             Some("svg") => write_atomically(path, |w| std::io::Write::write_all(w, drawing.svg().as_bytes()))
                 .map_err(|e| e.to_string())?,
             Some("png") => write_png(path, &drawing)?,
-            _ => return Err(format!("--diagram {}: expected a .svg or .png file", path.display())),
+            _ => {
+                return Err(format!(
+                    "--diagram {}: expected a .svg or .png file",
+                    path.display()
+                ));
+            }
         }
     }
     Ok(())
@@ -104,7 +109,8 @@ fn figures(p: &Prescription, cam: &LensSystem, film_diagonal: f64) -> Figures {
     }
     let theta = chief.map_or(0.0, |c| c.d[0].hypot(c.d[1]).atan2(c.d[2]));
     let ideal = par.efl * theta.tan();
-    let distortion_percent = (theta < 89f64.to_radians() && ideal != 0.0).then(|| 100.0 * (r - ideal) / ideal);
+    let distortion_percent =
+        (theta < 89f64.to_radians() && ideal != 0.0).then(|| 100.0 * (r - ideal) / ideal);
     Figures {
         name: p.name.clone(),
         source: p.source.clone(),
@@ -131,23 +137,55 @@ fn text(f: &Figures) -> String {
         let _ = writeln!(s, "  {}", f.source);
     }
     let _ = writeln!(s, "effective focal length   {:10.3} mm", f.efl);
-    let _ = writeln!(s, "back focal distance      {:10.3} mm   (rear vertex to focus)", f.bfl);
-    let _ = writeln!(s, "front focal distance     {:10.3} mm   (front vertex to front focus, + toward the scene)", f.ffl);
+    let _ = writeln!(
+        s,
+        "back focal distance      {:10.3} mm   (rear vertex to focus)",
+        f.bfl
+    );
+    let _ = writeln!(
+        s,
+        "front focal distance     {:10.3} mm   (front vertex to front focus, + toward the scene)",
+        f.ffl
+    );
     let _ = writeln!(s, "f-number                 {:10.3}", f.f_number);
-    let _ = writeln!(s, "entrance pupil           {:10.3} mm from the rear vertex, {:.3} mm across", f.ep.0, f.ep.1);
-    let _ = writeln!(s, "exit pupil               {:10.3} mm from the rear vertex, {:.3} mm across", f.xp.0, f.xp.1);
+    let _ = writeln!(
+        s,
+        "entrance pupil           {:10.3} mm from the rear vertex, {:.3} mm across",
+        f.ep.0, f.ep.1
+    );
+    let _ = writeln!(
+        s,
+        "exit pupil               {:10.3} mm from the rear vertex, {:.3} mm across",
+        f.xp.0, f.xp.1
+    );
     let _ = writeln!(s, "length (front to rear)   {:10.3} mm", f.track);
-    let _ = writeln!(s, "field of view            {:10.3} deg across the {:.1} mm diagonal", f.fov_deg, 2.0 * f.corner_mm);
+    let _ = writeln!(
+        s,
+        "field of view            {:10.3} deg across the {:.1} mm diagonal",
+        f.fov_deg,
+        2.0 * f.corner_mm
+    );
     match f.distortion_percent {
         Some(d) => {
-            let _ = writeln!(s, "distortion at the corner {d:10.3} %  (chief ray against EFL·tan θ)");
+            let _ = writeln!(
+                s,
+                "distortion at the corner {d:10.3} %  (chief ray against EFL·tan θ)"
+            );
         }
         None => {
             let _ = writeln!(s, "distortion at the corner        n/a  (field beyond 90°)");
         }
     }
-    let _ = writeln!(s, "relative illumination    {:10.3}    at the corner (centre = 1)", f.relative_illumination);
-    let _ = writeln!(s, "blocked at the corner    {:10.1} %  of the aperture samples", 100.0 * f.blocked_fraction);
+    let _ = writeln!(
+        s,
+        "relative illumination    {:10.3}    at the corner (centre = 1)",
+        f.relative_illumination
+    );
+    let _ = writeln!(
+        s,
+        "blocked at the corner    {:10.1} %  of the aperture samples",
+        100.0 * f.blocked_fraction
+    );
     s
 }
 
@@ -217,7 +255,9 @@ fn diagram(cam: &LensSystem, corner: f64, field: f64) -> Drawing {
         for j in 0..9 {
             let u = -1.0 + 2.0 * f64::from(j) / 8.0;
             // The film point at −r·x in the lens frame is the table's r on +x mirrored.
-            let Some(ray) = cam.film_side_ray(-r, [-u, 0.0]) else { continue };
+            let Some(ray) = cam.film_side_ray(-r, [-u, 0.0]) else {
+                continue;
+            };
             let ray = obscura_projections::lens_system::surface::Ray {
                 o: [-ray.o[0], 0.0, ray.o[2]],
                 d: [-ray.d[0], 0.0, ray.d[2]],
@@ -300,8 +340,14 @@ impl Drawing {
                 for k in 0..=steps {
                     let t = k as f64 / steps as f64;
                     let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
-                    let (x0, x1) = ((x - rad).floor().max(0.0) as usize, ((x + rad).ceil() as usize).min(w - 1));
-                    let (y0, y1) = ((y - rad).floor().max(0.0) as usize, ((y + rad).ceil() as usize).min(hh - 1));
+                    let (x0, x1) = (
+                        (x - rad).floor().max(0.0) as usize,
+                        ((x + rad).ceil() as usize).min(w - 1),
+                    );
+                    let (y0, y1) = (
+                        (y - rad).floor().max(0.0) as usize,
+                        ((y + rad).ceil() as usize).min(hh - 1),
+                    );
                     for py in y0..=y1 {
                         for px in x0..=x1 {
                             if (px as f64 + 0.5 - x).hypot(py as f64 + 0.5 - y) <= rad.max(0.75) {

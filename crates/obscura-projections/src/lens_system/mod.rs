@@ -193,8 +193,8 @@ pub struct LensSystem {
     stop_radius: f64,
     norm: f64,
     dispersive: bool,
-    /// Per wavelength step, the index behind each surface.
-    index_table: Vec<Vec<f64>>,
+    /// Per 1 nm wavelength step, the indices before and after each surface.
+    index_table: Vec<(Vec<f64>, Vec<f64>)>,
     focus_mm: f64,
     metric: DeepMetric,
     near: f32,
@@ -276,8 +276,9 @@ impl LensSystem {
         };
         camera.index_table = (0..=INDEX_STEPS)
             .map(|i| {
-                let l = spectrum::wavelength(i as f64 / INDEX_STEPS as f64);
-                camera.lens.surfaces.iter().map(|s| s.glass.index(l)).collect()
+                camera
+                    .lens
+                    .indices(spectrum::wavelength(i as f64 / INDEX_STEPS as f64))
             })
             .collect();
         camera.norm = camera.centre_weight();
@@ -363,20 +364,10 @@ impl LensSystem {
         let n = self.lens.surfaces.len();
         let out = match lambda_step {
             None => self.lens.trace(ray),
+            // The nearest 1 nm step's indices (within ~10⁻⁵ of the exact wavelength's).
             Some(x) => {
-                let i = (x as usize).min(INDEX_STEPS - 1);
-                let f = x - i as f64;
-                let mut after = [0.0f64; 64];
-                let mut before = [1.0f64; 64];
-                for s in 0..n {
-                    after[s] =
-                        self.index_table[i][s] + (self.index_table[i + 1][s] - self.index_table[i][s]) * f;
-                    if s + 1 < n {
-                        before[s + 1] = after[s];
-                    }
-                }
-                self.lens
-                    .trace_range(ray, 0, n - 1, (&before[..n], &after[..n]), true)
+                let (before, after) = &self.index_table[(x.round() as usize).min(INDEX_STEPS)];
+                self.lens.trace_range(ray, 0, n - 1, (before, after), true)
             }
         }
         .ok()?;
@@ -628,35 +619,49 @@ impl Projection for LensSystem {
             (dx * vz - dz * vx, dx * vx + dz * vz)
         };
         // Bracket on the table's exact chief rays, then bisect on the exact chief ray.
-        let mut lo = None;
+        let bisect = |mut a: f64, mut b: f64, mut ga: f64| -> Option<Point2> {
+            for _ in 0..80 {
+                let m = 0.5 * (a + b);
+                let (gm, _) = residual(&self.chief_ray(m)?);
+                if (gm > 0.0) == (ga > 0.0) {
+                    a = m;
+                    ga = gm;
+                } else {
+                    b = m;
+                }
+                if b - a < 1e-10 {
+                    break;
+                }
+            }
+            self.film_to_screen(0.5 * (a + b), p)
+        };
+        let mut lo: Option<(f64, f64)> = None;
         for j in 0..self.table.radii {
-            let Some(ray) = self.chief[j].ray else { break };
+            let r = j as f64 * self.table.dr;
+            let Some(ray) = self.chief[j].ray else {
+                // Past the last table radius with a chief ray: the field ends between the two. Find
+                // its edge by bisection on whether the chief ray passes, and bracket up to there.
+                let (r0, g0) = lo?;
+                let (mut a, mut b) = (r0, r);
+                for _ in 0..50 {
+                    let m = 0.5 * (a + b);
+                    if self.chief_ray(m).is_some() { a = m } else { b = m }
+                }
+                let (ga, along) = residual(&self.chief_ray(a)?);
+                return ((ga > 0.0) != (g0 > 0.0) && along > 0.0)
+                    .then(|| bisect(r0, a, g0))
+                    .flatten();
+            };
             let (g, along) = residual(&ray);
             if along <= 0.0 {
                 continue;
             }
             if g == 0.0 {
-                return self.film_to_screen(j as f64 * self.table.dr, p);
+                return self.film_to_screen(r, p);
             }
             match lo {
-                Some((r0, g0)) if (g0 > 0.0) != (g > 0.0) => {
-                    let (mut a, mut b, mut ga) = (r0, j as f64 * self.table.dr, g0);
-                    for _ in 0..80 {
-                        let m = 0.5 * (a + b);
-                        let (gm, _) = residual(&self.chief_ray(m)?);
-                        if (gm > 0.0) == (ga > 0.0) {
-                            a = m;
-                            ga = gm;
-                        } else {
-                            b = m;
-                        }
-                        if b - a < 1e-10 {
-                            break;
-                        }
-                    }
-                    return self.film_to_screen(0.5 * (a + b), p);
-                }
-                _ => lo = Some((j as f64 * self.table.dr, g)),
+                Some((r0, g0)) if (g0 > 0.0) != (g > 0.0) => return bisect(r0, r, g0),
+                _ => lo = Some((r, g)),
             }
         }
         None
