@@ -41,6 +41,7 @@
 //! not share an origin); DeepMetric CameraZ while every chief ray of the window stays within 60° of
 //! the axis, else RayLength (fisheyes).
 
+pub mod batch;
 pub mod glass;
 pub mod prescription;
 pub mod pupil;
@@ -195,6 +196,11 @@ pub struct LensSystem {
     dispersive: bool,
     /// Per 1 nm wavelength step, the indices before and after each surface.
     index_table: Vec<(Vec<f64>, Vec<f64>)>,
+    /// The eight-lane tracer, when every surface is a sphere or plane.
+    lane_lens: Option<batch::LaneLens>,
+    /// `η` per surface (rear to front) at the d line and per 1 nm step, for the lanes.
+    eta_d: Vec<f32>,
+    eta_table: Vec<Vec<f32>>,
     focus_mm: f64,
     metric: DeepMetric,
     near: f32,
@@ -263,6 +269,9 @@ impl LensSystem {
             norm: 1.0,
             dispersive: s.dispersion && prescription.is_dispersive(),
             index_table: Vec::new(),
+            lane_lens: None,
+            eta_d: Vec::new(),
+            eta_table: Vec::new(),
             focus_mm,
             metric: DeepMetric::CameraZ,
             near: env.clipping_near(),
@@ -280,6 +289,13 @@ impl LensSystem {
                     .lens
                     .indices(spectrum::wavelength(i as f64 / INDEX_STEPS as f64))
             })
+            .collect();
+        camera.lane_lens = batch::LaneLens::new(&camera.lens);
+        camera.eta_d = batch::LaneLens::etas(&camera.lens.n_before, &camera.lens.n_after);
+        camera.eta_table = camera
+            .index_table
+            .iter()
+            .map(|(b, a)| batch::LaneLens::etas(b, a))
             .collect();
         camera.norm = camera.centre_weight();
         if !(camera.norm > 0.0) {
@@ -593,10 +609,17 @@ impl Projection for LensSystem {
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let c = ctx.parts_mut();
-        for i in 0..c.rays.len() {
-            let (ray, tint) = self.sample(c.screen[i], c.aperture[i], c.lens[i]);
-            c.rays[i] = ray;
-            c.tint[i] = tint;
+        match &self.lane_lens {
+            Some(lanes) => {
+                crate::simd::run(|| self.project_lanes(lanes, c.screen, c.aperture, c.lens, c.rays, c.tint))
+            }
+            None => {
+                for i in 0..c.rays.len() {
+                    let (ray, tint) = self.sample(c.screen[i], c.aperture[i], c.lens[i]);
+                    c.rays[i] = ray;
+                    c.tint[i] = tint;
+                }
+            }
         }
     }
 
@@ -669,6 +692,115 @@ impl Projection for LensSystem {
 }
 
 impl LensSystem {
+    /// `project` eight rays at a time through [`batch::trace`]: per ray, the film point, the aiming
+    /// table and the wavelength as in [`LensSystem::sample`]; the lens-centre samples (the exact chief
+    /// ray) go through `sample` itself.
+    #[inline(always)]
+    fn project_lanes(
+        &self,
+        lane_lens: &batch::LaneLens,
+        screen: &[Point2],
+        aperture: &[Point2],
+        lens: &[Point2],
+        rays: &mut [RayGeometry],
+        tint: &mut [Rgb],
+    ) {
+        use batch::LANES;
+        let n = rays.len();
+        let mut start = 0;
+        while start < n {
+            let mut lanes = batch::Lanes::default();
+            let mut eta: [&[f32]; LANES] = [&self.eta_d; LANES];
+            let mut setup = [(0.0f64, 1.0f64, 0.0f64, 0.0f64, [1.0f32; 3]); LANES];
+            let mut todo = [false; LANES];
+            for l in 0..LANES {
+                let i = start + l;
+                if i >= n {
+                    continue;
+                }
+                let s = screen[i];
+                let f = [-f64::from(s.x) * self.k, -f64::from(s.y) * self.k];
+                let r = f[0].hypot(f[1]);
+                let (c, sn) = if r > 0.0 { (f[0] / r, f[1] / r) } else { (1.0, 0.0) };
+                let a = [f64::from(aperture[i].x), f64::from(aperture[i].y)];
+                let local = [c * a[0] + sn * a[1], -sn * a[0] + c * a[1]];
+                if local == [0.0, 0.0] {
+                    (rays[i], tint[i]) = self.sample(s, aperture[i], lens[i]);
+                    continue;
+                }
+                let rgb = if self.dispersive {
+                    let u = spectrum::hash_unit(s.x, s.y, lens[i].x, lens[i].y);
+                    eta[l] = &self.eta_table[((u * INDEX_STEPS as f64).round() as usize).min(INDEX_STEPS)];
+                    spectrum::weight(u)
+                } else {
+                    [1.0; 3]
+                };
+                todo[l] = true;
+                let Some(aimed) = self.table.lookup(r, local) else {
+                    setup[l] = (r, c, sn, 0.0, rgb);
+                    continue;
+                };
+                let t = aimed.t;
+                let t2 = t[0] * t[0] + t[1] * t[1];
+                let ray = film_ray(r, t);
+                lanes.ox[l] = r as f32;
+                lanes.dx[l] = ray.d[0] as f32;
+                lanes.dy[l] = ray.d[1] as f32;
+                lanes.dz[l] = ray.d[2] as f32;
+                lanes.alive[l] = 1.0;
+                setup[l] = (
+                    r,
+                    c,
+                    sn,
+                    aimed.jacobian / ((1.0 + t2) * (1.0 + t2)) / self.norm,
+                    rgb,
+                );
+            }
+            batch::trace(lane_lens, &mut lanes, &eta);
+            for l in 0..LANES {
+                if !todo[l] {
+                    continue;
+                }
+                let i = start + l;
+                let (r, c, sn, w, rgb) = setup[l];
+                let rotate = |o: [f64; 3], d: [f64; 3]| Ray {
+                    o: [c * o[0] - sn * o[1], sn * o[0] + c * o[1], o[2]],
+                    d: [c * d[0] - sn * d[1], sn * d[0] + c * d[1], d[2]],
+                };
+                let spread = self.spread(r);
+                let out = rotate(
+                    [
+                        f64::from(lanes.ox[l]),
+                        f64::from(lanes.oy[l]),
+                        f64::from(lanes.oz[l]),
+                    ],
+                    [
+                        f64::from(lanes.dx[l]),
+                        f64::from(lanes.dy[l]),
+                        f64::from(lanes.dz[l]),
+                    ],
+                );
+                if lanes.alive[l] != 0.0
+                    && let Some(ray) = self.camera_ray(&out, spread)
+                {
+                    let w = w as f32;
+                    rays[i] = ray;
+                    tint[i] = Rgb::new(w * rgb[0], w * rgb[1], w * rgb[2]);
+                    continue;
+                }
+                rays[i] = match self.chief_interpolated(r).and_then(|ch| {
+                    let ch = rotate(ch.o, ch.d);
+                    self.camera_ray(&ch, spread)
+                }) {
+                    Some(ray) => ray,
+                    None => RayGeometry::CULLED,
+                };
+                tint[i] = Rgb::new(0.0, 0.0, 0.0);
+            }
+            start += LANES;
+        }
+    }
+
     fn film_to_screen(&self, r: f64, p: [f64; 3]) -> Option<Point2> {
         let rho = p[0].hypot(p[1]);
         let (c, s) = if rho > 0.0 {

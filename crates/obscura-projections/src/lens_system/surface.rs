@@ -138,9 +138,8 @@ pub fn intersect_sphere(surface: &Surface, zv: f64, ray: &Ray) -> Option<([f64; 
             if on_cap(t2) { t2 } else { return None }
         };
         let p = [p0[0] + t * d[0], p0[1] + t * d[1], p0[2] + t * d[2]];
-        let n = [c * p[0], c * p[1], 1.0 + c * p[2]];
-        let inv = 1.0 / dot(n, n).sqrt();
-        Some(([p[0], p[1], p[2] + zv], [n[0] * inv, n[1] * inv, n[2] * inv]))
+        // c·p + ẑ = c·(p − centre): unit length on the sphere (|p − centre| = |R|), no square root.
+        Some(([p[0], p[1], p[2] + zv], [c * p[0], c * p[1], 1.0 + c * p[2]]))
     }
 }
 
