@@ -326,6 +326,7 @@ impl Drawing {
     }
 
     /// An RGB raster 900 pixels wide: each segment drawn as a disk-brushed line, 3×3 supersampled.
+    #[allow(clippy::needless_range_loop)] // the channel indexes nine samples of the block
     fn raster(&self) -> (u32, u32, Vec<u8>) {
         let ss = 3.0;
         let (s, h) = self.scale(900.0 * ss);

@@ -436,7 +436,7 @@ fn main() -> ExitCode {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
-        Command::Lens(a) => lens::run(&a),
+        Command::Lens(a) => lens::run(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

@@ -82,6 +82,7 @@ pub struct Lanes {
 /// Traces the lanes from the film through every surface; `eta[l]` holds lane `l`'s `η` per surface
 /// (rear to front).
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // one index over several lane arrays: the vectorised form
 pub fn trace(lens: &LaneLens, lanes: &mut Lanes, eta: &[&[f32]; LANES]) {
     for (k, s) in lens.surfaces.iter().enumerate() {
         let mut e = [0.0f32; LANES];

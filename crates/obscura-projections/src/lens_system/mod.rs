@@ -298,7 +298,7 @@ impl LensSystem {
             .map(|(b, a)| batch::LaneLens::etas(b, a))
             .collect();
         camera.norm = camera.centre_weight();
-        if !(camera.norm > 0.0) {
+        if camera.norm.is_nan() || camera.norm <= 0.0 {
             return Err(format!(
                 "{}: no light reaches the film centre through this lens",
                 prescription.name
@@ -347,23 +347,11 @@ impl LensSystem {
     /// The mean of the unnormalised weight over the unit disk at the film centre (128² midpoints).
     fn centre_weight(&self) -> f64 {
         let n = 128;
-        let (mut sum, mut count) = (0.0, 0usize);
-        for i in 0..n {
-            for j in 0..n {
-                let a = [
-                    -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
-                    -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
-                ];
-                if a[0] * a[0] + a[1] * a[1] > 1.0 {
-                    continue;
-                }
-                count += 1;
-                if let Some((_, w)) = self.trace_sample(0.0, a, None) {
-                    sum += w;
-                }
-            }
-        }
-        sum / count as f64
+        disk_grid(n)
+            .filter_map(|a| self.trace_sample(0.0, a, None))
+            .map(|(_, w)| w)
+            .sum::<f64>()
+            / disk_grid(n).count() as f64
     }
 
     /// Traces the sample at film radius `r` (film point on +x) through aperture point `a` (same frame):
@@ -410,7 +398,7 @@ impl LensSystem {
         let x = r / self.table.dr;
         let j = (x as usize).min(self.table.radii - 2);
         let (a, b) = (&self.chief[j], &self.chief[j + 1]);
-        (a.ray.is_some() && b.ray.is_some()).then(|| a.theta + (b.theta - a.theta) * (x - j as f64))
+        (a.ray.is_some() && b.ray.is_some()).then_some(a.theta + (b.theta - a.theta) * (x - j as f64))
     }
 
     /// The camera ray of a lens-frame ray leaving the front element.
@@ -512,44 +500,31 @@ impl LensSystem {
     /// disk: the relative illumination the renderer's image shows there.
     #[must_use]
     pub fn relative_illumination(&self, r: f64, n: usize) -> f64 {
-        let (mut sum, mut count) = (0.0, 0usize);
-        for i in 0..n {
-            for j in 0..n {
-                let a = [
-                    -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
-                    -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
-                ];
-                if a[0] * a[0] + a[1] * a[1] > 1.0 {
-                    continue;
-                }
-                count += 1;
-                if let Some((_, w)) = self.trace_sample(r, a, None) {
-                    sum += w;
-                }
-            }
-        }
-        sum / count as f64 / self.norm
+        disk_grid(n)
+            .filter_map(|a| self.trace_sample(r, a, None))
+            .map(|(_, w)| w)
+            .sum::<f64>()
+            / disk_grid(n).count() as f64
+            / self.norm
     }
 
     /// The fraction of aperture samples (unit disk, `n × n` grid) the glass blocks at film radius `r`.
     #[must_use]
     pub fn blocked_fraction(&self, r: f64, n: usize) -> f64 {
-        let (mut blocked, mut count) = (0usize, 0usize);
-        for i in 0..n {
-            for j in 0..n {
-                let a = [
-                    -1.0 + 2.0 * (i as f64 + 0.5) / n as f64,
-                    -1.0 + 2.0 * (j as f64 + 0.5) / n as f64,
-                ];
-                if a[0] * a[0] + a[1] * a[1] > 1.0 {
-                    continue;
-                }
-                count += 1;
-                blocked += usize::from(self.trace_sample(r, a, None).is_none());
-            }
-        }
-        blocked as f64 / count as f64
+        let blocked = disk_grid(n)
+            .filter(|&a| self.trace_sample(r, a, None).is_none())
+            .count();
+        blocked as f64 / disk_grid(n).count() as f64
     }
+}
+
+/// The midpoints of an `n × n` grid over `[−1, 1]²` that lie in the unit disk: aperture samples for
+/// the deterministic integrals (normalisation, relative illumination).
+fn disk_grid(n: usize) -> impl Iterator<Item = [f64; 2]> {
+    let at = move |i: usize| -1.0 + 2.0 * (i as f64 + 0.5) / n as f64;
+    (0..n * n)
+        .map(move |k| [at(k / n), at(k % n)])
+        .filter(|a| a[0] * a[0] + a[1] * a[1] <= 1.0)
 }
 
 fn chief_table(lens: &Lens, table: &PupilTable) -> Vec<Chief> {

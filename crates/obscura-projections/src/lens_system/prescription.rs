@@ -366,7 +366,7 @@ fn finish(
     let last = surfaces.len() - 1;
     for (i, s) in surfaces.iter().enumerate() {
         let at = &lines[i];
-        if !(s.semi_aperture > 0.0) {
+        if s.semi_aperture.is_nan() || s.semi_aperture <= 0.0 {
             return Err(format!(
                 "{at}: aperture diameter {}: expected a positive number (mm)",
                 2.0 * s.semi_aperture

@@ -121,6 +121,7 @@ pub fn aim(lens: &Lens, r: f64, q: [f64; 2], guess: [f64; 2]) -> Option<[f64; 2]
 impl PupilTable {
     /// Aims every node for `radii` film radii up to `r_max` mm at a stop of radius `stop_radius`.
     #[must_use]
+    #[allow(clippy::needless_range_loop)] // rows, slopes and validity share the radius index
     pub fn build(lens: &Lens, stop_radius: f64, r_max: f64, radii: usize) -> PupilTable {
         let dr = r_max / (radii - 1) as f64;
         let n = lens.surfaces.len();
@@ -195,7 +196,7 @@ impl PupilTable {
     #[must_use]
     pub fn lookup(&self, r: f64, a: [f64; 2]) -> Option<Aimed> {
         let x = r / self.dr;
-        if !(x <= (self.radii - 1) as f64) {
+        if x.is_nan() || x > (self.radii - 1) as f64 {
             return None;
         }
         let j = (x as usize).min(self.radii - 2);

@@ -12,6 +12,15 @@ fn tinted(p: &dyn Projection, s: &[Point2], a: &[Point2], t: &[f32]) -> (Vec<Ray
     (rays, tints)
 }
 
+/// A ray from the film centre at `slope` to the axis, in the x–z plane.
+fn near_axial(slope: f64) -> Ray {
+    let l = (1.0 + slope * slope).sqrt();
+    Ray {
+        o: [0.0; 3],
+        d: [slope / l, 0.0, 1.0 / l],
+    }
+}
+
 fn lens(name: &str) -> Prescription {
     Prescription::load(name).unwrap()
 }
@@ -83,16 +92,7 @@ fn traced_rays_find_the_paraxial_focus_and_focal_length() {
         let par = l.paraxial(LAMBDA_D, 1.0);
         assert!((l.back() - par.bfl).abs() < 1e-12);
         let slope: f64 = 1e-5;
-        let out = l
-            .trace(Ray {
-                o: [0.0; 3],
-                d: [
-                    slope / (1.0 + slope * slope).sqrt(),
-                    0.0,
-                    1.0 / (1.0 + slope * slope).sqrt(),
-                ],
-            })
-            .unwrap();
+        let out = l.trace(near_axial(slope)).unwrap();
         assert!(out.d[0].abs() < 1e-9, "{name}: leaves at slope {}", out.d[0]);
         let efl = out.o[0] / slope;
         assert!(
@@ -111,16 +111,7 @@ fn focusing_puts_the_focus_plane_on_the_film() {
         l.focus(dist).unwrap();
         // A near-axial ray from the film centre crosses the axis again at the focus plane.
         let slope: f64 = 1e-5;
-        let out = l
-            .trace(Ray {
-                o: [0.0; 3],
-                d: [
-                    slope / (1.0 + slope * slope).sqrt(),
-                    0.0,
-                    1.0 / (1.0 + slope * slope).sqrt(),
-                ],
-            })
-            .unwrap();
+        let out = l.trace(near_axial(slope)).unwrap();
         let t = -out.o[0] / out.d[0];
         let z = out.o[2] + t * out.d[2];
         assert!((z - dist).abs() < 1e-3 * dist, "{dist}: crosses at {z}");
@@ -247,13 +238,8 @@ fn dispersion_separates_f_and_c_focal_lengths_by_the_abbe_number() {
         lf.place(b);
         let (before, after) = lf.indices(lambda);
         let slope: f64 = 1e-5;
-        let d = [
-            slope / (1.0 + slope * slope).sqrt(),
-            0.0,
-            1.0 / (1.0 + slope * slope).sqrt(),
-        ];
         let out = lf
-            .trace_range(Ray { o: [0.0; 3], d }, 0, 2, (&before, &after), true)
+            .trace_range(near_axial(slope), 0, 2, (&before, &after), true)
             .unwrap();
         assert!(out.d[0].abs() < 1e-9);
         assert!((out.o[0] / slope - efl).abs() < 1e-3 * efl);
@@ -280,20 +266,14 @@ fn the_hyperbolic_singlet_focuses_every_height_on_the_paraxial_focus() {
     let mut l = Lens::new(&p, 0.0);
     l.focus(f64::INFINITY).unwrap();
     for slope in [0.01, 0.05, 0.1, 0.15] {
-        let d = [
-            slope / (1.0f64 + slope * slope).sqrt(),
-            0.0,
-            1.0 / (1.0f64 + slope * slope).sqrt(),
-        ];
-        let out = l.trace(Ray { o: [0.0; 3], d }).unwrap();
+        let out = l.trace(near_axial(slope)).unwrap();
         assert!(out.d[0].abs() < 1e-12, "slope {slope}: leaves at {}", out.d[0]);
     }
     // A sphere of the same radius does not: its marginal ray leaves far from parallel.
     let sphere = text.replace(&format!("\"conic\": {}, ", -n * n), "");
     let mut ls = Lens::new(&Prescription::parse("sphere.json", &sphere).unwrap(), 0.0);
     ls.focus(f64::INFINITY).unwrap();
-    let d = [0.15 / 1.0225f64.sqrt(), 0.0, 1.0 / 1.0225f64.sqrt()];
-    assert!(ls.trace(Ray { o: [0.0; 3], d }).unwrap().d[0].abs() > 1e-3);
+    assert!(ls.trace(near_axial(0.15)).unwrap().d[0].abs() > 1e-3);
     // The shipped asphere is this design in N-BK7.
     let shipped = lens("asphere.50mm");
     assert!((shipped.surfaces[2].conic + n * n).abs() < 1e-4);
@@ -545,11 +525,24 @@ fn every_shipped_lens_keeps_the_contract() {
 #[test]
 fn the_eight_lane_tracer_is_the_scalar_tracer_and_ignores_the_batch_position() {
     let env = ProjectionEnvironment::for_format(Format::new(96, 64));
-    let cam = LensSystem::new(&lens("dgauss.50mm"), Settings { focus_distance: 3.0, ..Settings::default() }, &env).unwrap();
+    let cam = LensSystem::new(
+        &lens("dgauss.50mm"),
+        Settings {
+            focus_distance: 3.0,
+            ..Settings::default()
+        },
+        &env,
+    )
+    .unwrap();
     assert!(cam.lane_lens.is_some());
     let n = 2003;
     let screen: Vec<Point2> = (0..n)
-        .map(|i| Point2::new(((i * 37) % 97) as f32 / 97.0 * 3.0 - 1.5, ((i * 53) % 89) as f32 / 89.0 * 2.0 - 1.0))
+        .map(|i| {
+            Point2::new(
+                ((i * 37) % 97) as f32 / 97.0 * 3.0 - 1.5,
+                ((i * 53) % 89) as f32 / 89.0 * 2.0 - 1.0,
+            )
+        })
         .collect();
     let aperture: Vec<Point2> = (0..n)
         .map(|i| {
@@ -567,11 +560,22 @@ fn the_eight_lane_tracer_is_the_scalar_tracer_and_ignores_the_batch_position() {
             disagree += 1; // a ray grazing an aperture's edge, f32 against f64
             continue;
         }
-        assert!((ray.direction - rays[i].direction).length() < 2e-5, "{i}: {ray:?} vs {:?}", rays[i]);
+        assert!(
+            (ray.direction - rays[i].direction).length() < 2e-5,
+            "{i}: {ray:?} vs {:?}",
+            rays[i]
+        );
         assert!((ray.origin - rays[i].origin).length() < 1e-5);
-        assert!((tint.g - tints[i].g).abs() <= 1e-5 * tint.g.abs().max(1.0), "{tint:?} vs {:?}", tints[i]);
+        assert!(
+            (tint.g - tints[i].g).abs() <= 1e-5 * tint.g.abs().max(1.0),
+            "{tint:?} vs {:?}",
+            tints[i]
+        );
     }
-    assert!(disagree * 200 < n, "{disagree} of {n} samples blocked by one tracer only");
+    assert!(
+        disagree * 200 < n,
+        "{disagree} of {n} samples blocked by one tracer only"
+    );
     // Shifted by three places in the batch, every ray is the same to the bit.
     let (shifted, _, shifted_tints) = project_batch(&cam, &screen[3..], &aperture[3..], &times[3..]);
     for i in 3..n {
