@@ -583,3 +583,36 @@ fn the_eight_lane_tracer_is_the_scalar_tracer_and_ignores_the_batch_position() {
         assert_eq!(shifted_tints[i - 3], tints[i]);
     }
 }
+
+#[test]
+fn each_aperture_sample_crosses_the_stop_at_its_own_place_so_blades_shape_the_stop() {
+    // The host's warped aperture sample a (a polygon for blades) is the stop point a·R_stop: the traced
+    // ray crosses the stop plane there, to the aiming table's interpolation error.
+    let cam = system(Settings::default(), "dgauss.50mm");
+    let l = cam.lens();
+    let n = l.surfaces.len();
+    let radius = cam.stop_radius();
+    let (mut worst, mut checked): (f64, usize) = (0.0, 0);
+    for r in [0.0, 4.1, 9.7, 15.2] {
+        for k in 0..60 {
+            let (rho, phi) = ((f64::from(k) + 0.5) / 60.0, f64::from(k) * 2.399_963);
+            let a = [rho.sqrt() * phi.cos(), rho.sqrt() * phi.sin()];
+            let ray = cam.film_side_ray(r, a).unwrap();
+            // Only the samples the glass lets through make the picture.
+            if l.trace(ray).is_err() {
+                continue;
+            }
+            let at = l
+                .trace_range(ray, l.stop, n - 1, (&l.n_before, &l.n_after), false)
+                .unwrap();
+            checked += 1;
+            let e = (at.o[0] - a[0] * radius).hypot(at.o[1] - a[1] * radius);
+            worst = worst.max(e);
+        }
+    }
+    assert!(checked > 150, "{checked}");
+    assert!(
+        worst < 0.005 * radius,
+        "off by {worst} mm on a stop of radius {radius} mm"
+    );
+}
