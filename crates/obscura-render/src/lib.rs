@@ -15,6 +15,7 @@
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
+//! | [`sequence`] | frame selections (`--frames 1-24`) and each frame's output path |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -33,4 +34,5 @@ pub mod ray;
 pub mod raymap;
 pub mod render;
 pub mod rng;
+pub mod sequence;
 pub mod stmap;
