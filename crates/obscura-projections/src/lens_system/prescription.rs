@@ -7,8 +7,8 @@
 //! the interface (0 or 1 = air), clear aperture *diameter* (mm). A row with radius 0 **and** index 0
 //! is the aperture stop; radius 0 with an index ≥ 1 is a flat glass surface. `#` starts a comment.
 //!
-//! **JSON** (`.json`): an object with optional `"name"` and `"source"` strings and a `"surfaces"`
-//! array, front to rear; each surface is an object with
+//! **JSON** (`.json`): an object with optional `"name"`, `"source"` and `"notes"` strings and a
+//! `"surfaces"` array, front to rear; each surface is an object with
 //!
 //! | key | meaning | default |
 //! |---|---|---|
@@ -19,6 +19,9 @@
 //! | `conic` | conic constant k | 0 |
 //! | `asphere` | even terms `[A4, A6, …, A16]` (up to seven) | none |
 //! | `stop` | `true` for the aperture stop (flat, in air) | false |
+//! | `note` | free text | none |
+//!
+//! Unknown keys are errors (a misspelt `"conic"` must not silently make a sphere).
 
 use std::path::Path;
 

@@ -134,9 +134,10 @@ impl Lens {
         self.surfaces.iter().map(|s| s.glass)
     }
 
-    /// Traces `ray` (lens frame, mm, starting on the film side of surface `to`… the rear) from the film
-    /// through surfaces `last` down to `first` (inclusive, `first ≤ last`), with the media's indices
-    /// `before`/`after`; `clip` checks the clear apertures. Returns the ray leaving surface `first`.
+    /// Traces `ray` (lens frame, mm, on the film side of surface `last`) toward the scene through
+    /// surfaces `last` down to `first` (inclusive, `first ≤ last`), with the media's indices
+    /// `before`/`after` (scene and film side of each surface); `clip` checks the clear apertures.
+    /// Returns the ray leaving surface `first`.
     ///
     /// # Errors
     /// Where the ray is blocked.
