@@ -28,6 +28,7 @@ use obscura_sdk::{Format, ParamList, ScreenWindow};
 mod animation;
 mod args;
 mod check;
+mod lens;
 mod params;
 mod stmap;
 
@@ -71,6 +72,9 @@ enum Command {
     /// Check a projection against the contract (directions, times, spread, field of view, deep metric,
     /// dicing hint, unproject, determinism, thread safety, property types); exit 0 when clean, 1 when a check failed, 2 when it could not run.
     Check(Box<check::CheckArgs>),
+    /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
+    /// drawing with traced ray fans (--diagram out.svg|png).
+    Lens(Box<lens::LensArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -536,6 +540,7 @@ fn main() -> ExitCode {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
+        Command::Lens(a) => lens::run(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),
