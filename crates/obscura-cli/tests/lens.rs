@@ -34,6 +34,18 @@ fn lens_json_holds_the_paraxial_figures_under_their_keys() {
 }
 
 #[test]
+fn the_shipped_patent_asphere_has_its_sources_figures() {
+    // US 2007/0236805 A1, Example 4: f = 99.80 mm, back focus 40.123 mm, angle of view 17.81° over a
+    // 31.14 mm image diagonal (the traced chief ray's, with the lens's own −0.3 % distortion).
+    let v = json(&["lens", "masterprime.100mm", "--json", "--film-diagonal", "31.14"]);
+    let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"));
+    assert!((f("efl_mm") - 99.80).abs() < 0.01, "{v}");
+    assert!((f("bfl_mm") - 40.123).abs() < 0.005, "{v}");
+    assert!((f("fov_deg") - 17.81).abs() < 0.05, "{v}");
+    assert!((f("f_number") - 1.24).abs() < 0.025, "{v}");
+}
+
+#[test]
 fn lens_draws_svg_and_png_and_refuses_other_extensions() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["d.svg", "d.png"] {
@@ -65,7 +77,7 @@ fn lens_draws_svg_and_png_and_refuses_other_extensions() {
 
 #[test]
 fn check_lens_system_is_clean() {
-    for lens in ["dgauss.50mm", "fisheye.10mm"] {
+    for lens in ["dgauss.50mm", "fisheye.10mm", "masterprime.100mm"] {
         let param = format!("lens={lens}");
         let run = obscura(&["check", "LensSystem", "--param", &param, "--format", "48x32"]);
         let out = text(&run.stdout);

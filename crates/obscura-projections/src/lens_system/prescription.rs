@@ -73,6 +73,10 @@ pub const SHIPPED: &[(&str, &str)] = &[
         "asphere.50mm",
         include_str!("../../../../data/lenses/asphere.50mm.json"),
     ),
+    (
+        "masterprime.100mm",
+        include_str!("../../../../data/lenses/masterprime.100mm.json"),
+    ),
 ];
 
 impl Prescription {

@@ -51,6 +51,7 @@ fn paraxial_efl_and_bfl_equal_an_independent_y_u_trace() {
         "telephoto.250mm.dat",
         "wide.100mm.dat",
         "fisheye.10mm",
+        "masterprime.100mm",
     ] {
         let p = lens(name);
         let l = Lens::new(&p, 0.0);
@@ -82,10 +83,35 @@ fn the_double_gauss_and_the_telephoto_have_their_nominal_focal_lengths() {
 }
 
 #[test]
+fn the_patent_asphere_has_the_focal_length_back_focus_and_f_number_its_source_states() {
+    // US 2007/0236805 A1, Example 4, as shipped in masterprime.100mm.json: the source states
+    // f = 99.80 mm, back focus 40.123 mm and F-number 1.24 (the transcribed stop diameter 41.035 mm
+    // gives 1.259: within 2 %). A transcription slip in any radius, spacing or index moves the EFL
+    // or the back focus by more than the source's rounding.
+    let p = lens("masterprime.100mm");
+    assert!(
+        p.surfaces.iter().filter(|s| !s.is_spherical()).count() == 1,
+        "one even asphere"
+    );
+    let stop = 2.0 * p.surfaces[p.stop].semi_aperture;
+    let par = Lens::new(&p, 0.0).paraxial(LAMBDA_D, stop);
+    assert!((par.efl - 99.80).abs() < 0.01, "EFL {}", par.efl);
+    assert!((par.bfl - 40.123).abs() < 0.005, "BFL {}", par.bfl);
+    assert!((par.f_number - 1.24).abs() < 0.02 * 1.24, "F {}", par.f_number);
+    let (efl, bfl) = y_u_trace(&p, LAMBDA_D);
+    assert!((efl - 99.80).abs() < 0.01 && (bfl - 40.123).abs() < 0.005);
+}
+
+#[test]
 fn traced_rays_find_the_paraxial_focus_and_focal_length() {
     // Focused at infinity, a near-axial ray from the film centre leaves the lens parallel to the axis
     // at height EFL·slope (reversed: a parallel ray focuses at the film).
-    for name in ["dgauss.50mm", "telephoto.250mm.dat", "wide.100mm.dat"] {
+    for name in [
+        "dgauss.50mm",
+        "telephoto.250mm.dat",
+        "wide.100mm.dat",
+        "masterprime.100mm",
+    ] {
         let p = lens(name);
         let mut l = Lens::new(&p, 0.0);
         l.focus(f64::INFINITY).unwrap();
@@ -509,6 +535,7 @@ fn every_shipped_lens_keeps_the_contract() {
         "telephoto.250mm.dat",
         "wide.100mm.dat",
         "asphere.50mm",
+        "masterprime.100mm",
     ] {
         keeps_contract(
             &LensSystemFactory,
