@@ -39,11 +39,12 @@ pub enum LoadError {
     #[error(transparent)]
     Obj(#[from] obj::ObjError),
     /// The extension names no format we read.
-    #[error("{0}: unknown scene format; expected .rib, .gltf, .glb or .obj")]
+    #[error("{0}: unknown scene format; expected .rib (.ribz, .rib.gz), .gltf, .glb or .obj")]
     Format(String),
 }
 
-/// Reads a scene by its extension: `.rib` (camera and all from the file), `.gltf`/`.glb`/`.obj`
+/// Reads a scene by its extension: `.rib`, `.ribz` or `.rib.gz` (camera and all from the file; ASCII
+/// or binary, gzip-compressed or not, whatever the extension says), `.gltf`/`.glb`/`.obj`
 /// (geometry, materials, lights and the file's camera; format and the rest from `camera`).
 ///
 /// # Errors
@@ -53,8 +54,13 @@ pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    let gzipped_rib = ext == "gz"
+        && path
+            .file_stem()
+            .is_some_and(|s| s.to_string_lossy().to_ascii_lowercase().ends_with(".rib"));
     match ext.as_str() {
-        "rib" => Ok(rib::parse_file(path)?),
+        "rib" | "ribz" => Ok(rib::parse_file(path)?),
+        "gz" if gzipped_rib => Ok(rib::parse_file(path)?),
         "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),
         "obj" => Ok(obj::load_obj(path, camera)?),
         _ => Err(LoadError::Format(path.display().to_string())),

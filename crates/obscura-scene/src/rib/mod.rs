@@ -47,6 +47,7 @@
 //! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
 //! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
+mod binary;
 mod geometry;
 mod lex;
 mod options;
@@ -69,41 +70,108 @@ use lex::{Value, lex};
 use request::{Req, normalize_declaration};
 use transform::{Block, BlockKind, Ctm, MotionBlock, transform_op};
 
-/// A RIB file could not be read: names the file, the line and what was expected.
+/// A RIB file could not be read: names the file, the line (or, in binary RIB, the request's index and
+/// byte offset) and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}:{line}: {message}")]
+#[error("{}: {message}", self.location())]
 pub struct RibError {
     /// The file: the name given to [`parse_str`], the path given to [`parse_file`], or an archive's path.
     pub file: String,
-    /// The line (from 1) of the request at fault; 0 when the file itself could not be read.
+    /// The line (from 1) of the request at fault; 0 when the file as a whole is at fault.
     pub line: u32,
+    /// In binary RIB: the index (from 0) of the request at fault among the file's requests.
+    pub request: Option<u32>,
+    /// In binary RIB: the byte offset of the request (or of the token) at fault.
+    pub byte: Option<u64>,
     /// What was expected and what was found.
     pub message: String,
 }
 
-/// Reads a RIB file; relative paths in it resolve against its directory.
+impl RibError {
+    /// An error about the file as a whole (`line` 0).
+    fn whole_file(file: &str, message: impl Into<String>) -> Self {
+        RibError {
+            file: file.to_string(),
+            line: 0,
+            request: None,
+            byte: None,
+            message: message.into(),
+        }
+    }
+
+    /// `file:line`, `file: request N at byte B` (binary RIB), or `file` alone.
+    fn location(&self) -> String {
+        match (self.request, self.byte) {
+            (Some(i), Some(b)) => format!("{}: request {i} at byte {b}", self.file),
+            (None, Some(b)) => format!("{}: byte {b}", self.file),
+            _ if self.line == 0 => self.file.clone(),
+            _ => format!("{}:{}", self.file, self.line),
+        }
+    }
+}
+
+/// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name).
+fn read_rib_bytes(path: &Path) -> Result<Vec<u8>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        let mut out = Vec::new();
+        std::io::Read::read_to_end(&mut flate2::read::MultiGzDecoder::new(&bytes[..]), &mut out)
+            .map_err(|e| format!("the file is gzip-compressed but cannot be decompressed: {e}"))?;
+        return Ok(out);
+    }
+    Ok(bytes)
+}
+
+/// Reads a RIB file (ASCII or binary, gzip-compressed or not); relative paths in it resolve against
+/// its directory.
 ///
 /// # Errors
-/// A [`RibError`] when the file cannot be read or holds a malformed or misplaced request.
+/// A [`RibError`] when the file cannot be read, is empty, holds a malformed or misplaced request, or
+/// has no `WorldBegin` (a fragment, such as an archive of options, describes nothing to render).
 pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
     let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| RibError {
-        file: name.clone(),
-        line: 0,
-        message: format!("cannot read the file: {e}"),
-    })?;
+    let bytes = read_rib_bytes(path).map_err(|m| RibError::whole_file(&name, m))?;
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(RibError::whole_file(
+            &name,
+            format!(
+                "the file is empty ({} bytes): it holds no requests to render",
+                bytes.len()
+            ),
+        ));
+    }
     let base = path.parent().unwrap_or_else(|| Path::new(""));
-    parse_str(&text, &name, base)
+    let mut reader = Reader::new();
+    reader.run(&bytes, &name, base, 0)?;
+    if reader.world.is_none() {
+        return Err(RibError::whole_file(
+            &name,
+            "no WorldBegin: the file is a fragment (options or an archive for ReadArchive), not a scene; \
+             a scene describes its world between WorldBegin and WorldEnd",
+        ));
+    }
+    reader.finish()
 }
 
 /// Reads RIB text. `name` is used in messages; relative paths (ReadArchive, Display, lightColorMap)
-/// resolve against `base_dir`.
+/// resolve against `base_dir`. Unlike [`parse_file`], text without `WorldBegin` is read as options
+/// and an empty world.
 ///
 /// # Errors
 /// A [`RibError`] naming `name` (or an archive) and the line of the first malformed or misplaced request.
 pub fn parse_str(text: &str, name: &str, base_dir: &Path) -> Result<Scene, RibError> {
+    parse_bytes(text.as_bytes(), name, base_dir)
+}
+
+/// Reads RIB bytes: ASCII, binary, or both mixed (not gzip-compressed: [`parse_file`] decompresses).
+/// As [`parse_str`] otherwise.
+///
+/// # Errors
+/// A [`RibError`] naming `name` (or an archive) and the line, or for binary RIB the request's index and
+/// byte offset, of the first malformed or misplaced request.
+pub fn parse_bytes(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Scene, RibError> {
     let mut reader = Reader::new();
-    reader.run(text, name, base_dir, 0)?;
+    reader.run(bytes, name, base_dir, 0)?;
     reader.finish()
 }
 
@@ -233,10 +301,12 @@ impl Reader {
     }
 
     /// Reads the requests of `text` (from `file`, `depth` archives deep), resolving paths against `base`.
-    fn run(&mut self, text: &str, file: &str, base: &Path, depth: u32) -> Result<(), RibError> {
-        let commands = lex(text).map_err(|e| RibError {
+    fn run(&mut self, bytes: &[u8], file: &str, base: &Path, depth: u32) -> Result<(), RibError> {
+        let commands = lex(bytes).map_err(|e| RibError {
             file: file.to_string(),
             line: e.line,
+            request: None,
+            byte: e.byte,
             message: e.message,
         })?;
         for c in &commands {
@@ -246,6 +316,7 @@ impl Reader {
                 depth,
                 name: &c.name,
                 line: c.line,
+                binary: c.binary,
                 args: &c.args,
             };
             self.request(&r)?;
@@ -257,16 +328,17 @@ impl Reader {
     fn finish(mut self) -> Result<Scene, RibError> {
         if let Some(m) = &self.motion {
             return Err(RibError {
-                file: m.file.clone(),
                 line: m.line,
-                message: "MotionBegin has no matching MotionEnd".into(),
+                ..RibError::whole_file(&m.file, "MotionBegin has no matching MotionEnd")
             });
         }
         if let Some(b) = self.blocks.last() {
             return Err(RibError {
-                file: b.file.clone(),
                 line: b.line,
-                message: format!("{} has no matching {}", b.kind.begin(), b.kind.end()),
+                ..RibError::whole_file(
+                    &b.file,
+                    format!("{} has no matching {}", b.kind.begin(), b.kind.end()),
+                )
             });
         }
         if self.world.is_none() {
@@ -376,10 +448,10 @@ impl Reader {
             )));
         }
         let path = r.resolve(file);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| r.err(format!("ReadArchive: cannot read \"{}\": {e}", path.display())))?;
+        let bytes =
+            read_rib_bytes(&path).map_err(|e| r.err(format!("ReadArchive \"{}\": {e}", path.display())))?;
         let name = path.display().to_string();
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        self.run(&text, &name, &base, r.depth + 1)
+        self.run(&bytes, &name, &base, r.depth + 1)
     }
 }

@@ -59,7 +59,7 @@ fn missing_archive_names_the_including_file_and_line() {
     let missing = dir.path().join("nope.rib").display().to_string();
     assert!(
         e.message
-            .starts_with(&format!("ReadArchive: cannot read \"{missing}\": ")),
+            .starts_with(&format!("ReadArchive \"{missing}\": cannot read the file: ")),
         "{e}"
     );
 }
