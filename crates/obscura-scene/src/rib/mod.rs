@@ -48,6 +48,7 @@
 //! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
 mod binary;
+mod display;
 mod geometry;
 mod lex;
 mod options;
@@ -282,6 +283,8 @@ struct Reader {
     warned_attributes: HashSet<String>,
     /// Options already warned about.
     warned_options: HashSet<String>,
+    /// `file:line` of each of the scene's displays, in order.
+    display_origins: Vec<String>,
 }
 
 impl Reader {
@@ -297,6 +300,7 @@ impl Reader {
             declared: HashMap::new(),
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),
+            display_origins: Vec::new(),
         }
     }
 
