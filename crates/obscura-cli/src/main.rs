@@ -22,7 +22,8 @@ use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
-use obscura_render::sequence::{FrameSpec, frame_displays};
+use obscura_render::sequence::{FrameSpec, sequence_displays};
+use obscura_scene::rib::Frame;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 mod args;
@@ -277,15 +278,104 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
 }
 
 fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
-    let mut registry = builtin_registry();
     let (width, height) = a.format.unwrap_or(job::DEFAULT_FORMAT);
-    let (mut scene, base_dir) =
-        job::load_scene(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
+    let (frames, base_dir) =
+        job::load_frames(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
     let calibration = a
         .calibration
         .as_deref()
         .map(|path| load_calibration(path, a.camera.as_deref(), a.quiet))
         .transpose()?;
+    let jobs = frame_jobs(a.frames.as_ref(), &frames)?;
+    let lists = sequence_displays(
+        &jobs
+            .iter()
+            .map(|&(n, i)| (n, job::displays(&frames[i].scene, a.output.as_deref())))
+            .collect::<Vec<_>>(),
+    );
+    if let Some(n) = a.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n.max(1))
+            .build_global()
+            .map_err(|e| e.to_string())?;
+    }
+    let _ = ctrlc::set_handler(|| {
+        if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!(
+            "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
+        );
+    });
+    // Each image renders once; a still selected as several frames is written as each of them.
+    let mut images: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
+    images.dedup();
+    for image in images {
+        let frame = &frames[image];
+        if !a.quiet && frames.len() > 1 {
+            println!("frame {} ({})", frame.number, frame.world);
+        }
+        let (scene, out) = render_image(a, search, frame.scene.clone(), &base_dir, calibration.clone(), {
+            let k = jobs.iter().position(|&(_, i)| i == image).unwrap_or(0);
+            job::wants_deep(&lists[k])
+        })?;
+        let attributes = [("obscura:projection", scene.projection.clone())];
+        for (k, _) in jobs.iter().enumerate().filter(|(_, j)| j.1 == image) {
+            let written = job::write_displays(&lists[k], &out, scene.camera.format.pixel_aspect, &attributes)
+                .map_err(|e| e.to_string())?;
+            if !a.quiet {
+                for p in &written {
+                    println!("wrote {}", p.display());
+                }
+            }
+        }
+        let s = &out.stats;
+        if s.cancelled {
+            return Err(format!(
+                "interrupted: wrote the {} of {} tiles that were rendered",
+                s.tiles.0, s.tiles.1
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The images to render as (frame number, index into `frames`), in file order: with `--frames`, the
+/// images of the frames it selects; a still (one image the file does not number) is each selected
+/// frame; without `--frames`, every image.
+fn frame_jobs(spec: Option<&FrameSpec>, frames: &[Frame]) -> Result<Vec<(u32, usize)>, String> {
+    if let [still] = frames
+        && !still.numbered
+    {
+        return Ok(match spec {
+            Some(s) => s.frames().map(|n| (n, 0)).collect(),
+            None => vec![(still.number, 0)],
+        });
+    }
+    let numbers: Vec<u32> = frames.iter().map(|f| f.number).collect();
+    let picked = match spec {
+        Some(s) => s.select(&numbers)?,
+        None => numbers.clone(),
+    };
+    Ok(frames
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| picked.contains(&f.number))
+        .map(|(i, f)| (f.number, i))
+        .collect())
+}
+
+/// Renders one image: the scene with the command line's overrides, through its projection. Returns
+/// the scene as rendered (overrides applied) and the render.
+fn render_image(
+    a: &RenderArgs,
+    search: &PluginSearch,
+    mut scene: obscura_scene::Scene,
+    base_dir: &std::path::Path,
+    calibration: Option<Calibrated>,
+    deep: bool,
+) -> Result<(obscura_scene::Scene, obscura_render::render::RenderOutput), String> {
+    let mut registry = builtin_registry();
     let mut overrides = Overrides {
         format: a.format,
         crop: a.crop.as_deref().map(crop_window),
@@ -312,7 +402,6 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             eprintln!("warning: {w}");
         }
     }
-    let displays = job::displays(&scene, a.output.as_deref());
     let opts = RenderOptions {
         samples_per_pixel: a.spp,
         seed: a.seed,
@@ -320,28 +409,14 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             max_depth: a.max_depth,
             ..PathOptions::default()
         },
-        deep: job::wants_deep(&displays),
+        deep,
         ..RenderOptions::default()
     };
-    if let Some(n) = a.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
-            .build_global()
-            .map_err(|e| e.to_string())?;
-    }
-    let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
+    let prepared = prepare(&scene, &mut registry, base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
     for w in prepared.stage().setup_warnings() {
         eprintln!("{w}");
     }
-    let _ = ctrlc::set_handler(|| {
-        if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        eprintln!(
-            "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
-        );
-    });
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
@@ -361,18 +436,6 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     let out = prepared.render(&opts, &progress, &job::CANCEL);
     if let Some(b) = &bar {
         b.finish_and_clear();
-    }
-    let attributes = [("obscura:projection", scene.projection.clone())];
-    // A scene without frames of its own is the same at every frame: rendered once, written as each
-    // selected frame.
-    let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
-    let mut written = Vec::new();
-    for &frame in &frames {
-        let displays = frame_displays(&displays, frame, frames.len() > 1);
-        written.extend(
-            job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
-                .map_err(|e| e.to_string())?,
-        );
     }
     let s = &out.stats;
     if let Some(w) = s.contract.warning(&scene.projection) {
@@ -403,17 +466,8 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 String::new()
             }
         );
-        for p in &written {
-            println!("wrote {}", p.display());
-        }
     }
-    if s.cancelled {
-        return Err(format!(
-            "interrupted: wrote the {} of {} tiles that were rendered",
-            s.tiles.0, s.tiles.1
-        ));
-    }
-    Ok(())
+    Ok((scene, out))
 }
 
 /// `obscura plugins [NAME]`: a NAME that is not built in (or a path) is loaded as a plugin first.

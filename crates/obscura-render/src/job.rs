@@ -10,6 +10,7 @@ use std::sync::atomic::AtomicBool;
 
 use obscura_calibration::files::{Calibration, CalibrationFileError};
 use obscura_host::{CameraDesc, CropWindow};
+use obscura_scene::rib::Frame;
 use obscura_scene::{Aov, Display, DisplayDriver, LoadError, Scene};
 use obscura_sdk::{DeclarationError, Format, ParamList};
 
@@ -42,6 +43,32 @@ pub fn load_scene(path: Option<&Path>, format: Format) -> Result<(Scene, PathBuf
         ),
         Some(path) => (
             obscura_scene::load(path, CameraDesc::new(format))?,
+            path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        ),
+    })
+}
+
+/// Reads the scene at `path` (or the built-in scene) as the images it holds — a RIB file's worlds
+/// with their frames, one image otherwise — and the directory its relative paths are read from.
+///
+/// # Errors
+/// As [`load_scene`].
+pub fn load_frames(path: Option<&Path>, format: Format) -> Result<(Vec<Frame>, PathBuf), LoadError> {
+    Ok(match path {
+        None => {
+            let (scene, dir) = load_scene(None, format)?;
+            (
+                vec![Frame {
+                    number: 1,
+                    numbered: false,
+                    world: String::new(),
+                    scene,
+                }],
+                dir,
+            )
+        }
+        Some(path) => (
+            obscura_scene::load_frames(path, CameraDesc::new(format))?,
             path.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
     })

@@ -43,6 +43,32 @@ pub enum LoadError {
     Format(String),
 }
 
+/// Reads a scene file as the images it holds: a RIB file's worlds, each with its frame (see
+/// [`rib::Frame`]); a glTF or OBJ file is one image, frame 1, not numbered by the file.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_frames(path: &Path, camera: CameraDesc) -> Result<Vec<rib::Frame>, LoadError> {
+    if is_rib(path) {
+        return Ok(rib::parse_file_frames(path)?);
+    }
+    Ok(vec![rib::Frame {
+        number: 1,
+        numbered: false,
+        world: String::new(),
+        scene: load(path, camera)?,
+    }])
+}
+
+/// True when `path` names a RIB file by its extension (`.rib`, `.ribz`, `.rib.gz`).
+fn is_rib(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    [".rib", ".ribz", ".rib.gz"].iter().any(|e| name.ends_with(e))
+}
+
 /// Reads a scene by its extension: `.rib`, `.ribz` or `.rib.gz` (camera and all from the file; ASCII
 /// or binary, gzip-compressed or not, whatever the extension says), `.gltf`/`.glb`/`.obj`
 /// (geometry, materials, lights and the file's camera; format and the rest from `camera`).
@@ -54,13 +80,10 @@ pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    let gzipped_rib = ext == "gz"
-        && path
-            .file_stem()
-            .is_some_and(|s| s.to_string_lossy().to_ascii_lowercase().ends_with(".rib"));
+    if is_rib(path) {
+        return Ok(rib::parse_file(path)?);
+    }
     match ext.as_str() {
-        "rib" | "ribz" => Ok(rib::parse_file(path)?),
-        "gz" if gzipped_rib => Ok(rib::parse_file(path)?),
         "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),
         "obj" => Ok(obj::load_obj(path, camera)?),
         _ => Err(LoadError::Format(path.display().to_string())),

@@ -49,6 +49,7 @@
 
 mod binary;
 mod display;
+mod frames;
 mod geometry;
 mod lex;
 mod options;
@@ -66,7 +67,10 @@ use std::path::Path;
 use obscura_host::CameraDesc;
 use obscura_sdk::{Format, parse_declaration};
 
+pub use frames::Frame;
+
 use crate::types::Scene;
+use frames::{CameraLight, OpenFrame, Saved};
 use lex::{Value, lex};
 use request::{Req, normalize_declaration};
 use transform::{Block, BlockKind, Ctm, MotionBlock, transform_op};
@@ -123,13 +127,23 @@ fn read_rib_bytes(path: &Path) -> Result<Vec<u8>, String> {
     Ok(bytes)
 }
 
-/// Reads a RIB file (ASCII or binary, gzip-compressed or not); relative paths in it resolve against
-/// its directory.
+/// Reads a RIB file (ASCII or binary, gzip-compressed or not) as one scene: its last image (a file
+/// with shadow or bake passes ends with its beauty pass), with the warnings of every image. Relative
+/// paths in it resolve against its directory. [`parse_file_frames`] gives every image.
+///
+/// # Errors
+/// As [`parse_file_frames`].
+pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
+    Ok(last_image(parse_file_frames(path)?))
+}
+
+/// Reads a RIB file (ASCII or binary, gzip-compressed or not) as its images: one per world, in file
+/// order, each with the frame it belongs to (see [`Frame`]).
 ///
 /// # Errors
 /// A [`RibError`] when the file cannot be read, is empty, holds a malformed or misplaced request, or
 /// has no `WorldBegin` (a fragment, such as an archive of options, describes nothing to render).
-pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
+pub fn parse_file_frames(path: &Path) -> Result<Vec<Frame>, RibError> {
     let name = path.display().to_string();
     let bytes = read_rib_bytes(path).map_err(|m| RibError::whole_file(&name, m))?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
@@ -144,7 +158,7 @@ pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
     let base = path.parent().unwrap_or_else(|| Path::new(""));
     let mut reader = Reader::new();
     reader.run(&bytes, &name, base, 0)?;
-    if reader.world.is_none() {
+    if reader.world.is_none() && reader.images.is_empty() {
         return Err(RibError::whole_file(
             &name,
             "no WorldBegin: the file is a fragment (options or an archive for ReadArchive), not a scene; \
@@ -154,9 +168,22 @@ pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
     reader.finish()
 }
 
-/// Reads RIB text. `name` is used in messages; relative paths (ReadArchive, Display, lightColorMap)
-/// resolve against `base_dir`. Unlike [`parse_file`], text without `WorldBegin` is read as options
-/// and an empty world.
+/// The last image's scene, with the warnings of all.
+fn last_image(frames: Vec<Frame>) -> Scene {
+    let mut warnings = Vec::new();
+    let mut last = None;
+    for f in frames {
+        warnings.extend(f.scene.warnings.iter().cloned());
+        last = Some(f.scene);
+    }
+    let mut scene = last.unwrap_or_else(|| Scene::new(CameraDesc::new(Format::new(640, 480))));
+    scene.warnings = warnings;
+    scene
+}
+
+/// Reads RIB text as one scene (its last image, as [`parse_file`]). `name` is used in messages;
+/// relative paths (ReadArchive, Display, lightColorMap) resolve against `base_dir`. Unlike
+/// [`parse_file`], text without `WorldBegin` is read as options and an empty world.
 ///
 /// # Errors
 /// A [`RibError`] naming `name` (or an archive) and the line of the first malformed or misplaced request.
@@ -171,6 +198,15 @@ pub fn parse_str(text: &str, name: &str, base_dir: &Path) -> Result<Scene, RibEr
 /// A [`RibError`] naming `name` (or an archive) and the line, or for binary RIB the request's index and
 /// byte offset, of the first malformed or misplaced request.
 pub fn parse_bytes(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Scene, RibError> {
+    Ok(last_image(parse_bytes_frames(bytes, name, base_dir)?))
+}
+
+/// Reads RIB bytes as their images (see [`parse_file_frames`]); text without `WorldBegin` gives one
+/// image of its options.
+///
+/// # Errors
+/// As [`parse_bytes`].
+pub fn parse_bytes_frames(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Vec<Frame>, RibError> {
     let mut reader = Reader::new();
     reader.run(bytes, name, base_dir, 0)?;
     reader.finish()
@@ -213,8 +249,8 @@ const REQUESTS: [Request; 39] = {
     [
         known("version", Anywhere, Reader::ignore),
         known("Version", Anywhere, Reader::ignore),
-        known("FrameBegin", Anywhere, Reader::ignore),
-        known("FrameEnd", Anywhere, Reader::ignore),
+        known("FrameBegin", Anywhere, Reader::frame_begin),
+        known("FrameEnd", Anywhere, Reader::frame_end),
         known("WorldBegin", Anywhere, Reader::world_begin),
         known("WorldEnd", World, Reader::world_end),
         known("Declare", Anywhere, Reader::declare),
@@ -245,8 +281,8 @@ const REQUESTS: [Request; 39] = {
         }),
         known("Attribute", Anywhere, Reader::attribute),
         known("Bxdf", Anywhere, Reader::bxdf),
-        known("Light", World, Reader::light),
-        known("LightSource", World, Reader::light),
+        known("Light", Anywhere, Reader::any_light),
+        known("LightSource", Anywhere, Reader::any_light),
         known("AreaLightSource", World, Reader::light),
         known("ReadArchive", Anywhere, Reader::read_archive),
         known("Sphere", World, Reader::quadric),
@@ -285,6 +321,14 @@ struct Reader {
     warned_options: HashSet<String>,
     /// `file:line` of each of the scene's displays, in order.
     display_origins: Vec<String>,
+    /// The open `FrameBegin`.
+    frame: Option<OpenFrame>,
+    /// The options as they were at the open world's `WorldBegin`.
+    before_world: Option<Saved>,
+    /// Lights read before `WorldBegin`, placed when it comes.
+    camera_lights: Vec<CameraLight>,
+    /// The images of the worlds read so far.
+    images: Vec<Frame>,
 }
 
 impl Reader {
@@ -301,6 +345,10 @@ impl Reader {
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),
             display_origins: Vec::new(),
+            frame: None,
+            before_world: None,
+            camera_lights: Vec::new(),
+            images: Vec::new(),
         }
     }
 
@@ -328,8 +376,9 @@ impl Reader {
         Ok(())
     }
 
-    /// The scene, once every block is closed.
-    fn finish(mut self) -> Result<Scene, RibError> {
+    /// The images, once every block is closed: a world still open at the end of the file is closed
+    /// there; text without any world gives one image of its options (and an empty world).
+    fn finish(mut self) -> Result<Vec<Frame>, RibError> {
         if let Some(m) = &self.motion {
             return Err(RibError {
                 line: m.line,
@@ -345,10 +394,26 @@ impl Reader {
                 )
             });
         }
-        if self.world.is_none() {
+        self.close_world();
+        if self.images.is_empty() {
             self.store_camera_transform();
+            self.images.push(Frame {
+                number: 1,
+                numbered: false,
+                world: String::new(),
+                scene: self.scene,
+            });
         }
-        Ok(self.scene)
+        Ok(self.images)
+    }
+
+    /// `LightSource`/`Light`: in the world, a light; before `WorldBegin`, a light fixed to the camera.
+    fn any_light(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        if self.world.is_some() {
+            self.light(r)
+        } else {
+            self.camera_light(r)
+        }
     }
 
     /// Records a warning at the request.
@@ -393,39 +458,6 @@ impl Reader {
     /// Requests that need nothing done (`version`, `FrameBegin`, `FrameEnd`).
     fn ignore(&mut self, _r: &Req<'_>) -> Result<(), RibError> {
         Ok(())
-    }
-
-    /// `WorldBegin`: the CTM so far becomes the camera transform, and the world starts at the identity.
-    fn world_begin(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        if let Some(at) = &self.world {
-            return Err(r.err(format!("WorldBegin: the world block was already begun at {at}")));
-        }
-        if let Some(b) = self.blocks.last() {
-            return Err(r.err(format!(
-                "WorldBegin inside {} (at {}:{}): close it first",
-                b.kind.begin(),
-                b.file,
-                b.line
-            )));
-        }
-        self.store_camera_transform();
-        self.ctm = Ctm::identity();
-        self.world = Some(r.at());
-        Ok(())
-    }
-
-    /// `WorldEnd`: every attribute and transform block must be closed.
-    fn world_end(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        match self.blocks.last() {
-            Some(b) => Err(r.err(format!(
-                "WorldEnd: {} at {}:{} has no matching {}",
-                b.kind.begin(),
-                b.file,
-                b.line,
-                b.kind.end()
-            ))),
-            None => Ok(()),
-        }
     }
 
     /// `Declare "name" "type"`: lets later parameter lists write `name` bare.

@@ -2,6 +2,7 @@
 
 mod archive;
 mod encoding;
+mod frames;
 mod geometry;
 mod lex;
 mod options;
