@@ -107,6 +107,10 @@ struct RenderArgs {
     /// Maximum path depth.
     #[arg(long, default_value_t = 6)]
     max_depth: u32,
+    /// The most triangles the scene may dice into; beyond it the render stops with a message naming
+    /// the primitive (about 100 bytes each with the BVH).
+    #[arg(long, default_value_t = obscura_render::dice::DEFAULT_SCENE_TRIANGLES, value_name = "N")]
+    max_triangles: u64,
     /// Seed of the sample sequences.
     #[arg(long, default_value_t = 0)]
     seed: u32,
@@ -410,6 +414,7 @@ fn render_image(
             ..PathOptions::default()
         },
         deep,
+        max_triangles: a.max_triangles,
         ..RenderOptions::default()
     };
     let prepared = prepare(&scene, &mut registry, base_dir, &opts).map_err(|e| e.to_string())?;
