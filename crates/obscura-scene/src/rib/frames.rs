@@ -44,6 +44,8 @@ pub(super) struct Saved {
     material: u32,
     micropolygon_length: f32,
     display_origins: Vec<String>,
+    frame_aspect: Option<f32>,
+    depth_of_field: Option<super::camera::DepthOfField>,
 }
 
 /// An open `FrameBegin`: its number, where it is, and the options to restore.
@@ -79,6 +81,8 @@ impl Reader {
             material: self.material,
             micropolygon_length: self.micropolygon_length,
             display_origins: self.display_origins.clone(),
+            frame_aspect: self.frame_aspect,
+            depth_of_field: self.depth_of_field,
         }
     }
 
@@ -93,6 +97,8 @@ impl Reader {
         self.material = saved.material;
         self.micropolygon_length = saved.micropolygon_length;
         self.display_origins = saved.display_origins;
+        self.frame_aspect = saved.frame_aspect;
+        self.depth_of_field = saved.depth_of_field;
     }
 
     /// `FrameBegin n`: saves the options.
@@ -158,6 +164,7 @@ impl Reader {
             )));
         }
         self.before_world = Some(self.save());
+        self.settle_camera(r)?;
         self.store_camera_transform();
         let camera_to_world = self.ctm.first().inverse();
         self.world = Some(r.at());

@@ -48,6 +48,7 @@
 //! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
 mod binary;
+mod camera;
 mod display;
 mod frames;
 mod geometry;
@@ -244,7 +245,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 39] = {
+const REQUESTS: [Request; 49] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -265,6 +266,16 @@ const REQUESTS: [Request; 39] = {
         known("Display", Options, Reader::display),
         known("Projection", Options, Reader::projection),
         known("Camera", Options, Reader::camera),
+        known("FrameAspectRatio", Options, Reader::frame_aspect_ratio),
+        known("Perspective", Anywhere, Reader::perspective),
+        known("DepthOfField", Options, Reader::depth_of_field),
+        known("Exposure", Options, Reader::exposure),
+        known("CoordinateSystem", Anywhere, Reader::coordinate_system),
+        known("CoordSysTransform", Anywhere, Reader::coord_sys_transform),
+        known("ClippingPlane", Anywhere, Reader::without_effect),
+        known("Sides", Anywhere, Reader::without_effect),
+        known("Orientation", Anywhere, Reader::without_effect),
+        known("ReverseOrientation", Anywhere, Reader::without_effect),
         known("MotionBegin", Anywhere, Reader::motion_begin),
         known("MotionEnd", Anywhere, Reader::motion_end),
         known("AttributeBegin", Anywhere, |rd, r| {
@@ -329,6 +340,12 @@ struct Reader {
     camera_lights: Vec<CameraLight>,
     /// The images of the worlds read so far.
     images: Vec<Frame>,
+    /// `FrameAspectRatio`.
+    frame_aspect: Option<f32>,
+    /// `DepthOfField`.
+    depth_of_field: Option<camera::DepthOfField>,
+    /// `CoordinateSystem`s: the CTM named, and whether it was named in the world.
+    coordinate_systems: HashMap<String, (Ctm, bool)>,
 }
 
 impl Reader {
@@ -349,6 +366,9 @@ impl Reader {
             before_world: None,
             camera_lights: Vec::new(),
             images: Vec::new(),
+            frame_aspect: None,
+            depth_of_field: None,
+            coordinate_systems: HashMap::new(),
         }
     }
 

@@ -100,22 +100,30 @@ impl Reader {
         Ok(())
     }
 
-    /// `Format width height pixelaspect`.
+    /// `Format width height pixelaspect`. As RISpec 3.2 says, a value ≤ 0 means "the default": a
+    /// width or height ≤ 0 keeps the current one, and a pixel aspect ≤ 0 (RenderMan writes −1) is 1.
     pub(super) fn format(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let [w, h, pa] = r.only_numbers::<3>("width height pixelaspect")?;
-        let size = |v: f32| (v >= 1.0 && v.fract() == 0.0 && v <= u32::MAX as f32).then_some(v as u32);
-        let (Some(width), Some(height)) = (size(w), size(h)) else {
+        let current = self.scene.camera.format;
+        let size = |v: f32, keep: u32| {
+            if v <= 0.0 {
+                Some(keep)
+            } else {
+                (v >= 1.0 && v.fract() == 0.0 && v <= u32::MAX as f32).then_some(v as u32)
+            }
+        };
+        let (Some(width), Some(height)) = (size(w, current.width), size(h, current.height)) else {
             return Err(r.err(format!(
-                "Format expects a positive integer width and height, got {w} {h}"
+                "Format expects a positive integer width and height (or ≤ 0 for the current one), got {w} {h}"
             )));
         };
-        if pa <= 0.0 {
-            return Err(r.err(format!("Format expects a positive pixel aspect ratio, got {pa}")));
+        if !pa.is_finite() {
+            return Err(r.err(format!("Format expects a finite pixel aspect ratio, got {pa}")));
         }
         self.scene.camera.format = Format {
             width,
             height,
-            pixel_aspect: pa,
+            pixel_aspect: if pa <= 0.0 { 1.0 } else { pa },
         };
         Ok(())
     }

@@ -38,7 +38,7 @@ fn format_with_wrong_arg_count_names_request_and_line() {
     );
     assert_eq!(
         fail("Format 64.5 64 1"),
-        "t.rib:1: Format expects a positive integer width and height, got 64.5 64"
+        "t.rib:1: Format expects a positive integer width and height (or ≤ 0 for the current one), got 64.5 64"
     );
 }
 
