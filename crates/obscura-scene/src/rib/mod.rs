@@ -456,13 +456,25 @@ impl Reader {
             self.warn(r, format!("unknown request {}, skipped", r.name));
             return Ok(());
         };
-        if let Some(m) = &self.motion
+        if let Some(m) = &mut self.motion
             && r.name != "MotionEnd"
         {
-            return Err(r.err(format!(
-                "{} inside MotionBegin (at {}:{}): only transform requests may move",
-                r.name, m.file, m.line
-            )));
+            // Deformation blur: the request of the first time stands, the later ones are dropped.
+            m.others += 1;
+            if m.others > 1 {
+                if m.others == 2 {
+                    let at = format!("{}:{}", m.file, m.line);
+                    self.warn(
+                        r,
+                        format!(
+                            "{} inside MotionBegin (at {at}): deformation motion blur is not supported; \
+                             the first time's {} stands, the others are dropped",
+                            r.name, r.name
+                        ),
+                    );
+                }
+                return Ok(());
+            }
         }
         match request.scope {
             Scope::Options if self.world.is_some() => {

@@ -133,12 +133,24 @@ impl Reader {
         let [Value::Str(name), rest @ ..] = r.args else {
             return Err(r.err("PixelFilter expects a filter name then xwidth ywidth"));
         };
-        let Some(&(_, kind)) = FILTERS.iter().find(|(n, _)| n == name) else {
-            let names: Vec<&str> = FILTERS.iter().map(|(n, _)| *n).collect();
-            return Err(r.err(format!(
-                "PixelFilter: unknown filter \"{name}\"; expected one of {}",
-                names.join(", ")
-            )));
+        let kind = match FILTERS.iter().find(|(n, _)| n == name) {
+            Some(&(_, kind)) => kind,
+            None => {
+                // Filters of other renderers: the nearest here, by the shape of their kernel.
+                let (stand_in, kind) = match name.as_str() {
+                    "sinc" | "lanczos" | "separable-catmull-rom" => ("catmull-rom", FilterKind::CatmullRom),
+                    _ => ("gaussian", FilterKind::Gaussian),
+                };
+                let names: Vec<&str> = FILTERS.iter().map(|(n, _)| *n).collect();
+                self.warn(
+                    r,
+                    format!(
+                        "PixelFilter \"{name}\" is not available: {stand_in} of the same width is used (available: {})",
+                        names.join(", ")
+                    ),
+                );
+                kind
+            }
         };
         let ([width_x, width_y], extra) = r.numbers::<2>(rest, "a filter name then xwidth ywidth")?;
         if !extra.is_empty() {

@@ -7,7 +7,7 @@ use obscura_sdk::{Format, ParamType, ParamValue, ScreenWindow};
 
 use super::*;
 use crate::rib::options::FILTERS;
-use crate::types::{Aov, Display, DisplayDriver, PixelFilter};
+use crate::types::{Aov, Display, DisplayDriver, FilterKind, PixelFilter};
 
 #[test]
 fn default_scene_is_640_by_480() {
@@ -122,12 +122,17 @@ fn pixel_filter_sets_kind_and_widths() {
 }
 
 #[test]
-fn unknown_pixel_filter_lists_the_six() {
+fn an_unknown_pixel_filter_is_the_nearest_one_with_a_warning_listing_the_six() {
+    let s = ok("\nPixelFilter \"sinc\" 3 3");
+    assert_eq!((s.filter.kind, s.filter.width_x), (FilterKind::CatmullRom, 3.0));
     assert_eq!(
-        fail("\nPixelFilter \"sinc\" 2 2"),
-        "t.rib:2: PixelFilter: unknown filter \"sinc\"; expected one of box, triangle, gaussian, \
-         catmull-rom, mitchell, blackman-harris"
+        s.warnings,
+        [
+            "t.rib:2: PixelFilter \"sinc\" is not available: catmull-rom of the same width is used (available: \
+          box, triangle, gaussian, catmull-rom, mitchell, blackman-harris)"
+        ]
     );
+    assert_eq!(ok("PixelFilter \"bessel\" 2 2").filter.kind, FilterKind::Gaussian);
     assert_eq!(
         fail("PixelFilter \"box\" 2"),
         "t.rib:1: PixelFilter expects a filter name then xwidth ywidth (2 numbers), got 1"
