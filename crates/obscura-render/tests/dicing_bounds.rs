@@ -89,3 +89,15 @@ fn a_scene_over_its_triangle_budget_names_the_primitive() {
         "{e}"
     );
 }
+
+#[test]
+fn a_subdivision_surface_around_the_camera_fits_its_quad_budget() {
+    // A cube of side 20 around the camera: the whole 32×24 image, so at most 16·768 quads.
+    let n = triangles(
+        "SubdivisionMesh \"catmull-clark\" [4 4 4 4 4 4] [0 1 3 2 2 3 5 4 4 5 7 6 6 7 1 0 1 7 5 3 6 0 2 4] \
+         [\"interpolateboundary\"] [0 0] [] [] \
+         \"P\" [-10 -10 10 10 -10 10 -10 10 10 10 10 10 -10 10 -10 10 10 -10 -10 -10 -10 10 -10 -10]",
+    );
+    assert!(n <= 2 * 16 * 768, "{n} triangles");
+    assert!(n >= 1000, "{n} triangles");
+}

@@ -408,6 +408,29 @@ pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
     }
 }
 
+/// The most quads a primitive with this object-space bounding sphere (centre, radius) should dice
+/// into: `F·max(P, P₀)/m²` for the pixels `P` it covers (see the module documentation), at most
+/// [`MAX_QUADS_PER_PRIMITIVE`]. Dicers whose count does not follow from one rate (a subdivision
+/// mesh's faces times `4^level`) lower their rate until they fit it.
+#[must_use]
+pub fn quad_budget(ctx: &DicingContext, centre: Vec3, radius: f32) -> u64 {
+    let m = ctx.object_to_camera;
+    let sigma = m
+        .x_axis
+        .truncate()
+        .length()
+        .max(m.y_axis.truncate().length())
+        .max(m.z_axis.truncate().length());
+    let covered =
+        screen_coverage(ctx, m.transform_point3(centre), radius.abs() * sigma).max(OFF_SCREEN_PIXELS);
+    let quads = f64::from(COVERAGE_FACTOR * covered) / micropolygon_length(ctx).powi(2);
+    if quads.is_nan() {
+        MAX_QUADS_PER_PRIMITIVE
+    } else {
+        (quads.ceil() as u64).min(MAX_QUADS_PER_PRIMITIVE)
+    }
+}
+
 /// The pixels of the image a camera-space bounding sphere (centre `c`, radius `rho`) covers, as the
 /// module documentation's table says: 0 for a sphere out of view, the whole image at most.
 #[must_use]

@@ -230,8 +230,9 @@ impl Reader {
             return Err(r.err("MotionEnd without a matching MotionBegin"));
         };
         let (n, k) = (m.times.len(), m.ops.len());
-        if k == 0 && m.others > 0 {
-            // A block of deforming geometry: its first time was read; nothing moves.
+        if k == 0 {
+            // A block of deforming geometry (its first time was read) or of requests skipped with a
+            // warning: nothing moves.
             return Ok(());
         }
         if k == 0 || k % n != 0 {
