@@ -373,15 +373,7 @@ pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceErro
 /// is measured at the [`NEAR_FRACTION`] floor (so a zero-radius one there gets the cap).
 #[must_use]
 pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
-    let m = ctx.object_to_camera;
-    let sigma = m
-        .x_axis
-        .truncate()
-        .length()
-        .max(m.y_axis.truncate().length())
-        .max(m.z_axis.truncate().length());
-    let c = m.transform_point3(centre);
-    let rho = radius.abs() * sigma;
+    let (c, rho, sigma) = camera_sphere(ctx, centre, radius);
     let near = (NEAR_FRACTION * rho).max(f32::MIN_POSITIVE);
     let s = pixels_per_screen_unit(ctx);
     let k = match ctx.hint {
@@ -408,12 +400,9 @@ pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
     }
 }
 
-/// The most quads a primitive with this object-space bounding sphere (centre, radius) should dice
-/// into: `F·max(P, P₀)/m²` for the pixels `P` it covers (see the module documentation), at most
-/// [`MAX_QUADS_PER_PRIMITIVE`]. Dicers whose count does not follow from one rate (a subdivision
-/// mesh's faces times `4^level`) lower their rate until they fit it.
-#[must_use]
-pub fn quad_budget(ctx: &DicingContext, centre: Vec3, radius: f32) -> u64 {
+/// An object-space bounding sphere in camera space: its centre `M·c₀`, its radius `σ·ρ₀`, and `σ`
+/// (the longest of `M`'s axis columns, `M` = object → camera).
+fn camera_sphere(ctx: &DicingContext, centre: Vec3, radius: f32) -> (Vec3, f32, f32) {
     let m = ctx.object_to_camera;
     let sigma = m
         .x_axis
@@ -421,8 +410,17 @@ pub fn quad_budget(ctx: &DicingContext, centre: Vec3, radius: f32) -> u64 {
         .length()
         .max(m.y_axis.truncate().length())
         .max(m.z_axis.truncate().length());
-    let covered =
-        screen_coverage(ctx, m.transform_point3(centre), radius.abs() * sigma).max(OFF_SCREEN_PIXELS);
+    (m.transform_point3(centre), radius.abs() * sigma, sigma)
+}
+
+/// The most quads a primitive with this object-space bounding sphere (centre, radius) should dice
+/// into: `F·max(P, P₀)/m²` for the pixels `P` it covers (see the module documentation), at most
+/// [`MAX_QUADS_PER_PRIMITIVE`]. Dicers whose count does not follow from one rate (a subdivision
+/// mesh's faces times `4^level`) lower their rate until they fit it.
+#[must_use]
+pub fn quad_budget(ctx: &DicingContext, centre: Vec3, radius: f32) -> u64 {
+    let (c, rho, _) = camera_sphere(ctx, centre, radius);
+    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
     let quads = f64::from(COVERAGE_FACTOR * covered) / micropolygon_length(ctx).powi(2);
     if quads.is_nan() {
         MAX_QUADS_PER_PRIMITIVE
