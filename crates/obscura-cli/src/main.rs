@@ -108,7 +108,7 @@ struct RenderArgs {
     #[arg(long, default_value_t = 6)]
     max_depth: u32,
     /// The most triangles the scene may dice into; beyond it the render stops with a message naming
-    /// the primitive (about 100 bytes each with the BVH).
+    /// the primitive (about 150 bytes each with the BVH).
     #[arg(long, default_value_t = obscura_render::dice::DEFAULT_SCENE_TRIANGLES, value_name = "N")]
     max_triangles: u64,
     /// Seed of the sample sequences.
