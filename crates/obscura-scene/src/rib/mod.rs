@@ -346,6 +346,20 @@ struct Reader {
     depth_of_field: Option<camera::DepthOfField>,
     /// `CoordinateSystem`s: the CTM named, and whether it was named in the world.
     coordinate_systems: HashMap<String, (Ctm, bool)>,
+    /// `ArchiveBegin` blocks read so far, by name.
+    inline_archives: HashMap<String, Vec<lex::Command>>,
+    /// The `ArchiveBegin` block being read.
+    recording: Option<InlineArchive>,
+}
+
+/// An `ArchiveBegin` block being read.
+struct InlineArchive {
+    name: String,
+    /// `ArchiveBegin`s nested inside it, not yet closed.
+    nesting: u32,
+    commands: Vec<lex::Command>,
+    file: String,
+    line: u32,
 }
 
 impl Reader {
@@ -369,6 +383,8 @@ impl Reader {
             frame_aspect: None,
             depth_of_field: None,
             coordinate_systems: HashMap::new(),
+            inline_archives: HashMap::new(),
+            recording: None,
         }
     }
 
@@ -381,7 +397,19 @@ impl Reader {
             byte: e.byte,
             message: e.message,
         })?;
-        for c in &commands {
+        self.run_commands(&commands, file, base, depth)
+    }
+
+    /// Handles `commands` read from `file`: an `ArchiveBegin "name"` … `ArchiveEnd` block is kept,
+    /// not run, until a `ReadArchive "name"` replays it (RISpec 3.3 inline archives).
+    fn run_commands(
+        &mut self,
+        commands: &[lex::Command],
+        file: &str,
+        base: &Path,
+        depth: u32,
+    ) -> Result<(), RibError> {
+        for c in commands {
             let r = Req {
                 file,
                 base,
@@ -391,7 +419,37 @@ impl Reader {
                 binary: c.binary,
                 args: &c.args,
             };
-            self.request(&r)?;
+            if let Some(rec) = &mut self.recording {
+                match c.name.as_str() {
+                    "ArchiveEnd" if rec.nesting == 0 => {
+                        if let Some(rec) = self.recording.take() {
+                            self.inline_archives.insert(rec.name, rec.commands);
+                        }
+                        continue;
+                    }
+                    "ArchiveBegin" => rec.nesting += 1,
+                    "ArchiveEnd" => rec.nesting -= 1,
+                    _ => {}
+                }
+                rec.commands.push(c.clone());
+                continue;
+            }
+            match c.name.as_str() {
+                "ArchiveBegin" => {
+                    let Some(Value::Str(name)) = c.args.first() else {
+                        return Err(r.err("ArchiveBegin expects an archive name (a string)"));
+                    };
+                    self.recording = Some(InlineArchive {
+                        name: name.clone(),
+                        nesting: 0,
+                        commands: Vec::new(),
+                        file: file.to_string(),
+                        line: c.line,
+                    });
+                }
+                "ArchiveEnd" => return Err(r.err("ArchiveEnd without a matching ArchiveBegin")),
+                _ => self.request(&r)?,
+            }
         }
         Ok(())
     }
@@ -399,6 +457,15 @@ impl Reader {
     /// The images, once every block is closed: a world still open at the end of the file is closed
     /// there; text without any world gives one image of its options (and an empty world).
     fn finish(mut self) -> Result<Vec<Frame>, RibError> {
+        if let Some(a) = &self.recording {
+            return Err(RibError {
+                line: a.line,
+                ..RibError::whole_file(
+                    &a.file,
+                    format!("ArchiveBegin \"{}\" has no matching ArchiveEnd", a.name),
+                )
+            });
+        }
         if let Some(m) = &self.motion {
             return Err(RibError {
                 line: m.line,
@@ -514,6 +581,9 @@ impl Reader {
             return Err(r.err(format!(
                 "ReadArchive \"{file}\": archives nested more than {MAX_ARCHIVE_DEPTH} deep (does an archive read itself?)"
             )));
+        }
+        if let Some(commands) = self.inline_archives.get(file.as_str()).cloned() {
+            return self.run_commands(&commands, r.file, r.base, r.depth + 1);
         }
         let path = r.resolve(file);
         let bytes =
