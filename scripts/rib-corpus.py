@@ -14,7 +14,7 @@ clock limit and 2 GiB of address space (prlimit --as). Every outcome is one of:
   crash      a panic, a signal, or running out of memory
   timeout    more than 60 s
 
-Needs numpy, Pillow and OpenEXR (PyPI) to look at the images. Prints one line per scene and a
+Needs numpy, opencv-python-headless and OpenEXR (PyPI) to look at the images. Prints one line per scene and a
 summary; --csv writes the table.
 """
 
@@ -51,10 +51,11 @@ def read_image(path):
                 arrays = [np.asarray(channels[n].pixels, dtype=np.float64) for n in names]
                 arrays = [a if a.ndim == 3 else a[..., None] for a in arrays]
                 return np.concatenate(arrays, axis=2)
-        from PIL import Image
+        # Any other name (a TIFF named .z, .shd, .pic, …): OpenCV reads by content, floats included.
+        import cv2
 
-        with Image.open(path) as im:
-            return np.asarray(im, dtype=np.float64)
+        img = cv2.imread(path, cv2.IMREAD_UNCHANGED)
+        return None if img is None else np.asarray(img, dtype=np.float64)
     except Exception:  # noqa: BLE001 - any unreadable image is "flat" for this count
         return None
 
@@ -91,8 +92,7 @@ def run_one(obscura, scene):
         return "crash", seconds, last or f"signal {-proc.returncode}"
     if proc.returncode != 0:
         return ("located" if LOCATED.search(last) else "error"), seconds, last
-    written = [line[len("wrote "):] for line in out.splitlines() if line.startswith("wrote ")]
-    images = [p for p in written if p.lower().endswith((".exr", ".png", ".tif", ".tiff"))]
+    images = [line[len("wrote "):] for line in out.splitlines() if line.startswith("wrote ")]
     if not images:
         return "flat", seconds, "no image written"
     flat = [p for p in images if is_flat(read_image(p if os.path.isabs(p) else os.path.join(cwd, p)))]

@@ -33,7 +33,7 @@
 //!
 //! | dicing hint | `P` |
 //! |---|---|
-//! | `Perspective` | 0 when the sphere is wholly behind the camera (`c.z + ρ ≤ 0`); the whole image when it reaches the camera plane (`c.z − ρ ≤ ε·ρ`); otherwise its screen square — centre `d·(c.x, c.y)/c.z`, half-side `d·ρ/(c.z − ρ)` — clipped to the screen window, in pixels |
+//! | `Perspective` | 0 when the sphere is wholly behind the camera (`c.z + ρ ≤ 0`) or wholly outside one of the frustum's four side planes (`x·d = r·z`, `x·d = l·z`, `y·d = t·z`, `y·d = b·z`, through the eye); the whole image when it reaches the camera plane (`c.z − ρ ≤ ε·ρ`); otherwise its screen square — centre `d·(c.x, c.y)/c.z`, half-side `d·ρ/(c.z − ρ)` — clipped to the screen window, in pixels |
 //! | `Orthographic` | 0 when wholly behind; otherwise the square `(c.x, c.y) ± ρ` clipped to the screen window |
 //! | `Spherical` | the whole image when the sphere holds the camera; otherwise the disc of angular radius `asin(ρ/‖c‖)`, at most the whole image |
 //!
@@ -453,7 +453,15 @@ pub fn screen_coverage(ctx: &DicingContext, c: Vec3, rho: f32) -> f32 {
     let pixels = match ctx.hint {
         DicingHint::Perspective => {
             let d = 1.0 / (0.5 * field_of_view_radians(ctx.field_of_view, 179.0)).tan();
-            if c.z + rho <= 0.0 {
+            // The frustum's side planes pass through the eye: x·d = r·z etc. A sphere wholly outside
+            // one of them is off screen, however near the camera it is.
+            let outside = |n: Vec3| n.dot(c) > rho * n.length();
+            if c.z + rho <= 0.0
+                || outside(Vec3::new(d, 0.0, -window.right))
+                || outside(Vec3::new(-d, 0.0, window.left))
+                || outside(Vec3::new(0.0, d, -window.top))
+                || outside(Vec3::new(0.0, -d, window.bottom))
+            {
                 0.0
             } else if c.z - rho <= NEAR_FRACTION * rho {
                 image

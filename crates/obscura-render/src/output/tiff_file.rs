@@ -3,7 +3,7 @@
 //!
 //! A TIFF holds either the colour or one float AOV:
 //! - with `Ci` among the AOVs: 8-bit RGB, or RGBA when alpha is asked for too, quantized as the RI
-//!   default `Quantize "rgba" 255 0 255` does: `code = clamp(round(255·v), 0, 255)` of the linear,
+//!   default `Quantize "rgba" 255 0 255` does (alpha declared as associated, `ExtraSamples` = 1): `code = clamp(round(255·v), 0, 255)` of the linear,
 //!   premultiplied value (no transfer curve: classic RenderMan applies `Exposure` gamma instead, and
 //!   no dither, so that a render is repeatable bit for bit);
 //! - otherwise the first of `z`, alpha, `N`, `P`, `cameraDirection` asked for, as 32-bit float
@@ -13,6 +13,7 @@
 use std::path::Path;
 
 use ::tiff::encoder::{Compression, DeflateLevel, TiffEncoder, colortype};
+use ::tiff::tags::ExtraSamples;
 use obscura_scene::Aov;
 
 use super::{OutputError, quantize, resolve};
@@ -68,7 +69,15 @@ pub fn write_tiff(path: &Path, film: &Film, aovs: &[Aov]) -> Result<(), OutputEr
             .map_err(tiff_err)?
             .with_compression(Compression::Deflate(DeflateLevel::Balanced));
         match &data {
-            Tiff::Eight { codes, alpha: true } => enc.write_image::<colortype::RGBA8>(w, h, codes),
+            Tiff::Eight { codes, alpha: true } => {
+                // RGB plus one extra sample marked as associated (premultiplied) alpha, as TIFF 6.0
+                // says an alpha channel is declared.
+                let mut image = enc.new_image::<colortype::RGB8>(w, h).map_err(tiff_err)?;
+                image
+                    .extra_samples(&[ExtraSamples::AssociatedAlpha])
+                    .map_err(tiff_err)?;
+                image.write_data(codes)
+            }
             Tiff::Eight { codes, alpha: false } => enc.write_image::<colortype::RGB8>(w, h, codes),
             Tiff::Grey(v) => enc.write_image::<colortype::Gray32Float>(w, h, v),
             Tiff::Rgb(v) => enc.write_image::<colortype::RGB32Float>(w, h, v),
@@ -156,6 +165,9 @@ mod tests {
             eprintln!("skipping the independent TIFF check: {err}");
             return None;
         }
+        // libtiff warns about a file whose tags disagree (an alpha channel not declared, …).
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!err.contains("Warning"), "libtiff: {err}");
         Some(String::from_utf8(out.stdout).unwrap().trim().to_string())
     }
 

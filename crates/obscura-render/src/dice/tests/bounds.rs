@@ -21,6 +21,9 @@ fn perspective_coverage_is_the_projected_square_of_the_bounding_sphere() {
     // Far outside the screen, wholly behind, or reaching the camera plane.
     assert_eq!(screen_coverage(&ctx, Vec3::new(100.0, 0.0, 10.0), 0.5), 0.0);
     assert_eq!(screen_coverage(&ctx, Vec3::new(0.0, 0.0, -0.3), 0.2), 0.0);
+    // Beside or below the camera, reaching its plane but outside the frustum: off screen.
+    assert_eq!(screen_coverage(&ctx, Vec3::new(0.0, -1.0, 0.05), 0.2), 0.0);
+    assert_eq!(screen_coverage(&ctx, Vec3::new(3.0, 0.0, 0.5), 0.6), 0.0);
     assert_eq!(
         screen_coverage(&ctx, Vec3::new(0.0, 0.0, 0.1), 0.2),
         640.0 * 480.0
