@@ -344,6 +344,9 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     Ok(())
 }
 
+/// The most frames a still scene is written as: each is a file.
+const MAX_STILL_FRAMES: u64 = 100_000;
+
 /// The images to render as (frame number, index into `frames`), in file order: with `--frames`, the
 /// images of the frames it selects; a still (one image the file does not number) is each selected
 /// frame; without `--frames`, every image.
@@ -351,6 +354,12 @@ fn frame_jobs(spec: Option<&FrameSpec>, frames: &[Frame]) -> Result<Vec<(u32, us
     if let [still] = frames
         && !still.numbered
     {
+        if let Some(s) = spec.filter(|s| s.len() > MAX_STILL_FRAMES) {
+            return Err(format!(
+                "--frames {s} selects {} frames of a scene without frames of its own (at most {MAX_STILL_FRAMES}: each is written as a file)",
+                s.len()
+            ));
+        }
         return Ok(match spec {
             Some(s) => s.frames().map(|n| (n, 0)).collect(),
             None => vec![(still.number, 0)],
