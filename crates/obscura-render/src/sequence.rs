@@ -236,6 +236,19 @@ pub fn frame_path(path: &Path, frame: u32, several: bool) -> PathBuf {
     path.with_file_name(numbered)
 }
 
+/// The displays frame `frame` writes: each display's path through [`frame_path`] (for a sequence
+/// of images that may share names, [`sequence_displays`]).
+#[must_use]
+pub fn frame_displays(displays: &[Display], frame: u32, several: bool) -> Vec<Display> {
+    displays
+        .iter()
+        .map(|d| Display {
+            path: frame_path(&d.path, frame, several),
+            ..d.clone()
+        })
+        .collect()
+}
+
 /// The displays each image of a sequence writes, given each image's frame number and displays in
 /// render order.
 ///
@@ -457,6 +470,11 @@ mod tests {
             (2, vec![display("x.exr")]),
         ]);
         assert_eq!(paths(&got), [["o.0001.exr"], ["o.0002.exr"], ["x.exr"]]);
+        // frame_displays numbers every name of one frame.
+        assert_eq!(
+            paths(&[frame_displays(&[display("o.exr")], 3, true)]),
+            [["o.0003.exr"]]
+        );
         // One image: names as given.
         assert_eq!(
             paths(&sequence_displays(&[(9, vec![display("o.exr")])])),
