@@ -15,9 +15,9 @@ use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::shutter::ShutterDesc;
 use obscura_host::{CameraDesc, CameraStage};
-use obscura_plugins::builtin_registry;
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all};
+use obscura_plugins::{builtin_registry, isolate};
 use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::raymap::{trace_ray_map, write_exr};
@@ -26,6 +26,7 @@ use obscura_render::sequence::{FrameSpec, sequence_displays};
 use obscura_scene::rib::Frame;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
+mod animation;
 mod args;
 mod check;
 mod params;
@@ -41,6 +42,14 @@ struct Cli {
     /// Repeatable.
     #[arg(long = "plugin-path", value_name = "DIR", global = true)]
     plugin_path: Vec<PathBuf>,
+    /// Run every plugin library in worker processes: a crash, abort or hang in a plugin costs the
+    /// batch it was projecting (counted and reported), never the run. OBSCURA_ISOLATE_PLUGINS=Name,…
+    /// isolates only the plugins named (`*`: all).
+    #[arg(long, global = true)]
+    isolate_plugins: bool,
+    /// Seconds an isolated plugin's call may take before its worker is killed and the batch lost.
+    #[arg(long, value_name = "SECONDS", global = true, default_value = "10", value_parser = args::parse_timeout)]
+    plugin_timeout: std::time::Duration,
 }
 
 #[derive(Subcommand, Debug)]
@@ -117,6 +126,14 @@ struct RenderArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     quiet: bool,
+    /// Ground-truth AOVs to add to every EXR: cameraZ, distance, Pcamera, Ncamera, objectId,
+    /// instanceId, materialId, flowForward, flowBackward, flowValid, or all of them with 'all'.
+    /// Repeatable or comma-separated. IDs and flow also write <image>.ids.json and <image>.camera.json.
+    #[arg(long = "aov", value_name = "NAME", value_delimiter = ',', value_parser = animation::parse_aovs)]
+    aovs: Vec<Vec<obscura_scene::Aov>>,
+    /// Frames per second of an animated scene (glTF): frame N is posed at (N − 1)/fps seconds.
+    #[arg(long, default_value_t = 24.0, value_parser = animation::parse_fps)]
+    fps: f32,
 }
 
 #[derive(Args, Debug)]
@@ -267,7 +284,7 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     }
     write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
     println!(
-        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} culled for breaking the contract",
+        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} lost to failed project calls, {} culled for breaking the contract",
         a.output.display(),
         report.samples,
         projection,
@@ -276,7 +293,8 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
         map.layers.len(),
         if map.layers.len() == 1 { "" } else { "s" },
         report.culled,
-        report.violations()
+        report.lost(),
+        report.breaches()
     );
     Ok(())
 }
@@ -290,13 +308,6 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         .as_deref()
         .map(|path| load_calibration(path, a.camera.as_deref(), a.quiet))
         .transpose()?;
-    let jobs = frame_jobs(a.frames.as_ref(), &frames)?;
-    let lists = sequence_displays(
-        &jobs
-            .iter()
-            .map(|&(n, i)| (n, job::displays(&frames[i].scene, a.output.as_deref())))
-            .collect::<Vec<_>>(),
-    );
     if let Some(n) = a.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
@@ -311,6 +322,38 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
         );
     });
+    // An animated scene (glTF) is posed per frame (frame 1 without --frames), so its flow reaches the
+    // next.
+    if let [still] = frames.as_slice()
+        && !still.numbered
+        && still.scene.animation_seconds.is_some()
+        && let Some(path) = a.scene.as_deref()
+    {
+        let mut scene = still.scene.clone();
+        let (mut registry, overrides) = configure(a, search, &mut scene, calibration)?;
+        let displays = image_displays(a, &scene);
+        let opts = render_options(a, &displays);
+        let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+        let job = animation::Animation {
+            path,
+            fps: a.fps,
+            format: Format::new(width, height),
+            overrides: &overrides,
+            projection: &scene.projection,
+            base_dir: &base_dir,
+            displays: &displays,
+            opts: &opts,
+            quiet: a.quiet,
+        };
+        return job.render(&frames, &mut registry);
+    }
+    let jobs = frame_jobs(a.frames.as_ref(), &frames)?;
+    let lists = sequence_displays(
+        &jobs
+            .iter()
+            .map(|&(n, i)| (n, image_displays(a, &frames[i].scene)))
+            .collect::<Vec<_>>(),
+    );
     // Each image renders once; a still selected as several frames is written as each of them.
     let mut images: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
     images.dedup();
@@ -319,29 +362,49 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         if !a.quiet && frames.len() > 1 {
             println!("frame {} ({})", frame.number, frame.world);
         }
-        let (scene, out) = render_image(a, search, frame.scene.clone(), &base_dir, calibration.clone(), {
-            let k = jobs.iter().position(|&(_, i)| i == image).unwrap_or(0);
-            job::wants_deep(&lists[k])
-        })?;
-        let attributes = [("obscura:projection", scene.projection.clone())];
-        for (k, _) in jobs.iter().enumerate().filter(|(_, j)| j.1 == image) {
-            let written = job::write_displays(&lists[k], &out, scene.camera.format.pixel_aspect, &attributes)
-                .map_err(|e| e.to_string())?;
-            if !a.quiet {
-                for p in &written {
-                    println!("wrote {}", p.display());
-                }
-            }
-        }
-        let s = &out.stats;
-        if s.cancelled {
-            return Err(format!(
-                "interrupted: wrote the {} of {} tiles that were rendered",
-                s.tiles.0, s.tiles.1
-            ));
-        }
+        let writes: Vec<(u32, &[obscura_scene::Display])> = jobs
+            .iter()
+            .zip(&lists)
+            .filter(|(j, _)| j.1 == image)
+            .map(|(j, l)| (j.0, l.as_slice()))
+            .collect();
+        render_image(
+            a,
+            search,
+            frame.scene.clone(),
+            &base_dir,
+            calibration.clone(),
+            &writes,
+        )?;
     }
     Ok(())
+}
+
+/// The displays of one image: the scene's (or `-o`'s) with the `--aov`s added; a still has no
+/// previous frame, so no backward flow.
+fn image_displays(a: &RenderArgs, scene: &obscura_scene::Scene) -> Vec<obscura_scene::Display> {
+    let mut displays = job::displays(scene, a.output.as_deref());
+    let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
+    obscura_render::frame::add_aovs(&mut displays, &aovs);
+    if scene.animation_seconds.is_none() {
+        displays = obscura_render::frame::without_backward_flow(&displays, false);
+    }
+    displays
+}
+
+/// The render options of the command line for these displays.
+fn render_options(a: &RenderArgs, displays: &[obscura_scene::Display]) -> RenderOptions {
+    RenderOptions {
+        samples_per_pixel: a.spp,
+        seed: a.seed,
+        path: PathOptions {
+            max_depth: a.max_depth,
+            ..PathOptions::default()
+        },
+        deep: job::wants_deep(displays),
+        max_triangles: a.max_triangles,
+        ..RenderOptions::default()
+    }
 }
 
 /// The most frames a still scene is written as: each is a file.
@@ -378,16 +441,14 @@ fn frame_jobs(spec: Option<&FrameSpec>, frames: &[Frame]) -> Result<Vec<(u32, us
         .collect())
 }
 
-/// Renders one image: the scene with the command line's overrides, through its projection. Returns
-/// the scene as rendered (overrides applied) and the render.
-fn render_image(
+/// The command line's overrides applied to `scene` (its projection loaded first, so that `--param`
+/// is read against its table); warnings printed unless `--quiet`.
+fn configure(
     a: &RenderArgs,
     search: &PluginSearch,
-    mut scene: obscura_scene::Scene,
-    base_dir: &std::path::Path,
+    scene: &mut obscura_scene::Scene,
     calibration: Option<Calibrated>,
-    deep: bool,
-) -> Result<(obscura_scene::Scene, obscura_render::render::RenderOutput), String> {
+) -> Result<(obscura_sdk::Registry, Overrides), String> {
     let mut registry = builtin_registry();
     let mut overrides = Overrides {
         format: a.format,
@@ -396,14 +457,11 @@ fn render_image(
         calibration,
         params: ParamList::new(),
     };
-    // --param is read against the table of the projection rendered through, so that one (a plugin
-    // given by name or path) is loaded first.
-    let projection =
-        ensure(&mut registry, overrides.projection(&scene), search).map_err(|e| e.to_string())?;
+    let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
     let factory = registry.find(&projection).map_err(|e| e.to_string())?;
     overrides.params =
         param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
-    overrides.apply(&mut scene).map_err(|e| e.to_string())?;
+    overrides.apply(scene).map_err(|e| e.to_string())?;
     scene.projection = projection;
     if !a.quiet
         && let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format))
@@ -415,17 +473,22 @@ fn render_image(
             eprintln!("warning: {w}");
         }
     }
-    let opts = RenderOptions {
-        samples_per_pixel: a.spp,
-        seed: a.seed,
-        path: PathOptions {
-            max_depth: a.max_depth,
-            ..PathOptions::default()
-        },
-        deep,
-        max_triangles: a.max_triangles,
-        ..RenderOptions::default()
-    };
+    Ok((registry, overrides))
+}
+
+/// Renders one image and writes it as each of `writes` (frame number, displays): the scene with the
+/// command line's overrides, through its projection, with its flow pass and ground-truth sidecars.
+fn render_image(
+    a: &RenderArgs,
+    search: &PluginSearch,
+    mut scene: obscura_scene::Scene,
+    base_dir: &std::path::Path,
+    calibration: Option<Calibrated>,
+    writes: &[(u32, &[obscura_scene::Display])],
+) -> Result<(), String> {
+    let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
+    let first: &[obscura_scene::Display] = writes.first().map_or(&[], |w| w.1);
+    let opts = render_options(a, first);
     let prepared = prepare(&scene, &mut registry, base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
     for w in prepared.stage().setup_warnings() {
@@ -447,9 +510,47 @@ fn render_image(
             b.set_position(done as u64);
         }
     };
-    let out = prepared.render(&opts, &progress, &job::CANCEL);
+    let mut out = prepared.render(&opts, &progress, &job::CANCEL);
     if let Some(b) = &bar {
         b.finish_and_clear();
+    }
+    let flow_warnings = obscura_render::frame::run_flow(
+        &scene,
+        &prepared,
+        &mut out,
+        first,
+        obscura_render::frame::Neighbours::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    for w in flow_warnings {
+        eprintln!("{w}");
+    }
+    let mut attributes = vec![("obscura:projection", scene.projection.clone())];
+    attributes.extend(
+        obscura_render::frame::header_attributes(&scene, &prepared, None).map_err(|e| e.to_string())?,
+    );
+    // Sidecars go with ground truth: a display with a ground-truth AOV.
+    let sidecars = (first.iter()).any(|d| {
+        d.aovs
+            .iter()
+            .any(|x| obscura_scene::Aov::GROUND_TRUTH.contains(x))
+    });
+    let mut written = Vec::new();
+    for &(frame, displays) in writes {
+        written.extend(
+            job::write_displays(displays, &out, scene.camera.format.pixel_aspect, &attributes)
+                .map_err(|e| e.to_string())?,
+        );
+        if sidecars {
+            let number = a.frames.is_some().then_some(frame);
+            written.extend(obscura_render::frame::write_sidecars(
+                &scene,
+                &prepared,
+                displays,
+                number,
+                out.stats.cancelled,
+            )?);
+        }
     }
     let s = &out.stats;
     if let Some(w) = s.contract.warning(&scene.projection) {
@@ -458,7 +559,7 @@ fn render_image(
     if !a.quiet {
         let frame = s.render_seconds.max(1e-9);
         println!(
-            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, \
+            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, {} lost to failed project calls, \
              {:.1} Mrays/s traced (camera, bounce and shadow rays); \
              camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
             scene.camera.pixels().width(),
@@ -469,6 +570,7 @@ fn render_image(
             s.triangles,
             s.contract.samples,
             s.contract.culled,
+            s.contract.lost(),
             s.rays_traced as f64 / frame * 1e-6,
             100.0 * s.camera_stage_seconds
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
@@ -476,12 +578,23 @@ fn render_image(
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
             if s.cancelled {
                 format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
+            } else if s.flow_seconds > 0.0 {
+                format!("; flow pass {:.3} s", s.flow_seconds)
             } else {
                 String::new()
             }
         );
+        for p in &written {
+            println!("wrote {}", p.display());
+        }
     }
-    Ok((scene, out))
+    if s.cancelled {
+        return Err(format!(
+            "interrupted: wrote the {} of {} tiles that were rendered",
+            s.tiles.0, s.tiles.1
+        ));
+    }
+    Ok(())
 }
 
 /// `obscura plugins [NAME]`: a NAME that is not built in (or a path) is loaded as a plugin first.
@@ -509,8 +622,22 @@ fn plugins(name: Option<&str>, names_only: bool, search: &PluginSearch) -> Resul
 }
 
 fn main() -> ExitCode {
+    if std::env::args_os()
+        .nth(1)
+        .is_some_and(|a| a == isolate::WORKER_ARG)
+    {
+        // A host started this process to run a plugin for it (`--isolate-plugins`).
+        return ExitCode::from(u8::try_from(isolate::worker_main()).unwrap_or(2));
+    }
     let cli = Cli::parse();
-    let search = PluginSearch::from_env(&cli.plugin_path);
+    let isolation = match isolate::Isolation::from_env(cli.isolate_plugins, cli.plugin_timeout) {
+        Ok(i) => i,
+        Err(e) => {
+            eprintln!("error: --isolate-plugins: cannot find this executable to run plugin workers: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let search = PluginSearch::from_env(&cli.plugin_path).with_isolation(isolation);
     let result = match &cli.command {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render(a, &search),

@@ -11,7 +11,9 @@
 //! | any other | TIFF at the name with `.tif` (the name as given when it ends in `.exr`, `.png` or `.tif`), with a warning |
 //!
 //! The mode is `rgb`, `rgba`, `rgbz`, `rgbaz`, `a`, `z`, `az`, or a comma-separated list of AOV names
-//! (`Ci`, `a`, `z`, `N`, `P`, `cameraDirection`; a leading type such as `color Ci` is allowed). An AOV
+//! (`Ci`, `a`, `z`, `N`, `P`, `cameraDirection` and the ground-truth AOVs `cameraZ`, `distance`,
+//! `Pcamera`, `Ncamera`, `objectId`, `instanceId`, `materialId`, `flowForward`, `flowBackward`,
+//! `flowValid`; a leading type such as `color Ci` is allowed). An AOV
 //! the renderer does not produce is left out with a warning; a display left with none is skipped.
 //!
 //! A name starting with `+` adds a display; without it the display replaces the ones before. Two
@@ -25,7 +27,7 @@ use super::{Reader, RibError};
 use crate::types::{Aov, Display, DisplayDriver};
 
 /// The names a `Display` mode may use.
-const CHANNELS: [(&str, &[Aov]); 13] = [
+const CHANNELS: [(&str, &[Aov]); 23] = [
     ("rgb", &[Aov::Ci]),
     ("rgba", &[Aov::Ci, Aov::Alpha]),
     ("rgbz", &[Aov::Ci, Aov::Z]),
@@ -39,6 +41,16 @@ const CHANNELS: [(&str, &[Aov]); 13] = [
     ("P", &[Aov::P]),
     ("cameraDirection", &[Aov::CameraDirection]),
     ("depth", &[Aov::Z]),
+    ("cameraZ", &[Aov::CameraZ]),
+    ("distance", &[Aov::Distance]),
+    ("Pcamera", &[Aov::PCamera]),
+    ("Ncamera", &[Aov::NCamera]),
+    ("objectId", &[Aov::ObjectId]),
+    ("instanceId", &[Aov::InstanceId]),
+    ("materialId", &[Aov::MaterialId]),
+    ("flowForward", &[Aov::FlowForward]),
+    ("flowBackward", &[Aov::FlowBackward]),
+    ("flowValid", &[Aov::FlowValid]),
 ];
 
 /// Drivers that show the image in a window.
