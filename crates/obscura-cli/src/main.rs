@@ -22,7 +22,8 @@ use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
-use obscura_render::sequence::{FrameSpec, frame_displays};
+use obscura_render::sequence::{FrameSpec, sequence_displays};
+use obscura_scene::rib::Frame;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 mod animation;
@@ -119,6 +120,10 @@ struct RenderArgs {
     /// Maximum path depth.
     #[arg(long, default_value_t = 6)]
     max_depth: u32,
+    /// The most triangles the scene may dice into; beyond it the render stops with a message naming
+    /// the primitive (about 150 bytes each with the BVH).
+    #[arg(long, default_value_t = obscura_render::dice::DEFAULT_SCENE_TRIANGLES, value_name = "N")]
+    max_triangles: u64,
     /// Seed of the sample sequences.
     #[arg(long, default_value_t = 0)]
     seed: u32,
@@ -299,58 +304,14 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
 }
 
 fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
-    let mut registry = builtin_registry();
     let (width, height) = a.format.unwrap_or(job::DEFAULT_FORMAT);
-    let (mut scene, base_dir) =
-        job::load_scene(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
+    let (frames, base_dir) =
+        job::load_frames(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
     let calibration = a
         .calibration
         .as_deref()
         .map(|path| load_calibration(path, a.camera.as_deref(), a.quiet))
         .transpose()?;
-    let mut overrides = Overrides {
-        format: a.format,
-        crop: a.crop.as_deref().map(crop_window),
-        projection: a.projection.clone(),
-        calibration,
-        params: ParamList::new(),
-    };
-    // --param is read against the table of the projection rendered through, so that one (a plugin
-    // given by name or path) is loaded first.
-    let projection =
-        ensure(&mut registry, overrides.projection(&scene), search).map_err(|e| e.to_string())?;
-    let factory = registry.find(&projection).map_err(|e| e.to_string())?;
-    overrides.params =
-        param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
-    overrides.apply(&mut scene).map_err(|e| e.to_string())?;
-    scene.projection = projection;
-    if !a.quiet
-        && let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format))
-    {
-        eprintln!("warning: {w}");
-    }
-    if !a.quiet {
-        for w in &scene.warnings {
-            eprintln!("warning: {w}");
-        }
-    }
-    let mut displays = job::displays(&scene, a.output.as_deref());
-    let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
-    obscura_render::frame::add_aovs(&mut displays, &aovs);
-    if scene.animation_seconds.is_none() {
-        // A still scene has no previous frame.
-        displays = obscura_render::frame::without_backward_flow(&displays, false);
-    }
-    let opts = RenderOptions {
-        samples_per_pixel: a.spp,
-        seed: a.seed,
-        path: PathOptions {
-            max_depth: a.max_depth,
-            ..PathOptions::default()
-        },
-        deep: job::wants_deep(&displays),
-        ..RenderOptions::default()
-    };
     if let Some(n) = a.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n.max(1))
@@ -365,10 +326,17 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
         );
     });
-    // An animated scene is posed per frame (frame 1 without --frames), so its flow reaches the next.
-    if scene.animation_seconds.is_some()
+    // An animated scene (glTF) is posed per frame (frame 1 without --frames), so its flow reaches the
+    // next.
+    if let [still] = frames.as_slice()
+        && !still.numbered
+        && still.scene.animation_seconds.is_some()
         && let Some(path) = a.scene.as_deref()
     {
+        let mut scene = still.scene.clone();
+        let (mut registry, overrides) = configure(a, search, &mut scene, calibration)?;
+        let displays = image_displays(a, &scene);
+        let opts = render_options(a, &displays);
         let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
         let job = animation::Animation {
             path,
@@ -383,7 +351,149 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         };
         return job.render(&frames, &mut registry);
     }
-    let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
+    let jobs = frame_jobs(a.frames.as_ref(), &frames)?;
+    let lists = sequence_displays(
+        &jobs
+            .iter()
+            .map(|&(n, i)| (n, image_displays(a, &frames[i].scene)))
+            .collect::<Vec<_>>(),
+    );
+    // Each image renders once; a still selected as several frames is written as each of them.
+    let mut images: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
+    images.dedup();
+    for image in images {
+        let frame = &frames[image];
+        if !a.quiet && frames.len() > 1 {
+            println!("frame {} ({})", frame.number, frame.world);
+        }
+        let writes: Vec<(u32, &[obscura_scene::Display])> = jobs
+            .iter()
+            .zip(&lists)
+            .filter(|(j, _)| j.1 == image)
+            .map(|(j, l)| (j.0, l.as_slice()))
+            .collect();
+        render_image(
+            a,
+            search,
+            frame.scene.clone(),
+            &base_dir,
+            calibration.clone(),
+            &writes,
+        )?;
+    }
+    Ok(())
+}
+
+/// The displays of one image: the scene's (or `-o`'s) with the `--aov`s added; a still has no
+/// previous frame, so no backward flow.
+fn image_displays(a: &RenderArgs, scene: &obscura_scene::Scene) -> Vec<obscura_scene::Display> {
+    let mut displays = job::displays(scene, a.output.as_deref());
+    let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
+    obscura_render::frame::add_aovs(&mut displays, &aovs);
+    if scene.animation_seconds.is_none() {
+        displays = obscura_render::frame::without_backward_flow(&displays, false);
+    }
+    displays
+}
+
+/// The render options of the command line for these displays.
+fn render_options(a: &RenderArgs, displays: &[obscura_scene::Display]) -> RenderOptions {
+    RenderOptions {
+        samples_per_pixel: a.spp,
+        seed: a.seed,
+        path: PathOptions {
+            max_depth: a.max_depth,
+            ..PathOptions::default()
+        },
+        deep: job::wants_deep(displays),
+        max_triangles: a.max_triangles,
+        ..RenderOptions::default()
+    }
+}
+
+/// The most frames a still scene is written as: each is a file.
+const MAX_STILL_FRAMES: u64 = 100_000;
+
+/// The images to render as (frame number, index into `frames`), in file order: with `--frames`, the
+/// images of the frames it selects; a still (one image the file does not number) is each selected
+/// frame; without `--frames`, every image.
+fn frame_jobs(spec: Option<&FrameSpec>, frames: &[Frame]) -> Result<Vec<(u32, usize)>, String> {
+    if let [still] = frames
+        && !still.numbered
+    {
+        if let Some(s) = spec.filter(|s| s.len() > MAX_STILL_FRAMES) {
+            return Err(format!(
+                "--frames {s} selects {} frames of a scene without frames of its own (at most {MAX_STILL_FRAMES}: each is written as a file)",
+                s.len()
+            ));
+        }
+        return Ok(match spec {
+            Some(s) => s.frames().map(|n| (n, 0)).collect(),
+            None => vec![(still.number, 0)],
+        });
+    }
+    let numbers: Vec<u32> = frames.iter().map(|f| f.number).collect();
+    let picked = match spec {
+        Some(s) => s.select(&numbers)?,
+        None => numbers.clone(),
+    };
+    Ok(frames
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| picked.contains(&f.number))
+        .map(|(i, f)| (f.number, i))
+        .collect())
+}
+
+/// The command line's overrides applied to `scene` (its projection loaded first, so that `--param`
+/// is read against its table); warnings printed unless `--quiet`.
+fn configure(
+    a: &RenderArgs,
+    search: &PluginSearch,
+    scene: &mut obscura_scene::Scene,
+    calibration: Option<Calibrated>,
+) -> Result<(obscura_sdk::Registry, Overrides), String> {
+    let mut registry = builtin_registry();
+    let mut overrides = Overrides {
+        format: a.format,
+        crop: a.crop.as_deref().map(crop_window),
+        projection: a.projection.clone(),
+        calibration,
+        params: ParamList::new(),
+    };
+    let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
+    let factory = registry.find(&projection).map_err(|e| e.to_string())?;
+    overrides.params =
+        param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
+    overrides.apply(scene).map_err(|e| e.to_string())?;
+    scene.projection = projection;
+    if !a.quiet
+        && let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format))
+    {
+        eprintln!("warning: {w}");
+    }
+    if !a.quiet {
+        for w in &scene.warnings {
+            eprintln!("warning: {w}");
+        }
+    }
+    Ok((registry, overrides))
+}
+
+/// Renders one image and writes it as each of `writes` (frame number, displays): the scene with the
+/// command line's overrides, through its projection, with its flow pass and ground-truth sidecars.
+fn render_image(
+    a: &RenderArgs,
+    search: &PluginSearch,
+    mut scene: obscura_scene::Scene,
+    base_dir: &std::path::Path,
+    calibration: Option<Calibrated>,
+    writes: &[(u32, &[obscura_scene::Display])],
+) -> Result<(), String> {
+    let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
+    let first: &[obscura_scene::Display] = writes.first().map_or(&[], |w| w.1);
+    let opts = render_options(a, first);
+    let prepared = prepare(&scene, &mut registry, base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
     for w in prepared.stage().setup_warnings() {
         eprintln!("{w}");
@@ -412,7 +522,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         &scene,
         &prepared,
         &mut out,
-        &displays,
+        first,
         obscura_render::frame::Neighbours::default(),
     )
     .map_err(|e| e.to_string())?;
@@ -424,19 +534,15 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         obscura_render::frame::header_attributes(&scene, &prepared, None).map_err(|e| e.to_string())?,
     );
     // Sidecars go with ground truth: a display with a ground-truth AOV.
-    let sidecars = (displays.iter()).any(|d| {
+    let sidecars = (first.iter()).any(|d| {
         d.aovs
             .iter()
             .any(|x| obscura_scene::Aov::GROUND_TRUTH.contains(x))
     });
-    // A scene without frames of its own is the same at every frame: rendered once, written as each
-    // selected frame.
-    let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
     let mut written = Vec::new();
-    for &frame in &frames {
-        let displays = frame_displays(&displays, frame, frames.len() > 1);
+    for &(frame, displays) in writes {
         written.extend(
-            job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
+            job::write_displays(displays, &out, scene.camera.format.pixel_aspect, &attributes)
                 .map_err(|e| e.to_string())?,
         );
         if sidecars {
@@ -444,7 +550,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             written.extend(obscura_render::frame::write_sidecars(
                 &scene,
                 &prepared,
-                &displays,
+                displays,
                 number,
                 out.stats.cancelled,
             )?);

@@ -10,11 +10,12 @@ use std::sync::atomic::AtomicBool;
 
 use obscura_calibration::files::{Calibration, CalibrationFileError};
 use obscura_host::{CameraDesc, CropWindow};
+use obscura_scene::rib::Frame;
 use obscura_scene::{Aov, Display, DisplayDriver, LoadError, Scene};
 use obscura_sdk::{DeclarationError, Format, ParamList};
 
 use crate::deep::{DeepCompression, write_deep_exr};
-use crate::output::{OutputError, write_exr, write_png};
+use crate::output::{OutputError, write_exr, write_png, write_tiff};
 use crate::render::RenderOutput;
 
 /// The built-in scene, rendered when no scene file is given.
@@ -42,6 +43,32 @@ pub fn load_scene(path: Option<&Path>, format: Format) -> Result<(Scene, PathBuf
         ),
         Some(path) => (
             obscura_scene::load(path, CameraDesc::new(format))?,
+            path.parent().map(Path::to_path_buf).unwrap_or_default(),
+        ),
+    })
+}
+
+/// Reads the scene at `path` (or the built-in scene) as the images it holds — a RIB file's worlds
+/// with their frames, one image otherwise — and the directory its relative paths are read from.
+///
+/// # Errors
+/// As [`load_scene`].
+pub fn load_frames(path: Option<&Path>, format: Format) -> Result<(Vec<Frame>, PathBuf), LoadError> {
+    Ok(match path {
+        None => {
+            let (scene, dir) = load_scene(None, format)?;
+            (
+                vec![Frame {
+                    number: 1,
+                    numbered: false,
+                    world: String::new(),
+                    scene,
+                }],
+                dir,
+            )
+        }
+        Some(path) => (
+            obscura_scene::load_frames(path, CameraDesc::new(format))?,
             path.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
     })
@@ -178,7 +205,7 @@ impl Overrides {
 
 /// The displays to write: the scene's own, or `output` (an EXR with beauty, alpha, z, N, P and
 /// cameraDirection) when given; with neither, `render.exr`. A PNG preview is added beside the first
-/// EXR when no display is a PNG already.
+/// display holding the beauty (`Ci`) when no display is a PNG already and no display writes that name.
 #[must_use]
 pub fn displays(scene: &Scene, output: Option<&Path>) -> Vec<Display> {
     let mut list = match output {
@@ -201,16 +228,16 @@ pub fn displays(scene: &Scene, output: Option<&Path>) -> Vec<Display> {
         None => scene.displays.clone(),
     };
     if !list.iter().any(|d| d.driver == DisplayDriver::Png)
-        && let Some(exr) = list.iter().find(|d| d.driver != DisplayDriver::Png)
+        && let Some(beauty) = list.iter().find(|d| d.aovs.contains(&Aov::Ci))
     {
-        {
-            let preview = Display {
-                path: exr.path.with_extension("png"),
+        let path = beauty.path.with_extension("png");
+        if !list.iter().any(|d| d.path == path) {
+            list.push(Display {
+                path,
                 driver: DisplayDriver::Png,
                 aovs: vec![Aov::Ci, Aov::Alpha],
                 half: false,
-            };
-            list.push(preview);
+            });
         }
     }
     list
@@ -239,6 +266,7 @@ pub fn write_displays(
                 write_exr(&d.path, &out.film, &d.aovs, d.half, pixel_aspect, attributes)?
             }
             DisplayDriver::Png => write_png(&d.path, &out.film)?,
+            DisplayDriver::Tiff => write_tiff(&d.path, &out.film, &d.aovs)?,
             DisplayDriver::DeepExr => match &out.deep {
                 Some(deep) => write_deep_exr(&d.path, deep, DeepCompression::Zips)?,
                 None => continue,

@@ -1,4 +1,5 @@
-//! Flat image files: OpenEXR (through the `exr` crate) and 8-bit sRGB PNG previews.
+//! Flat image files: OpenEXR (through the `exr` crate), 8-bit sRGB PNG previews, and the TIFF of
+//! RenderMan's classic drivers ([`write_tiff`]).
 //!
 //! Both are written with [`crate::atomic::write_atomically`], so a reader never sees half a file
 //! and a failed write leaves nothing behind.
@@ -14,6 +15,9 @@ use exr::prelude::{
 use obscura_scene::Aov;
 
 use crate::film::{Film, SampleValues};
+
+mod tiff_file;
+pub use tiff_file::write_tiff;
 
 /// An image file could not be written. Every variant names the file.
 #[derive(Debug, thiserror::Error)]

@@ -38,7 +38,7 @@ use rayon::prelude::*;
 
 use crate::bvh::{Instance, SceneAccel};
 use crate::deep::{DeepImage, DeepSample};
-use crate::dice::{DiceError, DicingContext, dice};
+use crate::dice::{DiceError, DicingContext, TriangleBudget, dice};
 use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
 use crate::integrator::{PathOptions, PathResult, ShadingScene, trace_path};
@@ -89,6 +89,8 @@ pub struct RenderOptions {
     pub deep: bool,
     /// Tile edge in pixels.
     pub tile_size: u32,
+    /// The most triangles the scene may dice into (see [`crate::dice::TriangleBudget`]).
+    pub max_triangles: u64,
 }
 
 impl Default for RenderOptions {
@@ -99,6 +101,7 @@ impl Default for RenderOptions {
             path: PathOptions::default(),
             deep: false,
             tile_size: 16,
+            max_triangles: crate::dice::DEFAULT_SCENE_TRIANGLES,
         }
     }
 }
@@ -222,7 +225,7 @@ pub fn prepare(
     let shutter = scene.camera.shutter;
     let camera_to_world = camera_motion(stage.environment().world_to_camera(), shutter)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
-    let meshes = dice_objects(scene, &props, world_to_camera_open)?;
+    let meshes = dice_objects(scene, &props, world_to_camera_open, opts.max_triangles)?;
     let instances: Vec<Instance> = scene
         .objects
         .iter()
@@ -298,11 +301,17 @@ fn dice_objects(
     scene: &Scene,
     props: &Properties,
     world_to_camera_open: Affine3A,
+    max_triangles: u64,
 ) -> Result<Vec<TriangleMesh>, RenderError> {
+    let budget = TriangleBudget::new(max_triangles);
     let diced: Vec<Result<TriangleMesh, RenderError>> = scene
         .objects
         .par_iter()
         .map(|o| {
+            if budget.exhausted() {
+                // Another primitive has already gone over: this one's own message would mislead.
+                return Ok(TriangleMesh::default());
+            }
             let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
             let ctx = DicingContext {
                 hint: props.dicing_hint,
@@ -312,10 +321,13 @@ fn dice_objects(
                 object_to_camera: Mat4::from(world_to_camera_open) * object_to_world,
                 micropolygon_length: o.micropolygon_length,
             };
-            dice(&o.shape, &ctx).map_err(|error| RenderError::Dice {
+            let located = |error| RenderError::Dice {
                 source_location: o.source.clone(),
                 error,
-            })
+            };
+            let mesh = dice(&o.shape, &ctx).map_err(located)?;
+            budget.take(mesh.len() as u64).map_err(located)?;
+            Ok(mesh)
         })
         .collect();
     diced.into_iter().collect()

@@ -236,7 +236,8 @@ pub fn frame_path(path: &Path, frame: u32, several: bool) -> PathBuf {
     path.with_file_name(numbered)
 }
 
-/// The displays frame `frame` writes: each display's path through [`frame_path`].
+/// The displays frame `frame` writes: each display's path through [`frame_path`] (for a sequence
+/// of images that may share names, [`sequence_displays`]).
 #[must_use]
 pub fn frame_displays(displays: &[Display], frame: u32, several: bool) -> Vec<Display> {
     displays
@@ -244,6 +245,47 @@ pub fn frame_displays(displays: &[Display], frame: u32, several: bool) -> Vec<Di
         .map(|d| Display {
             path: frame_path(&d.path, frame, several),
             ..d.clone()
+        })
+        .collect()
+}
+
+/// The displays each image of a sequence writes, given each image's frame number and displays in
+/// render order.
+///
+/// A frame-number pattern in a name is always replaced by the image's frame number. A file named
+/// by more than one image (as `-o out.exr` names one for all, or a scene naming one file in every
+/// frame) is numbered by frame, `out.0001.exr`, or, when those images share a frame number too (a
+/// shadow pass and a beauty pass in one frame), by the image's position in the sequence (from 1).
+/// Names only one image uses are kept as they are.
+#[must_use]
+pub fn sequence_displays(images: &[(u32, Vec<Display>)]) -> Vec<Vec<Display>> {
+    let users = |path: &Path| -> Vec<usize> {
+        (0..images.len())
+            .filter(|&i| images[i].1.iter().any(|d| d.path == path))
+            .collect()
+    };
+    images
+        .iter()
+        .enumerate()
+        .map(|(i, (number, displays))| {
+            displays
+                .iter()
+                .map(|d| {
+                    let sharing = users(&d.path);
+                    let path = if has_frame_pattern(&d.path) || sharing.len() < 2 {
+                        frame_path(&d.path, *number, false)
+                    } else {
+                        let same_number = sharing.iter().filter(|&&j| images[j].0 == *number).count() > 1;
+                        let key = if same_number {
+                            u32::try_from(i + 1).unwrap_or(u32::MAX)
+                        } else {
+                            *number
+                        };
+                        frame_path(&d.path, key, true)
+                    };
+                    Display { path, ..d.clone() }
+                })
+                .collect()
         })
         .collect()
 }
@@ -383,6 +425,61 @@ mod tests {
         assert_eq!(p("out", 42, true), Path::new("out.0042"));
         assert_eq!(p(".hidden", 42, true), Path::new(".hidden.0042"));
         assert_eq!(p("out.exr", 123_456, true), Path::new("out.123456.exr"));
+    }
+
+    fn display(path: &str) -> Display {
+        Display {
+            path: PathBuf::from(path),
+            driver: obscura_scene::DisplayDriver::OpenExr,
+            aovs: vec![obscura_scene::Aov::Ci],
+            half: false,
+        }
+    }
+
+    fn paths(lists: &[Vec<Display>]) -> Vec<Vec<String>> {
+        lists
+            .iter()
+            .map(|l| l.iter().map(|d| d.path.display().to_string()).collect())
+            .collect()
+    }
+
+    #[test]
+    fn a_sequence_numbers_only_the_files_several_images_name() {
+        // Frames 4 and 5 each name their own beauty and share "depth.exr"; a pattern is replaced.
+        let got = sequence_displays(&[
+            (
+                4,
+                vec![display("b4.exr"), display("depth.exr"), display("m.##.exr")],
+            ),
+            (
+                5,
+                vec![display("b5.exr"), display("depth.exr"), display("m.##.exr")],
+            ),
+        ]);
+        assert_eq!(
+            paths(&got),
+            [
+                ["b4.exr", "depth.0004.exr", "m.04.exr"],
+                ["b5.exr", "depth.0005.exr", "m.05.exr"]
+            ]
+        );
+        // Two images of one frame naming one file: numbered by their place.
+        let got = sequence_displays(&[
+            (1, vec![display("o.exr")]),
+            (1, vec![display("o.exr")]),
+            (2, vec![display("x.exr")]),
+        ]);
+        assert_eq!(paths(&got), [["o.0001.exr"], ["o.0002.exr"], ["x.exr"]]);
+        // frame_displays numbers every name of one frame.
+        assert_eq!(
+            paths(&[frame_displays(&[display("o.exr")], 3, true)]),
+            [["o.0003.exr"]]
+        );
+        // One image: names as given.
+        assert_eq!(
+            paths(&sequence_displays(&[(9, vec![display("o.exr")])])),
+            [["o.exr"]]
+        );
     }
 
     proptest! {

@@ -39,11 +39,38 @@ pub enum LoadError {
     #[error(transparent)]
     Obj(#[from] obj::ObjError),
     /// The extension names no format we read.
-    #[error("{0}: unknown scene format; expected .rib, .gltf, .glb or .obj")]
+    #[error("{0}: unknown scene format; expected .rib (.ribz, .rib.gz), .gltf, .glb or .obj")]
     Format(String),
 }
 
-/// Reads a scene by its extension: `.rib` (camera and all from the file), `.gltf`/`.glb`/`.obj`
+/// Reads a scene file as the images it holds: a RIB file's worlds, each with its frame (see
+/// [`rib::Frame`]); a glTF or OBJ file is one image, frame 1, not numbered by the file.
+///
+/// # Errors
+/// As [`load`].
+pub fn load_frames(path: &Path, camera: CameraDesc) -> Result<Vec<rib::Frame>, LoadError> {
+    if is_rib(path) {
+        return Ok(rib::parse_file_frames(path)?);
+    }
+    Ok(vec![rib::Frame {
+        number: 1,
+        numbered: false,
+        world: String::new(),
+        scene: load(path, camera)?,
+    }])
+}
+
+/// True when `path` names a RIB file by its extension (`.rib`, `.ribz`, `.rib.gz`).
+fn is_rib(path: &Path) -> bool {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    [".rib", ".ribz", ".rib.gz"].iter().any(|e| name.ends_with(e))
+}
+
+/// Reads a scene by its extension: `.rib`, `.ribz` or `.rib.gz` (camera and all from the file; ASCII
+/// or binary, gzip-compressed or not, whatever the extension says), `.gltf`/`.glb`/`.obj`
 /// (geometry, materials, lights and the file's camera; format and the rest from `camera`).
 ///
 /// # Errors
@@ -53,8 +80,10 @@ pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
+    if is_rib(path) {
+        return Ok(rib::parse_file(path)?);
+    }
     match ext.as_str() {
-        "rib" => Ok(rib::parse_file(path)?),
         "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),
         "obj" => Ok(obj::load_obj(path, camera)?),
         _ => Err(LoadError::Format(path.display().to_string())),

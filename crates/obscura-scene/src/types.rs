@@ -287,6 +287,9 @@ pub enum DisplayDriver {
     Png,
     /// `"deepexr"`.
     DeepExr,
+    /// `"tiff"` (and RenderMan's `"file"`, `"zfile"`, `"shadow"`): baseline TIFF, 8-bit colour or
+    /// 32-bit float depth.
+    Tiff,
 }
 
 /// One AOV a display writes.

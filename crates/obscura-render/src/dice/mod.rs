@@ -24,6 +24,28 @@
 //! `FieldOfView` in degrees (90 when it is not a positive finite number), clamped to 179° for
 //! `Perspective` and 360° for `Spherical`.
 //!
+//! # Bounded by what the primitive covers on screen
+//!
+//! The nearest-point rate alone explodes for geometry behind, around or very near the camera (a
+//! sphere of radius 0.2 just behind the lens would be measured at `ε·ρ`, a sky sphere around the
+//! camera likewise: millions of triangles each). As RenderMan dices off-screen geometry coarsely, the
+//! rate is also capped by the primitive's on-screen coverage `P`, in pixels, of its bounding sphere:
+//!
+//! | dicing hint | `P` |
+//! |---|---|
+//! | `Perspective` | 0 when the sphere is wholly behind the camera (`c.z + ρ ≤ 0`) or wholly outside one of the frustum's four side planes (`x·d = r·z`, `x·d = l·z`, `y·d = t·z`, `y·d = b·z`, through the eye); the whole image when it reaches the camera plane (`c.z − ρ ≤ ε·ρ`); otherwise its screen square — centre `d·(c.x, c.y)/c.z`, half-side `d·ρ/(c.z − ρ)` — clipped to the screen window, in pixels |
+//! | `Orthographic` | 0 when wholly behind; otherwise the square `(c.x, c.y) ± ρ` clipped to the screen window |
+//! | `Spherical` | the whole image when the sphere holds the camera; otherwise the disc of angular radius `asin(ρ/‖c‖)`, at most the whole image |
+//!
+//! and the rate becomes `k' = min(k, √(F·max(P, P₀)/(2π²)) / ρ₀)` (`ρ₀` the object-space radius,
+//! `F` = [`COVERAGE_FACTOR`], `P₀` = [`OFF_SCREEN_PIXELS`]): a sphere of radius `ρ₀`, whose (u, v) grid
+//! spans the arcs `2πρ₀ × πρ₀`, then holds at most `F·max(P, P₀)` micropolygons of one pixel —
+//! several per pixel it covers, and about a thousand for a primitive off screen (which shadows and
+//! reflections still see). The micropolygon
+//! length is at least [`MIN_MICROPOLYGON_LENGTH`] pixels, so `micropolygonlength 1e-30` dices as
+//! `1/16` pixel would. What is left unbounded (a polygon mesh passes through as given) is held by the
+//! scene's triangle budget ([`TriangleBudget`]).
+//!
 //! # Files
 //!
 //! | module | holds |
@@ -67,6 +89,22 @@ pub const NEAR_FRACTION: f32 = 0.05;
 
 /// The cap on [`pixels_per_unit`].
 pub const MAX_PIXELS_PER_UNIT: f32 = 1e30;
+
+/// The micropolygons per covered pixel the bounding sphere's area may hold (the `F` of the module
+/// documentation): with the sphere's back half and the square around its disc, a primitive in view
+/// keeps its nearest-point rate.
+pub const COVERAGE_FACTOR: f32 = 16.0;
+
+/// The pixels an off-screen primitive is measured as covering (the `P₀` of the module documentation):
+/// `F·P₀` = 1024 micropolygons, a 32 × 32 grid.
+pub const OFF_SCREEN_PIXELS: f32 = 64.0;
+
+/// The shortest micropolygon length, in pixels: finer `micropolygonlength` values dice as this.
+pub const MIN_MICROPOLYGON_LENGTH: f32 = 0.0625;
+
+/// The most triangles a scene dices into by default ([`TriangleBudget`]): about 1.2 GB with the BVH
+/// (measured: 155 bytes per triangle for an 8.4-million-triangle sphere).
+pub const DEFAULT_SCENE_TRIANGLES: u64 = 8_000_000;
 
 /// Crease sharpness at or above which an edge is infinitely sharp.
 pub const INFINITE_SHARPNESS: f32 = 10.0;
@@ -201,9 +239,75 @@ pub enum DiceError {
         /// The vertex count one level would need.
         vertices: u64,
     },
+    /// The scene's triangle budget ([`TriangleBudget`]) cannot hold this primitive.
+    #[error(
+        "this primitive dices into {triangles} triangles, which the scene cannot hold: {used} are diced \
+         already and the budget is {limit} (raise it with --max-triangles if the memory is there, or \
+         raise this primitive's Attribute \"dice\" \"micropolygonlength\")"
+    )]
+    SceneBudget {
+        /// The primitive's triangles.
+        triangles: u64,
+        /// The scene's triangles before it.
+        used: u64,
+        /// The budget.
+        limit: u64,
+    },
     /// The diced geometry overflowed to infinity (parameters near the limits of `f32`).
     #[error("diced geometry is not finite (parameters too large)")]
     NonFiniteGeometry,
+}
+
+/// The triangles a whole scene may dice into, shared by the threads dicing its primitives: each
+/// diced primitive takes its count, and the first to go over the limit is refused
+/// ([`DiceError::SceneBudget`]), so that a scene too large for memory stops with a message naming
+/// that primitive instead of being killed.
+#[derive(Debug)]
+pub struct TriangleBudget {
+    limit: u64,
+    used: std::sync::atomic::AtomicU64,
+}
+
+impl TriangleBudget {
+    /// A budget of `limit` triangles.
+    #[must_use]
+    pub fn new(limit: u64) -> Self {
+        TriangleBudget {
+            limit,
+            used: std::sync::atomic::AtomicU64::new(0),
+        }
+    }
+
+    /// Takes `triangles` from the budget.
+    ///
+    /// # Errors
+    /// [`DiceError::SceneBudget`] when the scene would then hold more than the limit (nothing is
+    /// taken).
+    pub fn take(&self, triangles: u64) -> Result<(), DiceError> {
+        use std::sync::atomic::Ordering;
+        self.used
+            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |used| {
+                used.checked_add(triangles).filter(|&t| t <= self.limit)
+            })
+            .map(|_| ())
+            .map_err(|used| DiceError::SceneBudget {
+                triangles,
+                used,
+                limit: self.limit,
+            })
+    }
+
+    /// The triangles taken so far.
+    #[must_use]
+    pub fn used(&self) -> u64 {
+        self.used.load(std::sync::atomic::Ordering::SeqCst)
+    }
+
+    /// True once the scene is at its limit: no further primitive can be diced.
+    #[must_use]
+    pub fn exhausted(&self) -> bool {
+        self.used() >= self.limit
+    }
 }
 
 /// The shape as triangles in OBJECT space, with smooth per-vertex normals for curved surfaces.
@@ -270,15 +374,7 @@ pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceErro
 /// is measured at the [`NEAR_FRACTION`] floor (so a zero-radius one there gets the cap).
 #[must_use]
 pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
-    let m = ctx.object_to_camera;
-    let sigma = m
-        .x_axis
-        .truncate()
-        .length()
-        .max(m.y_axis.truncate().length())
-        .max(m.z_axis.truncate().length());
-    let c = m.transform_point3(centre);
-    let rho = radius.abs() * sigma;
+    let (c, rho, sigma) = camera_sphere(ctx, centre, radius);
     let near = (NEAR_FRACTION * rho).max(f32::MIN_POSITIVE);
     let s = pixels_per_screen_unit(ctx);
     let k = match ctx.hint {
@@ -294,11 +390,104 @@ pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
             sigma * pixels_per_radian / distance
         }
     };
+    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
+    let grid_area = 2.0 * std::f32::consts::PI * std::f32::consts::PI;
+    let cap = (COVERAGE_FACTOR * covered / grid_area).sqrt() / radius.abs();
+    let k = if cap.is_nan() { k } else { k.min(cap) };
     if k.is_nan() {
         0.0
     } else {
         k.clamp(0.0, MAX_PIXELS_PER_UNIT)
     }
+}
+
+/// An object-space bounding sphere in camera space: its centre `M·c₀`, its radius `σ·ρ₀`, and `σ`
+/// (the longest of `M`'s axis columns, `M` = object → camera).
+fn camera_sphere(ctx: &DicingContext, centre: Vec3, radius: f32) -> (Vec3, f32, f32) {
+    let m = ctx.object_to_camera;
+    let sigma = m
+        .x_axis
+        .truncate()
+        .length()
+        .max(m.y_axis.truncate().length())
+        .max(m.z_axis.truncate().length());
+    (m.transform_point3(centre), radius.abs() * sigma, sigma)
+}
+
+/// The most quads a primitive with this object-space bounding sphere (centre, radius) should dice
+/// into: `F·max(P, P₀)/m²` for the pixels `P` it covers (see the module documentation), at most
+/// [`MAX_QUADS_PER_PRIMITIVE`]. Dicers whose count does not follow from one rate (a subdivision
+/// mesh's faces times `4^level`) lower their rate until they fit it.
+#[must_use]
+pub fn quad_budget(ctx: &DicingContext, centre: Vec3, radius: f32) -> u64 {
+    let (c, rho, _) = camera_sphere(ctx, centre, radius);
+    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
+    let quads = f64::from(COVERAGE_FACTOR * covered) / micropolygon_length(ctx).powi(2);
+    if quads.is_nan() {
+        MAX_QUADS_PER_PRIMITIVE
+    } else {
+        (quads.ceil() as u64).min(MAX_QUADS_PER_PRIMITIVE)
+    }
+}
+
+/// The pixels of the image a camera-space bounding sphere (centre `c`, radius `rho`) covers, as the
+/// module documentation's table says: 0 for a sphere out of view, the whole image at most.
+#[must_use]
+pub fn screen_coverage(ctx: &DicingContext, c: Vec3, rho: f32) -> f32 {
+    let (w, h) = (ctx.format.width.max(1) as f32, ctx.format.height.max(1) as f32);
+    let image = w * h;
+    let s = pixels_per_screen_unit(ctx);
+    let window = ctx.screen_window;
+    // The pixels of the square centre ± half (screen units) inside the screen window.
+    let square = |x: f32, y: f32, half: f32| {
+        let ox = ((x + half).min(window.right) - (x - half).max(window.left)).max(0.0);
+        let oy = ((y + half).min(window.top) - (y - half).max(window.bottom)).max(0.0);
+        let (sx, sy) = (w / window.width().abs(), h / window.height().abs());
+        let (sx, sy) = if sx.is_finite() && sy.is_finite() {
+            (sx, sy)
+        } else {
+            (s, s)
+        };
+        (ox * oy * sx * sy).min(image)
+    };
+    let pixels = match ctx.hint {
+        DicingHint::Perspective => {
+            let d = 1.0 / (0.5 * field_of_view_radians(ctx.field_of_view, 179.0)).tan();
+            // The frustum's side planes pass through the eye: x·d = r·z etc. A sphere wholly outside
+            // one of them is off screen, however near the camera it is.
+            let outside = |n: Vec3| n.dot(c) > rho * n.length();
+            if c.z + rho <= 0.0
+                || outside(Vec3::new(d, 0.0, -window.right))
+                || outside(Vec3::new(-d, 0.0, window.left))
+                || outside(Vec3::new(0.0, d, -window.top))
+                || outside(Vec3::new(0.0, -d, window.bottom))
+            {
+                0.0
+            } else if c.z - rho <= NEAR_FRACTION * rho {
+                image
+            } else {
+                square(d * c.x / c.z, d * c.y / c.z, d * rho / (c.z - rho))
+            }
+        }
+        DicingHint::Orthographic => {
+            if c.z + rho <= 0.0 {
+                0.0
+            } else {
+                square(c.x, c.y, rho)
+            }
+        }
+        DicingHint::Spherical => {
+            let distance = c.length();
+            if distance <= rho {
+                image
+            } else {
+                let pixels_per_radian = 2.0 * s / field_of_view_radians(ctx.field_of_view, 360.0);
+                let alpha = (rho / distance).asin();
+                (std::f32::consts::PI * (alpha * pixels_per_radian).powi(2)).min(image)
+            }
+        }
+    };
+    if pixels.is_nan() { image } else { pixels }
 }
 
 /// `max(W/(r − l), H/(t − b))`, falling back to the default window when the given one is degenerate.
@@ -340,10 +529,15 @@ fn field_of_view_radians(degrees: f32, max_degrees: f32) -> f32 {
     degrees.clamp(1e-3, max_degrees).to_radians()
 }
 
-/// The micropolygon length in pixels: `ctx`'s when positive, else one pixel.
+/// The micropolygon length in pixels: `ctx`'s when positive (at least [`MIN_MICROPOLYGON_LENGTH`]),
+/// else one pixel.
 fn micropolygon_length(ctx: &DicingContext) -> f64 {
     let m = ctx.micropolygon_length;
-    if m > 0.0 { f64::from(m) } else { 1.0 }
+    if m > 0.0 {
+        f64::from(m.max(MIN_MICROPOLYGON_LENGTH))
+    } else {
+        1.0
+    }
 }
 
 /// Refuses the first position that is NaN or infinite (of a polygon mesh or a control mesh).

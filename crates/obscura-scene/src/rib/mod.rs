@@ -47,6 +47,10 @@
 //! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
 //! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
+mod binary;
+mod camera;
+mod display;
+mod frames;
 mod geometry;
 mod lex;
 mod options;
@@ -64,46 +68,148 @@ use std::path::Path;
 use obscura_host::CameraDesc;
 use obscura_sdk::{Format, parse_declaration};
 
+pub use frames::Frame;
+
 use crate::types::Scene;
+use frames::{CameraLight, OpenFrame, Saved};
 use lex::{Value, lex};
 use request::{Req, normalize_declaration};
 use transform::{Block, BlockKind, Ctm, MotionBlock, transform_op};
 
-/// A RIB file could not be read: names the file, the line and what was expected.
+/// A RIB file could not be read: names the file, the line (or, in binary RIB, the request's index and
+/// byte offset) and what was expected.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{file}:{line}: {message}")]
+#[error("{}: {message}", self.location())]
 pub struct RibError {
     /// The file: the name given to [`parse_str`], the path given to [`parse_file`], or an archive's path.
     pub file: String,
-    /// The line (from 1) of the request at fault; 0 when the file itself could not be read.
+    /// The line (from 1) of the request at fault; 0 when the file as a whole is at fault.
     pub line: u32,
+    /// In binary RIB: the index (from 0) of the request at fault among the file's requests.
+    pub request: Option<u32>,
+    /// In binary RIB: the byte offset of the request (or of the token) at fault.
+    pub byte: Option<u64>,
     /// What was expected and what was found.
     pub message: String,
 }
 
-/// Reads a RIB file; relative paths in it resolve against its directory.
-///
-/// # Errors
-/// A [`RibError`] when the file cannot be read or holds a malformed or misplaced request.
-pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
-    let name = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| RibError {
-        file: name.clone(),
-        line: 0,
-        message: format!("cannot read the file: {e}"),
-    })?;
-    let base = path.parent().unwrap_or_else(|| Path::new(""));
-    parse_str(&text, &name, base)
+impl RibError {
+    /// An error about the file as a whole (`line` 0).
+    fn whole_file(file: &str, message: impl Into<String>) -> Self {
+        RibError {
+            file: file.to_string(),
+            line: 0,
+            request: None,
+            byte: None,
+            message: message.into(),
+        }
+    }
+
+    /// `file:line`, `file: request N at byte B` (binary RIB), or `file` alone.
+    fn location(&self) -> String {
+        match (self.request, self.byte) {
+            (Some(i), Some(b)) => format!("{}: request {i} at byte {b}", self.file),
+            (None, Some(b)) => format!("{}: byte {b}", self.file),
+            _ if self.line == 0 => self.file.clone(),
+            _ => format!("{}:{}", self.file, self.line),
+        }
+    }
 }
 
-/// Reads RIB text. `name` is used in messages; relative paths (ReadArchive, Display, lightColorMap)
-/// resolve against `base_dir`.
+/// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name).
+fn read_rib_bytes(path: &Path) -> Result<Vec<u8>, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        let mut out = Vec::new();
+        std::io::Read::read_to_end(&mut flate2::read::MultiGzDecoder::new(&bytes[..]), &mut out)
+            .map_err(|e| format!("the file is gzip-compressed but cannot be decompressed: {e}"))?;
+        return Ok(out);
+    }
+    Ok(bytes)
+}
+
+/// Reads a RIB file (ASCII or binary, gzip-compressed or not) as one scene: its last image (a file
+/// with shadow or bake passes ends with its beauty pass), with the warnings of every image. Relative
+/// paths in it resolve against its directory. [`parse_file_frames`] gives every image.
+///
+/// # Errors
+/// As [`parse_file_frames`].
+pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
+    Ok(last_image(parse_file_frames(path)?))
+}
+
+/// Reads a RIB file (ASCII or binary, gzip-compressed or not) as its images: one per world, in file
+/// order, each with the frame it belongs to (see [`Frame`]).
+///
+/// # Errors
+/// A [`RibError`] when the file cannot be read, is empty, holds a malformed or misplaced request, or
+/// has no `WorldBegin` (a fragment, such as an archive of options, describes nothing to render).
+pub fn parse_file_frames(path: &Path) -> Result<Vec<Frame>, RibError> {
+    let name = path.display().to_string();
+    let bytes = read_rib_bytes(path).map_err(|m| RibError::whole_file(&name, m))?;
+    if bytes.iter().all(u8::is_ascii_whitespace) {
+        return Err(RibError::whole_file(
+            &name,
+            format!(
+                "the file is empty ({} bytes): it holds no requests to render",
+                bytes.len()
+            ),
+        ));
+    }
+    let base = path.parent().unwrap_or_else(|| Path::new(""));
+    let mut reader = Reader::new();
+    reader.run(&bytes, &name, base, 0)?;
+    if reader.world.is_none() && reader.images.is_empty() {
+        return Err(RibError::whole_file(
+            &name,
+            "no WorldBegin: the file is a fragment (options or an archive for ReadArchive), not a scene; \
+             a scene describes its world between WorldBegin and WorldEnd",
+        ));
+    }
+    reader.finish()
+}
+
+/// The last image's scene, with the warnings of all.
+fn last_image(frames: Vec<Frame>) -> Scene {
+    let mut warnings = Vec::new();
+    let mut last = None;
+    for f in frames {
+        warnings.extend(f.scene.warnings.iter().cloned());
+        last = Some(f.scene);
+    }
+    let mut scene = last.unwrap_or_else(|| Scene::new(CameraDesc::new(Format::new(640, 480))));
+    scene.warnings = warnings;
+    scene
+}
+
+/// Reads RIB text as one scene (its last image, as [`parse_file`]). `name` is used in messages;
+/// relative paths (ReadArchive, Display, lightColorMap) resolve against `base_dir`. Unlike
+/// [`parse_file`], text without `WorldBegin` is read as options and an empty world.
 ///
 /// # Errors
 /// A [`RibError`] naming `name` (or an archive) and the line of the first malformed or misplaced request.
 pub fn parse_str(text: &str, name: &str, base_dir: &Path) -> Result<Scene, RibError> {
+    parse_bytes(text.as_bytes(), name, base_dir)
+}
+
+/// Reads RIB bytes: ASCII, binary, or both mixed (not gzip-compressed: [`parse_file`] decompresses).
+/// As [`parse_str`] otherwise.
+///
+/// # Errors
+/// A [`RibError`] naming `name` (or an archive) and the line, or for binary RIB the request's index and
+/// byte offset, of the first malformed or misplaced request.
+pub fn parse_bytes(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Scene, RibError> {
+    Ok(last_image(parse_bytes_frames(bytes, name, base_dir)?))
+}
+
+/// Reads RIB bytes as their images (see [`parse_file_frames`]); text without `WorldBegin` gives one
+/// image of its options.
+///
+/// # Errors
+/// As [`parse_bytes`].
+pub fn parse_bytes_frames(bytes: &[u8], name: &str, base_dir: &Path) -> Result<Vec<Frame>, RibError> {
     let mut reader = Reader::new();
-    reader.run(text, name, base_dir, 0)?;
+    reader.run(bytes, name, base_dir, 0)?;
     reader.finish()
 }
 
@@ -139,13 +245,13 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 39] = {
+const REQUESTS: [Request; 49] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
         known("Version", Anywhere, Reader::ignore),
-        known("FrameBegin", Anywhere, Reader::ignore),
-        known("FrameEnd", Anywhere, Reader::ignore),
+        known("FrameBegin", Anywhere, Reader::frame_begin),
+        known("FrameEnd", Anywhere, Reader::frame_end),
         known("WorldBegin", Anywhere, Reader::world_begin),
         known("WorldEnd", World, Reader::world_end),
         known("Declare", Anywhere, Reader::declare),
@@ -160,6 +266,16 @@ const REQUESTS: [Request; 39] = {
         known("Display", Options, Reader::display),
         known("Projection", Options, Reader::projection),
         known("Camera", Options, Reader::camera),
+        known("FrameAspectRatio", Options, Reader::frame_aspect_ratio),
+        known("Perspective", Anywhere, Reader::perspective),
+        known("DepthOfField", Options, Reader::depth_of_field),
+        known("Exposure", Options, Reader::exposure),
+        known("CoordinateSystem", Anywhere, Reader::coordinate_system),
+        known("CoordSysTransform", Anywhere, Reader::coord_sys_transform),
+        known("ClippingPlane", Anywhere, Reader::without_effect),
+        known("Sides", Anywhere, Reader::without_effect),
+        known("Orientation", Anywhere, Reader::without_effect),
+        known("ReverseOrientation", Anywhere, Reader::without_effect),
         known("MotionBegin", Anywhere, Reader::motion_begin),
         known("MotionEnd", Anywhere, Reader::motion_end),
         known("AttributeBegin", Anywhere, |rd, r| {
@@ -176,8 +292,8 @@ const REQUESTS: [Request; 39] = {
         }),
         known("Attribute", Anywhere, Reader::attribute),
         known("Bxdf", Anywhere, Reader::bxdf),
-        known("Light", World, Reader::light),
-        known("LightSource", World, Reader::light),
+        known("Light", Anywhere, Reader::any_light),
+        known("LightSource", Anywhere, Reader::any_light),
         known("AreaLightSource", World, Reader::light),
         known("ReadArchive", Anywhere, Reader::read_archive),
         known("Sphere", World, Reader::quadric),
@@ -216,6 +332,36 @@ struct Reader {
     warned_attributes: HashSet<String>,
     /// Options already warned about.
     warned_options: HashSet<String>,
+    /// `file:line` of each of the scene's displays, in order.
+    display_origins: Vec<String>,
+    /// The open `FrameBegin`.
+    frame: Option<OpenFrame>,
+    /// The options as they were at the open world's `WorldBegin`.
+    before_world: Option<Saved>,
+    /// Lights read before `WorldBegin`, placed when it comes.
+    camera_lights: Vec<CameraLight>,
+    /// The images of the worlds read so far.
+    images: Vec<Frame>,
+    /// `FrameAspectRatio`.
+    frame_aspect: Option<f32>,
+    /// `DepthOfField`.
+    depth_of_field: Option<camera::DepthOfField>,
+    /// `CoordinateSystem`s: the CTM named, and whether it was named in the world.
+    coordinate_systems: HashMap<String, (Ctm, bool)>,
+    /// `ArchiveBegin` blocks read so far, by name.
+    inline_archives: HashMap<String, Vec<lex::Command>>,
+    /// The `ArchiveBegin` block being read.
+    recording: Option<InlineArchive>,
+}
+
+/// An `ArchiveBegin` block being read.
+struct InlineArchive {
+    name: String,
+    /// `ArchiveBegin`s nested inside it, not yet closed.
+    nesting: u32,
+    commands: Vec<lex::Command>,
+    file: String,
+    line: u32,
 }
 
 impl Reader {
@@ -232,50 +378,132 @@ impl Reader {
             declared: HashMap::new(),
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),
+            display_origins: Vec::new(),
+            frame: None,
+            before_world: None,
+            camera_lights: Vec::new(),
+            images: Vec::new(),
+            frame_aspect: None,
+            depth_of_field: None,
+            coordinate_systems: HashMap::new(),
+            inline_archives: HashMap::new(),
+            recording: None,
         }
     }
 
     /// Reads the requests of `text` (from `file`, `depth` archives deep), resolving paths against `base`.
-    fn run(&mut self, text: &str, file: &str, base: &Path, depth: u32) -> Result<(), RibError> {
-        let commands = lex(text).map_err(|e| RibError {
+    fn run(&mut self, bytes: &[u8], file: &str, base: &Path, depth: u32) -> Result<(), RibError> {
+        let commands = lex(bytes).map_err(|e| RibError {
             file: file.to_string(),
             line: e.line,
+            request: None,
+            byte: e.byte,
             message: e.message,
         })?;
-        for c in &commands {
+        self.run_commands(&commands, file, base, depth)
+    }
+
+    /// Handles `commands` read from `file`: an `ArchiveBegin "name"` … `ArchiveEnd` block is kept,
+    /// not run, until a `ReadArchive "name"` replays it (RISpec 3.3 inline archives).
+    fn run_commands(
+        &mut self,
+        commands: &[lex::Command],
+        file: &str,
+        base: &Path,
+        depth: u32,
+    ) -> Result<(), RibError> {
+        for c in commands {
             let r = Req {
                 file,
                 base,
                 depth,
                 name: &c.name,
                 line: c.line,
+                binary: c.binary,
                 args: &c.args,
             };
-            self.request(&r)?;
+            if let Some(rec) = &mut self.recording {
+                match c.name.as_str() {
+                    "ArchiveEnd" if rec.nesting == 0 => {
+                        if let Some(rec) = self.recording.take() {
+                            self.inline_archives.insert(rec.name, rec.commands);
+                        }
+                        continue;
+                    }
+                    "ArchiveBegin" => rec.nesting += 1,
+                    "ArchiveEnd" => rec.nesting -= 1,
+                    _ => {}
+                }
+                rec.commands.push(c.clone());
+                continue;
+            }
+            match c.name.as_str() {
+                "ArchiveBegin" => {
+                    let Some(Value::Str(name)) = c.args.first() else {
+                        return Err(r.err("ArchiveBegin expects an archive name (a string)"));
+                    };
+                    self.recording = Some(InlineArchive {
+                        name: name.clone(),
+                        nesting: 0,
+                        commands: Vec::new(),
+                        file: file.to_string(),
+                        line: c.line,
+                    });
+                }
+                "ArchiveEnd" => return Err(r.err("ArchiveEnd without a matching ArchiveBegin")),
+                _ => self.request(&r)?,
+            }
         }
         Ok(())
     }
 
-    /// The scene, once every block is closed.
-    fn finish(mut self) -> Result<Scene, RibError> {
+    /// The images, once every block is closed: a world still open at the end of the file is closed
+    /// there; text without any world gives one image of its options (and an empty world).
+    fn finish(mut self) -> Result<Vec<Frame>, RibError> {
+        if let Some(a) = &self.recording {
+            return Err(RibError {
+                line: a.line,
+                ..RibError::whole_file(
+                    &a.file,
+                    format!("ArchiveBegin \"{}\" has no matching ArchiveEnd", a.name),
+                )
+            });
+        }
         if let Some(m) = &self.motion {
             return Err(RibError {
-                file: m.file.clone(),
                 line: m.line,
-                message: "MotionBegin has no matching MotionEnd".into(),
+                ..RibError::whole_file(&m.file, "MotionBegin has no matching MotionEnd")
             });
         }
         if let Some(b) = self.blocks.last() {
             return Err(RibError {
-                file: b.file.clone(),
                 line: b.line,
-                message: format!("{} has no matching {}", b.kind.begin(), b.kind.end()),
+                ..RibError::whole_file(
+                    &b.file,
+                    format!("{} has no matching {}", b.kind.begin(), b.kind.end()),
+                )
             });
         }
-        if self.world.is_none() {
+        self.close_world();
+        if self.images.is_empty() {
             self.store_camera_transform();
+            self.images.push(Frame {
+                number: 1,
+                numbered: false,
+                world: String::new(),
+                scene: self.scene,
+            });
         }
-        Ok(self.scene)
+        Ok(self.images)
+    }
+
+    /// `LightSource`/`Light`: in the world, a light; before `WorldBegin`, a light fixed to the camera.
+    fn any_light(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        if self.world.is_some() {
+            self.light(r)
+        } else {
+            self.camera_light(r)
+        }
     }
 
     /// Records a warning at the request.
@@ -298,13 +526,25 @@ impl Reader {
             self.warn(r, format!("unknown request {}, skipped", r.name));
             return Ok(());
         };
-        if let Some(m) = &self.motion
+        if let Some(m) = &mut self.motion
             && r.name != "MotionEnd"
         {
-            return Err(r.err(format!(
-                "{} inside MotionBegin (at {}:{}): only transform requests may move",
-                r.name, m.file, m.line
-            )));
+            // Deformation blur: the request of the first time stands, the later ones are dropped.
+            m.others += 1;
+            if m.others > 1 {
+                if m.others == 2 {
+                    let at = format!("{}:{}", m.file, m.line);
+                    self.warn(
+                        r,
+                        format!(
+                            "{} inside MotionBegin (at {at}): deformation motion blur is not supported; \
+                             the first time's {} stands, the others are dropped",
+                            r.name, r.name
+                        ),
+                    );
+                }
+                return Ok(());
+            }
         }
         match request.scope {
             Scope::Options if self.world.is_some() => {
@@ -320,39 +560,6 @@ impl Reader {
     /// Requests that need nothing done (`version`, `FrameBegin`, `FrameEnd`).
     fn ignore(&mut self, _r: &Req<'_>) -> Result<(), RibError> {
         Ok(())
-    }
-
-    /// `WorldBegin`: the CTM so far becomes the camera transform, and the world starts at the identity.
-    fn world_begin(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        if let Some(at) = &self.world {
-            return Err(r.err(format!("WorldBegin: the world block was already begun at {at}")));
-        }
-        if let Some(b) = self.blocks.last() {
-            return Err(r.err(format!(
-                "WorldBegin inside {} (at {}:{}): close it first",
-                b.kind.begin(),
-                b.file,
-                b.line
-            )));
-        }
-        self.store_camera_transform();
-        self.ctm = Ctm::identity();
-        self.world = Some(r.at());
-        Ok(())
-    }
-
-    /// `WorldEnd`: every attribute and transform block must be closed.
-    fn world_end(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        match self.blocks.last() {
-            Some(b) => Err(r.err(format!(
-                "WorldEnd: {} at {}:{} has no matching {}",
-                b.kind.begin(),
-                b.file,
-                b.line,
-                b.kind.end()
-            ))),
-            None => Ok(()),
-        }
     }
 
     /// `Declare "name" "type"`: lets later parameter lists write `name` bare.
@@ -378,11 +585,14 @@ impl Reader {
                 "ReadArchive \"{file}\": archives nested more than {MAX_ARCHIVE_DEPTH} deep (does an archive read itself?)"
             )));
         }
+        if let Some(commands) = self.inline_archives.get(file.as_str()).cloned() {
+            return self.run_commands(&commands, r.file, r.base, r.depth + 1);
+        }
         let path = r.resolve(file);
-        let text = std::fs::read_to_string(&path)
-            .map_err(|e| r.err(format!("ReadArchive: cannot read \"{}\": {e}", path.display())))?;
+        let bytes =
+            read_rib_bytes(&path).map_err(|e| r.err(format!("ReadArchive \"{}\": {e}", path.display())))?;
         let name = path.display().to_string();
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        self.run(&text, &name, &base, r.depth + 1)
+        self.run(&bytes, &name, &base, r.depth + 1)
     }
 }

@@ -1,14 +1,14 @@
 //! The options: what the image and the camera are (`Format`, `ScreenWindow`, `CropWindow`, `Shutter`,
-//! `Clipping`, `PixelFilter`, `Hider`, `Display`, `Projection`, `Camera`, `Option`). They may only come
-//! before `WorldBegin`.
+//! `Clipping`, `PixelFilter`, `Hider`, `Projection`, `Camera`, `Option`; `Display` is in `display.rs`).
+//! They may only come before `WorldBegin`.
 
 use obscura_host::CropWindow;
 use obscura_sdk::{Format, ScreenWindow};
 
 use super::lex::Value;
-use super::request::{Req, get_float, get_floats, get_int, get_string};
+use super::request::{Req, get_float, get_floats, get_int};
 use super::{Reader, RibError};
-use crate::types::{Aov, Display, DisplayDriver, FilterKind, PixelFilter};
+use crate::types::{FilterKind, PixelFilter};
 
 /// `Clipping` far values at least this large mean "no far plane" (RenderMan writes 1e30).
 const FAR_IS_INFINITE: f32 = 1e30;
@@ -21,30 +21,6 @@ pub(super) const FILTERS: [(&str, FilterKind); 6] = [
     ("catmull-rom", FilterKind::CatmullRom),
     ("mitchell", FilterKind::Mitchell),
     ("blackman-harris", FilterKind::BlackmanHarris),
-];
-
-/// The names a `Display` channel list may use.
-const CHANNELS: [(&str, &[Aov]); 20] = [
-    ("rgb", &[Aov::Ci]),
-    ("rgba", &[Aov::Ci, Aov::Alpha]),
-    ("rgbz", &[Aov::Ci, Aov::Z]),
-    ("rgbaz", &[Aov::Ci, Aov::Alpha, Aov::Z]),
-    ("Ci", &[Aov::Ci]),
-    ("a", &[Aov::Alpha]),
-    ("z", &[Aov::Z]),
-    ("N", &[Aov::N]),
-    ("P", &[Aov::P]),
-    ("cameraDirection", &[Aov::CameraDirection]),
-    ("cameraZ", &[Aov::CameraZ]),
-    ("distance", &[Aov::Distance]),
-    ("Pcamera", &[Aov::PCamera]),
-    ("Ncamera", &[Aov::NCamera]),
-    ("objectId", &[Aov::ObjectId]),
-    ("instanceId", &[Aov::InstanceId]),
-    ("materialId", &[Aov::MaterialId]),
-    ("flowForward", &[Aov::FlowForward]),
-    ("flowBackward", &[Aov::FlowBackward]),
-    ("flowValid", &[Aov::FlowValid]),
 ];
 
 /// Parameters a projection may be given by bare name (`Projection "perspective" "fov" [40]`).
@@ -124,22 +100,30 @@ impl Reader {
         Ok(())
     }
 
-    /// `Format width height pixelaspect`.
+    /// `Format width height pixelaspect`. As RISpec 3.2 says, a value ≤ 0 means "the default": a
+    /// width or height ≤ 0 keeps the current one, and a pixel aspect ≤ 0 (RenderMan writes −1) is 1.
     pub(super) fn format(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let [w, h, pa] = r.only_numbers::<3>("width height pixelaspect")?;
-        let size = |v: f32| (v >= 1.0 && v.fract() == 0.0 && v <= u32::MAX as f32).then_some(v as u32);
-        let (Some(width), Some(height)) = (size(w), size(h)) else {
+        let current = self.scene.camera.format;
+        let size = |v: f32, keep: u32| {
+            if v <= 0.0 {
+                Some(keep)
+            } else {
+                (v >= 1.0 && v.fract() == 0.0 && v <= u32::MAX as f32).then_some(v as u32)
+            }
+        };
+        let (Some(width), Some(height)) = (size(w, current.width), size(h, current.height)) else {
             return Err(r.err(format!(
-                "Format expects a positive integer width and height, got {w} {h}"
+                "Format expects a positive integer width and height (or ≤ 0 for the current one), got {w} {h}"
             )));
         };
-        if pa <= 0.0 {
-            return Err(r.err(format!("Format expects a positive pixel aspect ratio, got {pa}")));
+        if !pa.is_finite() {
+            return Err(r.err(format!("Format expects a finite pixel aspect ratio, got {pa}")));
         }
         self.scene.camera.format = Format {
             width,
             height,
-            pixel_aspect: pa,
+            pixel_aspect: if pa <= 0.0 { 1.0 } else { pa },
         };
         Ok(())
     }
@@ -149,12 +133,24 @@ impl Reader {
         let [Value::Str(name), rest @ ..] = r.args else {
             return Err(r.err("PixelFilter expects a filter name then xwidth ywidth"));
         };
-        let Some(&(_, kind)) = FILTERS.iter().find(|(n, _)| n == name) else {
-            let names: Vec<&str> = FILTERS.iter().map(|(n, _)| *n).collect();
-            return Err(r.err(format!(
-                "PixelFilter: unknown filter \"{name}\"; expected one of {}",
-                names.join(", ")
-            )));
+        let kind = match FILTERS.iter().find(|(n, _)| n == name) {
+            Some(&(_, kind)) => kind,
+            None => {
+                // Filters of other renderers: the nearest here, by the shape of their kernel.
+                let (stand_in, kind) = match name.as_str() {
+                    "sinc" | "lanczos" | "separable-catmull-rom" => ("catmull-rom", FilterKind::CatmullRom),
+                    _ => ("gaussian", FilterKind::Gaussian),
+                };
+                let names: Vec<&str> = FILTERS.iter().map(|(n, _)| *n).collect();
+                self.warn(
+                    r,
+                    format!(
+                        "PixelFilter \"{name}\" is not available: {stand_in} of the same width is used (available: {})",
+                        names.join(", ")
+                    ),
+                );
+                kind
+            }
         };
         let ([width_x, width_y], extra) = r.numbers::<2>(rest, "a filter name then xwidth ywidth")?;
         if !extra.is_empty() {
@@ -198,73 +194,6 @@ impl Reader {
                 .ok_or_else(|| r.err(format!("Hider: maxsamples must be at least 1, got {n}")))?;
             self.scene.samples_per_pixel = n;
         }
-        Ok(())
-    }
-
-    /// `Display "file" "driver" "channels"`: replaces the displays, or adds one when the file starts
-    /// with `+`.
-    pub(super) fn display(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        let [
-            Value::Str(file),
-            Value::Str(driver),
-            Value::Str(channels),
-            rest @ ..,
-        ] = r.args
-        else {
-            return Err(r.err("Display expects \"file\" \"driver\" \"channels\" (3 strings) then parameters"));
-        };
-        let (append, file) = match file.strip_prefix('+') {
-            Some(f) => (true, f),
-            None => (false, file.as_str()),
-        };
-        if file.is_empty() {
-            return Err(r.err("Display expects a file name, got \"\""));
-        }
-        let driver = match driver.as_str() {
-            "openexr" | "exr" => DisplayDriver::OpenExr,
-            "png" => DisplayDriver::Png,
-            "deepexr" => DisplayDriver::DeepExr,
-            other => {
-                return Err(r.err(format!(
-                    "Display: unknown driver \"{other}\"; expected one of openexr, exr, png, deepexr"
-                )));
-            }
-        };
-        let mut aovs: Vec<Aov> = Vec::new();
-        for channel in channels.split(',').map(str::trim) {
-            let Some((_, list)) = CHANNELS.iter().find(|(n, _)| *n == channel) else {
-                let known: Vec<&str> = CHANNELS.iter().map(|(n, _)| *n).collect();
-                return Err(r.err(format!(
-                    "Display: unknown channel \"{channel}\"; known channels: {}",
-                    known.join(", ")
-                )));
-            };
-            for aov in list.iter() {
-                if !aovs.contains(aov) {
-                    aovs.push(*aov);
-                }
-            }
-        }
-        let params = self.params(r, rest, &["string type"], false)?;
-        let half = match get_string(&params, "type") {
-            None | Some("float") => false,
-            Some("half") => true,
-            Some(other) => {
-                return Err(r.err(format!(
-                    "Display: \"string type\" must be \"half\" or \"float\", got \"{other}\""
-                )));
-            }
-        };
-        let display = Display {
-            path: r.resolve(file),
-            driver,
-            aovs,
-            half,
-        };
-        if !append {
-            self.scene.displays.clear();
-        }
-        self.scene.displays.push(display);
         Ok(())
     }
 

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use obscura_sdk::{ParamList, ParamType, ParamValue, Rgb, parse_declaration};
 
-use super::lex::{Num, Value, describe};
+use super::lex::{BinaryAt, Num, Value, describe};
 use super::{Reader, RibError};
 
 /// One request being handled: its file, the directory relative paths resolve against, its arguments.
@@ -21,14 +21,17 @@ pub(super) struct Req<'a> {
     pub(super) name: &'a str,
     /// The line (from 1) of the request name.
     pub(super) line: u32,
+    /// For a binary-encoded request: its index and byte offset.
+    pub(super) binary: Option<BinaryAt>,
     /// The arguments.
     pub(super) args: &'a [Value],
 }
 
 impl<'a> Req<'a> {
-    /// `file:line`, the origin recorded in parameter lists and objects.
+    /// `file:line` (binary RIB: `file: request N at byte B`), the origin recorded in parameter lists
+    /// and objects.
     pub(super) fn at(&self) -> String {
-        format!("{}:{}", self.file, self.line)
+        self.err("").location()
     }
 
     /// An error at this request.
@@ -36,6 +39,8 @@ impl<'a> Req<'a> {
         RibError {
             file: self.file.to_string(),
             line: self.line,
+            request: self.binary.map(|b| b.index),
+            byte: self.binary.map(|b| b.byte),
             message: message.into(),
         }
     }
@@ -74,6 +79,18 @@ impl<'a> Req<'a> {
             }
         };
         let got = values.len();
+        if got < N
+            && let Some(other) = rest
+                .first()
+                .filter(|v| !matches!(v, Value::Num(_) | Value::Nums(_)))
+        {
+            return Err(self.err(format!(
+                "{} expects {what} ({N} numbers); argument {} is {}, where a number is expected",
+                self.name,
+                got + 1,
+                describe(other)
+            )));
+        }
         let array: [f32; N] = values
             .into_iter()
             .map(|v| v as f32)

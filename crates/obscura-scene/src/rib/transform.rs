@@ -116,6 +116,8 @@ pub(super) struct Block {
 pub(super) struct MotionBlock {
     pub(super) times: Vec<f32>,
     pub(super) ops: Vec<Op>,
+    /// Requests other than transforms read in the block (deformation blur: only the first stands).
+    pub(super) others: u32,
     pub(super) file: String,
     pub(super) line: u32,
 }
@@ -218,6 +220,7 @@ impl Reader {
         self.motion = Some(MotionBlock {
             times,
             ops: Vec::new(),
+            others: 0,
             file: r.file.to_string(),
             line: r.line,
         });
@@ -230,6 +233,11 @@ impl Reader {
             return Err(r.err("MotionEnd without a matching MotionBegin"));
         };
         let (n, k) = (m.times.len(), m.ops.len());
+        if k == 0 {
+            // A block of deforming geometry (its first time was read) or of requests skipped with a
+            // warning: nothing moves.
+            return Ok(());
+        }
         if k == 0 || k % n != 0 {
             return Err(r.err(format!(
                 "MotionEnd: MotionBegin at {}:{} gives {n} times but the block holds {k} transform requests; expected {n} (one per time, or a multiple of {n} for several groups)",

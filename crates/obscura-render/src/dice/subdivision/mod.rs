@@ -3,7 +3,8 @@
 //!
 //! The level is the smallest `j ≥ 1` with `L·k / 2^j ≤ m` (`L` the control mesh's longest edge, `k`
 //! for the control points' bounding sphere), i.e. `j = clamp(⌈log₂(L·k/m)⌉, 1, 6)`, lowered while
-//! the result would exceed [`MAX_QUADS_PER_PRIMITIVE`]. After `j` uniform steps (the first turns an
+//! the result would exceed the primitive's [`quad_budget`] (the quads its on-screen coverage
+//! allows, at most [`MAX_QUADS_PER_PRIMITIVE`](super::MAX_QUADS_PER_PRIMITIVE)). After `j` uniform steps (the first turns an
 //! n-gon into n quads) every vertex moves to its limit position:
 //!
 //! - smooth interior vertex of valence `n`: `(n²·S + 4·Σ eᵢ + Σ fᵢ) / (n·(n + 5))` (`eᵢ` the edge
@@ -35,8 +36,8 @@ use self::limit::limit_surface;
 /// Also named by the tests, which build a level's topology directly.
 pub(super) use self::topology::Topology;
 use super::{
-    DiceError, DicingContext, INFINITE_SHARPNESS, MAX_QUADS_PER_PRIMITIVE, MAX_SUBDIVISION_LEVEL,
-    check_finite, micropolygon_length, pixels_per_unit,
+    DiceError, DicingContext, INFINITE_SHARPNESS, MAX_SUBDIVISION_LEVEL, check_finite, micropolygon_length,
+    pixels_per_unit, quad_budget,
 };
 use crate::ray::TriangleMesh;
 
@@ -165,16 +166,14 @@ pub(super) fn subdivision(mesh: &SubdivMesh, ctx: &DicingContext) -> Result<Tria
     subdivide_to_limit(level, topology, levels)
 }
 
-/// `clamp(⌈log₂(L·k/m)⌉, 1, 6)`, lowered to fit [`MAX_QUADS_PER_PRIMITIVE`].
+/// `clamp(⌈log₂(L·k/m)⌉, 1, 6)`, lowered to fit the primitive's [`quad_budget`] (at most
+/// [`MAX_QUADS_PER_PRIMITIVE`](super::MAX_QUADS_PER_PRIMITIVE)).
 pub(super) fn subdivision_level(level: &Level, topology: &Topology, ctx: &DicingContext) -> u32 {
     let used = || level.face_verts.iter().map(|&v| level.positions[v as usize]);
     let lo = used().fold(DVec3::splat(f64::INFINITY), DVec3::min);
     let hi = used().fold(DVec3::splat(f64::NEG_INFINITY), DVec3::max);
-    let k = f64::from(pixels_per_unit(
-        ctx,
-        (0.5 * (lo + hi)).as_vec3(),
-        (0.5 * (hi - lo).length()) as f32,
-    ));
+    let (centre, radius) = ((0.5 * (lo + hi)).as_vec3(), (0.5 * (hi - lo).length()) as f32);
+    let k = f64::from(pixels_per_unit(ctx, centre, radius));
     let longest = topology
         .edges
         .iter()
@@ -187,7 +186,8 @@ pub(super) fn subdivision_level(level: &Level, topology: &Topology, ctx: &Dicing
         pixels.log2().ceil().clamp(1.0, f64::from(MAX_SUBDIVISION_LEVEL)) as u32
     };
     let first = level.face_verts.len() as u64;
-    while levels > 1 && first.saturating_mul(1 << (2 * (levels - 1))) > MAX_QUADS_PER_PRIMITIVE {
+    let budget = quad_budget(ctx, centre, radius);
+    while levels > 1 && first.saturating_mul(1 << (2 * (levels - 1))) > budget {
         levels -= 1;
     }
     levels

@@ -1,6 +1,7 @@
 //! Tests of dicing: the rate (this file), quadrics and Catmull–Clark surfaces (one file each), and
 //! the helpers they share (watertightness, area, edge lengths).
 
+mod bounds;
 mod quadric;
 mod subdivision;
 

@@ -2,7 +2,9 @@
 
 use glam::{Mat4, Vec3};
 
+use super::{fail, ok};
 use crate::rib::parse_file;
+use crate::types::Shape;
 
 #[test]
 fn read_archive_reads_in_place_with_the_same_state() {
@@ -59,7 +61,7 @@ fn missing_archive_names_the_including_file_and_line() {
     let missing = dir.path().join("nope.rib").display().to_string();
     assert!(
         e.message
-            .starts_with(&format!("ReadArchive: cannot read \"{missing}\": ")),
+            .starts_with(&format!("ReadArchive \"{missing}\": cannot read the file: ")),
         "{e}"
     );
 }
@@ -92,4 +94,26 @@ fn parse_file_names_the_file_in_messages() {
     );
     let e = parse_file(&dir.path().join("absent.rib")).unwrap_err();
     assert_eq!(e.line, 0);
+}
+
+#[test]
+fn an_inline_archive_is_kept_until_read_and_then_read_each_time() {
+    let s = ok(
+        "ArchiveBegin \"wave\"\n  Sphere 1 -1 1 360\n  ArchiveBegin \"inner\"\n  Cone 1 1 360\n  ArchiveEnd\nArchiveEnd\n\
+         WorldBegin\nReadArchive \"wave\"\nTranslate 1 0 0\nReadArchive \"wave\"\nReadArchive \"inner\"\nWorldEnd\n",
+    );
+    let kinds: Vec<bool> = s
+        .objects
+        .iter()
+        .map(|o| matches!(o.shape, Shape::Sphere { .. }))
+        .collect();
+    assert_eq!(kinds, [true, true, false]);
+    assert_eq!(
+        fail("ArchiveBegin \"a\"\nSphere 1 -1 1 360\n"),
+        "t.rib:1: ArchiveBegin \"a\" has no matching ArchiveEnd"
+    );
+    assert_eq!(
+        fail("\nArchiveEnd\n"),
+        "t.rib:2: ArchiveEnd without a matching ArchiveBegin"
+    );
 }

@@ -50,7 +50,10 @@ fn unterminated_string_names_the_line_it_started() {
 #[test]
 fn unterminated_array_names_the_line_it_started() {
     let msg = fail("WorldBegin\nPolygon \"P\" [0 0 0\n1 0 0\nSphere 1 -1 1 360\n");
-    assert_eq!(msg, "t.rib:2: unterminated array: no ']' before the next request");
+    assert_eq!(
+        msg,
+        "t.rib:2: unterminated array: no ']' before the next request (Sphere)"
+    );
     let msg = fail("WorldBegin\n\nPolygon \"P\" [0 0 0\n1 0 0\n");
     assert_eq!(msg, "t.rib:3: unterminated array: the closing ']' is missing");
 }

@@ -1,6 +1,9 @@
 //! The RIB reader's tests, by topic; the helpers here parse text as a file `t.rib` in `/base`.
 
 mod archive;
+mod camera;
+mod encoding;
+mod frames;
 mod geometry;
 mod lex;
 mod options;

@@ -7,7 +7,7 @@ use obscura_sdk::{Format, ParamType, ParamValue, ScreenWindow};
 
 use super::*;
 use crate::rib::options::FILTERS;
-use crate::types::{Aov, Display, DisplayDriver, PixelFilter};
+use crate::types::{Aov, Display, DisplayDriver, FilterKind, PixelFilter};
 
 #[test]
 fn default_scene_is_640_by_480() {
@@ -38,7 +38,7 @@ fn format_with_wrong_arg_count_names_request_and_line() {
     );
     assert_eq!(
         fail("Format 64.5 64 1"),
-        "t.rib:1: Format expects a positive integer width and height, got 64.5 64"
+        "t.rib:1: Format expects a positive integer width and height (or ≤ 0 for the current one), got 64.5 64"
     );
 }
 
@@ -122,12 +122,17 @@ fn pixel_filter_sets_kind_and_widths() {
 }
 
 #[test]
-fn unknown_pixel_filter_lists_the_six() {
+fn an_unknown_pixel_filter_is_the_nearest_one_with_a_warning_listing_the_six() {
+    let s = ok("\nPixelFilter \"sinc\" 3 3");
+    assert_eq!((s.filter.kind, s.filter.width_x), (FilterKind::CatmullRom, 3.0));
     assert_eq!(
-        fail("\nPixelFilter \"sinc\" 2 2"),
-        "t.rib:2: PixelFilter: unknown filter \"sinc\"; expected one of box, triangle, gaussian, \
-         catmull-rom, mitchell, blackman-harris"
+        s.warnings,
+        [
+            "t.rib:2: PixelFilter \"sinc\" is not available: catmull-rom of the same width is used (available: \
+          box, triangle, gaussian, catmull-rom, mitchell, blackman-harris)"
+        ]
     );
+    assert_eq!(ok("PixelFilter \"bessel\" 2 2").filter.kind, FilterKind::Gaussian);
     assert_eq!(
         fail("PixelFilter \"box\" 2"),
         "t.rib:1: PixelFilter expects a filter name then xwidth ywidth (2 numbers), got 1"
@@ -200,20 +205,100 @@ fn display_adds_or_replaces_and_reads_channels_and_type() {
 }
 
 #[test]
-fn display_with_unknown_channel_names_it_and_the_known_ones() {
+fn display_leaves_out_an_unknown_aov_with_a_warning_naming_it() {
+    let scene = ok("\nDisplay \"a.exr\" \"openexr\" \"rgba,Cs\"");
+    assert_eq!(scene.displays[0].aovs, vec![Aov::Ci, Aov::Alpha]);
     assert_eq!(
-        fail("\nDisplay \"a.exr\" \"openexr\" \"rgba,Cs\""),
-        "t.rib:2: Display: unknown channel \"Cs\"; known channels: rgb, rgba, rgbz, rgbaz, Ci, a, z, N, \
-         P, cameraDirection, cameraZ, distance, Pcamera, Ncamera, objectId, instanceId, materialId, \
-         flowForward, flowBackward, flowValid"
+        scene.warnings,
+        [
+            "t.rib:2: Display \"a.exr\": AOV \"Cs\" is not produced by this renderer, left out (known: rgb, \
+          rgba, rgbz, rgbaz, az, Ci, a, z, Z, N, P, cameraDirection, depth, cameraZ, distance, Pcamera, Ncamera, \
+          objectId, instanceId, materialId, flowForward, flowBackward, flowValid)"
+        ]
     );
+    // A display left with no AOV is skipped, said so.
+    let scene = ok("Display \"a.exr\" \"openexr\" \"color Oi\"");
+    assert!(scene.displays.is_empty());
+    assert!(
+        scene.warnings[1]
+            .ends_with("no AOV of mode \"color Oi\" is produced here, so the display is skipped")
+    );
+    // A typed AOV name is read by its name.
     assert_eq!(
-        fail("Display \"a.tif\" \"tiff\" \"rgba\""),
-        "t.rib:1: Display: unknown driver \"tiff\"; expected one of openexr, exr, png, deepexr"
+        ok("Display \"n.exr\" \"openexr\" \"normal N\"").displays[0].aovs,
+        vec![Aov::N]
     );
     assert_eq!(
         fail("Display \"a.exr\" \"openexr\" \"rgba\" \"string type\" \"double\""),
         "t.rib:1: Display: \"string type\" must be \"half\" or \"float\", got \"double\""
+    );
+}
+
+#[test]
+fn every_display_driver_is_written_as_a_file() {
+    let scene = ok("Display \"a.tif\" \"tiff\" \"rgba\"\n\
+         Display \"+b.pic\" \"file\" \"rgb\"\n\
+         Display \"+c.exr\" \"file\" \"rgba\"\n\
+         Display \"+d.png\" \"file\" \"rgb\"\n\
+         Display \"+shadow.z\" \"zfile\" \"z\"\n\
+         Display \"+map.shd\" \"shadow\" \"rgb\"\n\
+         Display \"+depth.exr\" \"zfile\" \"z\"\n\
+         Display \"+fb\" \"framebuffer\" \"rgb\"\n\
+         Display \"+view.tif\" \"it\" \"rgba\"\n\
+         Display \"+pic.xpm\" \"xpm\" \"rgb\"\n\
+         Display \"+pic2.png\" \"sgi\" \"rgb\"\n");
+    let got: Vec<(String, DisplayDriver, Vec<Aov>)> = scene
+        .displays
+        .iter()
+        .map(|d| (d.path.display().to_string(), d.driver, d.aovs.clone()))
+        .collect();
+    let (rgb, rgba, z) = (vec![Aov::Ci], vec![Aov::Ci, Aov::Alpha], vec![Aov::Z]);
+    let want = [
+        ("/base/a.tif", DisplayDriver::Tiff, &rgba),
+        ("/base/b.pic", DisplayDriver::Tiff, &rgb),
+        ("/base/c.exr", DisplayDriver::OpenExr, &rgba),
+        ("/base/d.png", DisplayDriver::Png, &rgb),
+        ("/base/shadow.z", DisplayDriver::Tiff, &z),
+        ("/base/map.shd", DisplayDriver::Tiff, &z),
+        ("/base/depth.exr", DisplayDriver::OpenExr, &z),
+        ("/base/fb.exr", DisplayDriver::OpenExr, &rgb),
+        ("/base/view.exr", DisplayDriver::OpenExr, &rgba),
+        ("/base/pic.tif", DisplayDriver::Tiff, &rgb),
+        ("/base/pic2.png", DisplayDriver::Png, &rgb),
+    ];
+    assert_eq!(got.len(), want.len());
+    for (g, w) in got.iter().zip(want) {
+        assert_eq!((g.0.as_str(), g.1, &g.2), w);
+    }
+    assert_eq!(
+        scene.warnings,
+        [
+            "t.rib:8: Display driver \"framebuffer\" shows a window, which a batch render has not: written to /base/fb.exr instead",
+            "t.rib:9: Display driver \"it\" shows a window, which a batch render has not: written to /base/view.exr instead",
+            "t.rib:10: Display driver \"xpm\" is not known: written as TIFF to /base/pic.tif",
+            "t.rib:11: Display driver \"sgi\" is not known: written by its extension to /base/pic2.png",
+        ]
+    );
+}
+
+#[test]
+fn two_displays_naming_one_file_is_an_error_naming_both() {
+    assert_eq!(
+        fail("Display \"a.tif\" \"file\" \"rgba\"\nDisplay \"+a.tif\" \"tiff\" \"z\"\n"),
+        "t.rib:2: Display \"+a.tif\" writes /base/a.tif, which the display at t.rib:1 writes already: two \
+         displays naming one file would overwrite each other"
+    );
+    // Interactive drivers become files too, so they can collide.
+    assert!(
+        fail("Display \"fb\" \"framebuffer\" \"rgb\"\nDisplay \"+fb.exr\" \"openexr\" \"z\"\n")
+            .contains("which the display at t.rib:1 writes already")
+    );
+    // A display without "+" replaces the list: no collision.
+    assert_eq!(
+        ok("Display \"a.tif\" \"file\" \"rgba\"\nDisplay \"a.tif\" \"file\" \"rgb\"\n")
+            .displays
+            .len(),
+        1
     );
 }
 

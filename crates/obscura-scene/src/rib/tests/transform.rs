@@ -3,7 +3,7 @@
 use glam::{Mat4, Vec3};
 
 use super::*;
-use crate::types::MotionTransform;
+use crate::types::{MotionTransform, Shape};
 
 #[test]
 fn translate_before_world_begin_puts_the_world_origin_at_plus_z() {
@@ -176,6 +176,21 @@ fn attribute_end_restores_a_static_transform_after_motion() {
 }
 
 #[test]
+fn deforming_geometry_takes_its_first_time_with_a_warning() {
+    let s =
+        ok("WorldBegin\nMotionBegin [0 1]\nSphere 1 -1 1 360\nSphere 2 -2 2 360\nMotionEnd\nCone 1 1 360\n");
+    assert_eq!(s.objects.len(), 2);
+    assert!(matches!(s.objects[0].shape, Shape::Sphere { radius, .. } if radius == 1.0));
+    assert_eq!(
+        s.warnings,
+        [
+            "t.rib:4: Sphere inside MotionBegin (at t.rib:2): deformation motion blur is not supported; the first \
+          time's Sphere stands, the others are dropped"
+        ]
+    );
+}
+
+#[test]
 fn malformed_motion_blocks_are_errors() {
     assert_eq!(
         fail("WorldBegin\nMotionBegin [0 1]\nTranslate 1 0 0\nMotionEnd\n"),
@@ -184,7 +199,7 @@ fn malformed_motion_blocks_are_errors() {
     );
     assert_eq!(
         fail("WorldBegin\nMotionBegin [0 1]\nSphere 1 -1 1 360\n"),
-        "t.rib:3: Sphere inside MotionBegin (at t.rib:2): only transform requests may move"
+        "t.rib:2: MotionBegin has no matching MotionEnd"
     );
     assert_eq!(
         fail("MotionBegin [0 1]\nTranslate 1 0 0\n"),
