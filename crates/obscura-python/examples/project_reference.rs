@@ -2,9 +2,11 @@
 //! projection through the host's camera stage, from Rust, on the same number of screen samples, in
 //! the same batches of 4096 (`CameraStage::run_prepared`, the chief-ray path `project` takes without
 //! lens or time samples), on 1 or more threads. Output is the stage's own AoS rays; no numpy arrays.
+//! With `MODE` = `keep`, every call also allocates N rays and tints and copies each batch's there (the
+//! work a caller that keeps its rays does, as `project` must); with `batch`, the batch is all.
 //!
 //! ```sh
-//! cargo run --release -p obscura-python --example project_reference -- PxrPerspective 1000000 1
+//! cargo run --release -p obscura-python --example project_reference -- PxrPerspective 1000000 1 keep
 //! ```
 //!
 //! Prints the best of five runs in Mrays/s.
@@ -14,15 +16,20 @@ use std::time::Instant;
 use obscura_host::driver::Batch;
 use obscura_host::{CameraDesc, CameraStage};
 use obscura_plugins::builtin_registry;
-use obscura_sdk::{Format, ParamList, Point2};
+use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Rgb};
 use rayon::prelude::*;
 
 const CHUNK: usize = 4096;
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
-    let [_, name, n, threads, params @ ..] = args.as_slice() else {
-        return Err("usage: project_reference PROJECTION N THREADS ['type name' value ...]".into());
+    let [_, name, n, threads, mode, params @ ..] = args.as_slice() else {
+        return Err("usage: project_reference PROJECTION N THREADS keep|batch ['type name' value ...]".into());
+    };
+    let keep = match mode.as_str() {
+        "keep" => true,
+        "batch" => false,
+        other => return Err(format!("MODE {other:?}: expected keep or batch")),
     };
     let n: usize = n.parse().map_err(|e| format!("N: {e}"))?;
     let threads: usize = threads.parse().map_err(|e| format!("THREADS: {e}"))?;
@@ -57,20 +64,44 @@ fn main() -> Result<(), String> {
     for _ in 0..5 {
         let start = Instant::now();
         culled = pool.install(|| {
-            screen
-                .par_chunks(CHUNK)
-                .map_init(
-                    || Batch::with_capacity(CHUNK),
-                    |b, chunk| {
-                        b.clear();
-                        for s in chunk {
-                            b.push(*s, Point2::new(0.5, 0.5), 0.0);
-                            b.aperture.push(Point2::ZERO);
-                        }
-                        stage.run_prepared(b).culled
-                    },
-                )
-                .sum::<u64>()
+            let (mut rays, mut tints) = if keep {
+                (vec![RayGeometry::CULLED; n], vec![Rgb::WHITE; n])
+            } else {
+                (Vec::new(), Vec::new())
+            };
+            let out: Vec<(&mut [RayGeometry], &mut [Rgb])> = if keep {
+                rays.chunks_mut(CHUNK).zip(tints.chunks_mut(CHUNK)).collect()
+            } else {
+                Vec::new()
+            };
+            let run = |b: &mut Batch, chunk: &[Point2]| {
+                b.clear();
+                for s in chunk {
+                    b.push(*s, Point2::new(0.5, 0.5), 0.0);
+                    b.aperture.push(Point2::ZERO);
+                }
+                stage.run_prepared(b).culled
+            };
+            if keep {
+                screen
+                    .par_chunks(CHUNK)
+                    .zip(out)
+                    .map_init(
+                        || Batch::with_capacity(CHUNK),
+                        |b, (chunk, (r, t))| {
+                            let c = run(b, chunk);
+                            r.copy_from_slice(&b.rays);
+                            t.copy_from_slice(&b.tint);
+                            c
+                        },
+                    )
+                    .sum::<u64>()
+            } else {
+                screen
+                    .par_chunks(CHUNK)
+                    .map_init(|| Batch::with_capacity(CHUNK), |b, chunk| run(b, chunk))
+                    .sum::<u64>()
+            }
         });
         best = best.min(start.elapsed().as_secs_f64());
     }

@@ -38,13 +38,13 @@ fx, fy, cx, cy = cam.params["params"][:4]
 ideal = np.stack([fx * d[:, 0] / d[:, 2] + cx, fy * d[:, 1] / d[:, 2] + cy], axis=1)
 shift = ideal - px
 
-fig, ax = plt.subplots(figsize=(7.52, 4.8), dpi=100)
+fig, ax = plt.subplots(figsize=(7.52, 5.6), dpi=100)
 angle = np.degrees(np.arccos(np.clip(field[..., 2], -1, 1)))
 im = ax.imshow(angle, cmap="Greys", extent=(0, w, h, 0))
 q = ax.quiver(px[ok, 0], px[ok, 1], shift[ok, 0], shift[ok, 1], np.hypot(*shift[ok].T),
               angles="xy", scale_units="xy", scale=1, cmap="viridis", width=0.003)
 fig.colorbar(q, ax=ax, label="distortion (px)", fraction=0.03)
-fig.colorbar(im, ax=ax, label="angle off the axis (°)", fraction=0.03)
+fig.colorbar(im, ax=ax, label="ray angle off the axis (°)", orientation="horizontal", fraction=0.04, pad=0.08)
 ax.set_title(f"COLMAP camera 1 ({cam.model}, {w}×{h}): distorted → pinhole pixel")
 ax.set_xlim(0, w)
 ax.set_ylim(h, 0)
