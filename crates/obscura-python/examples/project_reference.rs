@@ -24,7 +24,9 @@ const CHUNK: usize = 4096;
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().collect();
     let [_, name, n, threads, mode, params @ ..] = args.as_slice() else {
-        return Err("usage: project_reference PROJECTION N THREADS keep|batch ['type name' value ...]".into());
+        return Err(
+            "usage: project_reference PROJECTION N THREADS keep|batch ['type name' value ...]".into(),
+        );
     };
     let keep = match mode.as_str() {
         "keep" => true,

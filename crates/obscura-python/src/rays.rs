@@ -114,7 +114,7 @@ impl<'py, T: Real> RayArrays<'py, T> {
         let mut tint = self.tint.readwrite();
         let mut time = self.time.readwrite();
         let mut valid = self.valid.readwrite();
-        let err = |_| PyRuntimeError::new_err("a new output array is not contiguous");
+        let err = not_contiguous;
         let mut o3 = origin.as_slice_mut().map_err(err)?.chunks_mut(3 * CHUNK);
         let mut d3 = direction.as_slice_mut().map_err(err)?.chunks_mut(3 * CHUNK);
         let mut t3 = tint.as_slice_mut().map_err(err)?.chunks_mut(3 * CHUNK);
@@ -164,6 +164,38 @@ impl<'py, T: Real> RayArrays<'py, T> {
         d.set_item("valid", self.valid)?;
         Ok(d)
     }
+}
+
+/// Allocates an answer of N rows (`cols` values and a valid flag each) and fills it chunk by chunk
+/// on the pool without the GIL: `fill(first_row, values, valid)`, `valid` pre-set to false.
+fn answer<'py, T: Real>(
+    py: Python<'py>,
+    n: usize,
+    cols: usize,
+    fill: impl Fn(usize, &mut [T], &mut [bool]) + Send + Sync,
+) -> PyResult<Answer<'py, T>> {
+    let values = zeros::<T>(py, &[n, cols]);
+    let valid = PyArray1::<bool>::zeros(py, n, false);
+    {
+        let mut a = values.readwrite();
+        let mut b = valid.readwrite();
+        let a = a.as_slice_mut().map_err(not_contiguous)?;
+        let b = b.as_slice_mut().map_err(not_contiguous)?;
+        let pool = pool()?;
+        py.detach(|| {
+            pool.install(|| {
+                a.par_chunks_mut(cols * CHUNK)
+                    .zip(b.par_chunks_mut(CHUNK))
+                    .enumerate()
+                    .for_each(|(k, (a, b))| fill(k * CHUNK, a, b));
+            });
+        });
+    }
+    Ok((values, valid))
+}
+
+fn not_contiguous(_: numpy::AsSliceError) -> PyErr {
+    PyRuntimeError::new_err("a new output array is not contiguous")
 }
 
 /// `"obscura"` (+Y up) or `"opencv"` (+Y down): the sign applied to Y.
@@ -432,91 +464,52 @@ impl Camera {
         conv: PixelConvention,
         sy: f64,
     ) -> PyResult<Answer<'py, T>> {
-        let n = px.rows();
-        let dirs = zeros::<T>(py, &[n, 3]);
-        let valid = PyArray1::<bool>::zeros(py, n, false);
-        {
-            let mut d = dirs.readwrite();
-            let mut v = valid.readwrite();
-            let d = d
-                .as_slice_mut()
-                .map_err(|_| PyRuntimeError::new_err("output not contiguous"))?;
-            let v = v
-                .as_slice_mut()
-                .map_err(|_| PyRuntimeError::new_err("output not contiguous"))?;
-            let pool = pool()?;
-            let format = self.stage.camera().format;
-            let (fw, fh) = (f64::from(format.width), f64::from(format.height));
-            match &self.exact {
-                Some(e) => {
-                    let (sx, sy_scale) = (e.resolution.0 / fw, e.resolution.1 / fh);
-                    let (out_shift, cal_shift) = (conv.shift(), e.convention.shift());
-                    py.detach(|| {
-                        pool.install(|| {
-                            d.par_chunks_mut(3 * CHUNK)
-                                .zip(v.par_chunks_mut(CHUNK))
-                                .enumerate()
-                                .for_each(|(k, (d, v))| {
-                                    for i in 0..v.len() {
-                                        let row = k * CHUNK + i;
-                                        let raster = [px.get(row, 0) - out_shift, px.get(row, 1) - out_shift];
-                                        let model_px =
-                                            [raster[0] * sx + cal_shift, raster[1] * sy_scale + cal_shift];
-                                        if let Some(r) = e.model.pixel_to_ray(model_px) {
-                                            let len =
-                                                (r.v[0] * r.v[0] + r.v[1] * r.v[1] + r.v[2] * r.v[2]).sqrt();
-                                            // The model's camera space is OpenCV's (+Y down).
-                                            let u = [r.v[0] / len, -r.v[1] / len * sy, r.v[2] / len];
-                                            if u.iter().all(|x| x.is_finite()) {
-                                                for c in 0..3 {
-                                                    d[3 * i + c] = T::from_f64(u[c]);
-                                                }
-                                                v[i] = true;
-                                            }
-                                        }
-                                    }
-                                });
-                        });
-                    });
-                }
-                None => {
-                    let cam = self.stage.camera();
-                    let stage = &self.stage;
-                    let shift = conv.shift();
-                    py.detach(|| {
-                        pool.install(|| {
-                            d.par_chunks_mut(3 * CHUNK)
-                                .zip(v.par_chunks_mut(CHUNK))
-                                .enumerate()
-                                .for_each_init(
-                                    || Batch::with_capacity(CHUNK),
-                                    |b, (k, (d, v))| {
-                                        b.clear();
-                                        for i in 0..v.len() {
-                                            let row = k * CHUNK + i;
-                                            let s = cam.raster_to_screen(
-                                                px.get(row, 0) - shift,
-                                                px.get(row, 1) - shift,
-                                            );
-                                            b.push(s, Point2::new(0.5, 0.5), 0.0);
-                                            b.aperture.push(Point2::ZERO);
-                                        }
-                                        stage.run_prepared(b);
-                                        for (i, r) in b.rays.iter().enumerate() {
-                                            let u = [r.direction.x, r.direction.y, r.direction.z];
-                                            d[3 * i] = T::from_f32(u[0]);
-                                            d[3 * i + 1] = T::from_f64(f64::from(u[1]) * sy);
-                                            d[3 * i + 2] = T::from_f32(u[2]);
-                                            v[i] = r.direction != Vec3::ZERO;
-                                        }
-                                    },
-                                );
-                        });
-                    });
-                }
+        let format = self.stage.camera().format;
+        let (fw, fh) = (f64::from(format.width), f64::from(format.height));
+        match &self.exact {
+            Some(e) => {
+                let (scale_x, scale_y) = (e.resolution.0 / fw, e.resolution.1 / fh);
+                let (out_shift, cal_shift) = (conv.shift(), e.convention.shift());
+                answer(py, px.rows(), 3, |start, d, v| {
+                    for i in 0..v.len() {
+                        let raster = [px.get(start + i, 0) - out_shift, px.get(start + i, 1) - out_shift];
+                        let model_px = [raster[0] * scale_x + cal_shift, raster[1] * scale_y + cal_shift];
+                        let Some(r) = e.model.pixel_to_ray(model_px) else {
+                            continue;
+                        };
+                        let len = (r.v[0] * r.v[0] + r.v[1] * r.v[1] + r.v[2] * r.v[2]).sqrt();
+                        // The model's camera space is OpenCV's (+Y down).
+                        let u = [r.v[0] / len, -r.v[1] / len * sy, r.v[2] / len];
+                        if u.iter().all(|x| x.is_finite()) {
+                            for c in 0..3 {
+                                d[3 * i + c] = T::from_f64(u[c]);
+                            }
+                            v[i] = true;
+                        }
+                    }
+                })
+            }
+            None => {
+                let cam = self.stage.camera();
+                let shift = conv.shift();
+                answer(py, px.rows(), 3, |start, d, v| {
+                    let mut b = Batch::with_capacity(v.len());
+                    for i in 0..v.len() {
+                        let s =
+                            cam.raster_to_screen(px.get(start + i, 0) - shift, px.get(start + i, 1) - shift);
+                        b.push(s, Point2::new(0.5, 0.5), 0.0);
+                        b.aperture.push(Point2::ZERO);
+                    }
+                    self.stage.run_prepared(&mut b);
+                    for (i, r) in b.rays.iter().enumerate() {
+                        d[3 * i] = T::from_f32(r.direction.x);
+                        d[3 * i + 1] = T::from_f64(f64::from(r.direction.y) * sy);
+                        d[3 * i + 2] = T::from_f32(r.direction.z);
+                        v[i] = r.direction != Vec3::ZERO;
+                    }
+                })
             }
         }
-        Ok((dirs, valid))
     }
 
     fn ray_to_pixel_typed<'py, T: Real>(
@@ -526,62 +519,38 @@ impl Camera {
         point: impl Fn(usize) -> [f64; 3] + Send + Sync,
         conv: PixelConvention,
     ) -> PyResult<Answer<'py, T>> {
-        let pixels = zeros::<T>(py, &[n, 2]);
-        let valid = PyArray1::<bool>::zeros(py, n, false);
-        {
-            let mut p = pixels.readwrite();
-            let mut v = valid.readwrite();
-            let p = p
-                .as_slice_mut()
-                .map_err(|_| PyRuntimeError::new_err("output not contiguous"))?;
-            let v = v
-                .as_slice_mut()
-                .map_err(|_| PyRuntimeError::new_err("output not contiguous"))?;
-            let pool = pool()?;
-            let format = self.stage.camera().format;
-            let window = self.stage.camera().screen_window();
-            let (fw, fh) = (f64::from(format.width), f64::from(format.height));
-            let out_shift = conv.shift();
-            let exact = self.exact.as_ref();
-            let projection = self.stage.projection();
-            let point = &point;
-            py.detach(|| {
-                pool.install(|| {
-                    p.par_chunks_mut(2 * CHUNK)
-                        .zip(v.par_chunks_mut(CHUNK))
-                        .enumerate()
-                        .for_each(|(k, (p, v))| {
-                            for i in 0..v.len() {
-                                let q = point(k * CHUNK + i);
-                                let raster = match exact {
-                                    Some(e) => e.model.ray_to_pixel([q[0], -q[1], q[2]]).map(|m| {
-                                        let s = e.convention.shift();
-                                        [(m[0] - s) * fw / e.resolution.0, (m[1] - s) * fh / e.resolution.1]
-                                    }),
-                                    None => projection
-                                        .unproject(Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32), 0.0)
-                                        .filter(|s| s.x.is_finite() && s.y.is_finite())
-                                        .map(|s| {
-                                            let (x, y) = window.screen_to_raster(format, s);
-                                            [x, y]
-                                        }),
-                                };
-                                match raster {
-                                    Some(r) => {
-                                        p[2 * i] = T::from_f64(r[0] + out_shift);
-                                        p[2 * i + 1] = T::from_f64(r[1] + out_shift);
-                                        v[i] = true;
-                                    }
-                                    None => {
-                                        p[2 * i] = T::from_f64(f64::NAN);
-                                        p[2 * i + 1] = T::from_f64(f64::NAN);
-                                    }
-                                }
-                            }
-                        });
-                });
-            });
-        }
-        Ok((pixels, valid))
+        let format = self.stage.camera().format;
+        let window = self.stage.camera().screen_window();
+        let (fw, fh) = (f64::from(format.width), f64::from(format.height));
+        let out_shift = conv.shift();
+        let exact = self.exact.as_ref();
+        let projection = self.stage.projection();
+        answer(py, n, 2, |start, p, v| {
+            for i in 0..v.len() {
+                let q = point(start + i);
+                let raster = match exact {
+                    Some(e) => e.model.ray_to_pixel([q[0], -q[1], q[2]]).map(|m| {
+                        let s = e.convention.shift();
+                        [(m[0] - s) * fw / e.resolution.0, (m[1] - s) * fh / e.resolution.1]
+                    }),
+                    None => projection
+                        .unproject(Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32), 0.0)
+                        .filter(|s| s.x.is_finite() && s.y.is_finite())
+                        .map(|s| {
+                            let (x, y) = window.screen_to_raster(format, s);
+                            [x, y]
+                        }),
+                };
+                let (x, y) = match raster {
+                    Some(r) => {
+                        v[i] = true;
+                        (r[0] + out_shift, r[1] + out_shift)
+                    }
+                    None => (f64::NAN, f64::NAN),
+                };
+                p[2 * i] = T::from_f64(x);
+                p[2 * i + 1] = T::from_f64(y);
+            }
+        })
     }
 }
