@@ -188,3 +188,22 @@ def test_render_stops_when_the_progress_callback_raises():
 
     with pytest.raises(KeyboardInterrupt):
         obscura.render(None, camera=cam, spp=64, progress=stop)
+
+
+def test_ctrl_c_interrupts_a_render():
+    """A real SIGINT while the render runs without the GIL: KeyboardInterrupt, promptly."""
+    import os
+    import signal
+    import threading
+    import time
+
+    cam = obscura.Camera("PxrPerspective", format=(512, 512))
+    timer = threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            obscura.render(None, camera=cam, spp=256)
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - start < 60
