@@ -57,9 +57,17 @@ pub fn read_params(
         let value = read_value(plugin, decl, &v)?;
         let stored = match &value {
             Raw::Strings(s) => ParamValue::Strings(s.clone()),
-            Raw::Numbers(x) if decl.ty == ParamType::Int => {
-                ParamValue::Ints(x.iter().map(|&f| f as i32).collect())
-            }
+            Raw::Numbers(x) if decl.ty == ParamType::Int => ParamValue::Ints(
+                x.iter()
+                    .map(|&f| {
+                        i32::try_from(f as i64).map_err(|_| {
+                            PyValueError::new_err(format!(
+                                "{plugin}: {name}={repr}: {f} does not fit a 32-bit int"
+                            ))
+                        })
+                    })
+                    .collect::<PyResult<_>>()?,
+            ),
             Raw::Numbers(x) => ParamValue::Floats(x.iter().map(|&f| f as f32).collect()),
         };
         list.push(&decl.rib_declaration(), stored, Some(format!("{name}={repr}")))

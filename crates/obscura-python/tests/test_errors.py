@@ -116,3 +116,8 @@ def test_empty_input_gives_empty_output(cam):
     assert out["direction"].shape == (0, 3) and out["valid"].shape == (0,)
     px, ok = cam.ray_to_pixel(np.zeros((0, 3)))
     assert px.shape == (0, 2) and ok.shape == (0,)
+
+
+def test_an_int_parameter_beyond_32_bits_is_refused():
+    with pytest.raises(ValueError, match="does not fit a 32-bit int"):
+        obscura.Camera("CalibratedCamera", model="PINHOLE", params=[1, 1, 1, 1], resolution=(2**40, 4))
