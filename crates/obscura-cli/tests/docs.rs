@@ -7,7 +7,8 @@
 //! commands (`driver.rs`, `docs/sampling.png`, `obscura check`), not test names. Cells are split at
 //! every `|` not escaped as `\|` (GitHub's rule, which ignores code spans), and the column is counted
 //! from the *end* of each row: a stray `|` in an earlier column (`| |D| − 1 |`) then moves no later
-//! column. A test exists when some `.rs` file under `crates/` or `examples/` holds `fn NAME(`.
+//! column. A test exists when some `.rs` file under `crates/` or `examples/` holds `fn NAME(`, or
+//! some `.py` file there (the Python package's pytest tests) holds `def NAME(`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -102,7 +103,7 @@ fn test_names(markdown: &str) -> Vec<(usize, String)> {
     names
 }
 
-/// Every `.rs` file under `dir`, skipping build output and hidden directories.
+/// Every `.rs` and `.py` file under `dir`, skipping build output and hidden directories.
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
@@ -115,7 +116,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
             if !name.starts_with('.') && name != "target" {
                 rust_files(&path, out);
             }
-        } else if name.ends_with(".rs") {
+        } else if name.ends_with(".rs") || name.ends_with(".py") {
             out.push(path);
         }
     }
@@ -156,15 +157,15 @@ fn every_test_named_in_decisions_exists() {
     let missing: Vec<String> = names
         .iter()
         .filter(|(_, name)| {
-            let needle = format!("fn {name}(");
-            !sources.iter().any(|s| s.contains(&needle))
+            let (rust, python) = (format!("fn {name}("), format!("def {name}("));
+            !sources.iter().any(|s| s.contains(&rust) || s.contains(&python))
         })
         .map(|(line, name)| format!("  docs/decisions.md:{line}: {name}"))
         .collect();
     assert!(
         missing.is_empty(),
-        "tests named in docs/decisions.md but found as `fn NAME(` in no .rs file under crates/ or \
-         examples/ (renamed? update the document):\n{}",
+        "tests named in docs/decisions.md but found as `fn NAME(` (`def NAME(` in Python) in no \
+         file under crates/ or examples/ (renamed? update the document):\n{}",
         missing.join("\n")
     );
 }
