@@ -48,6 +48,9 @@ use glam::{Mat3A, Mat4, Vec3A};
 use obscura_host::distribution::Distribution1D;
 use obscura_scene::Light;
 
+mod classic;
+
+use self::classic::{PointLight, SpotBeam};
 use crate::material::{Frame, color, sanitize};
 use crate::ray::Ray;
 
@@ -172,6 +175,8 @@ struct Dome {
     to_world: Mat3A,
     to_light: Mat3A,
     map: Option<EnvMap>,
+    /// Seen by camera rays that escape (false for the classic `ambientlight`).
+    camera_visible: bool,
 }
 
 impl Dome {
@@ -368,6 +373,8 @@ enum Emitter {
     Distant(Distant),
     Rect(Rect),
     Sphere(SphereLight),
+    /// A point or spot light (a delta).
+    Point(PointLight),
 }
 
 impl Emitter {
@@ -378,6 +385,7 @@ impl Emitter {
             Emitter::Distant(d) => d.strength,
             Emitter::Rect(r) => r.strength,
             Emitter::Sphere(s) => s.strength,
+            Emitter::Point(p) => p.strength,
         }
     }
 
@@ -387,7 +395,7 @@ impl Emitter {
         match self {
             Emitter::Rect(r) => r.intersect(o, d, t_min, t_max),
             Emitter::Sphere(s) => s.intersect(o, d, t_min, t_max),
-            Emitter::Dome(_) | Emitter::Distant(_) => None,
+            Emitter::Dome(_) | Emitter::Distant(_) | Emitter::Point(_) => None,
         }
     }
 }
@@ -442,6 +450,44 @@ impl Lights {
                     to_world,
                     to_light: to_world.transpose(),
                     map,
+                    camera_visible: true,
+                })
+            }
+            Light::Ambient { color: c, intensity } => Emitter::Dome(Dome {
+                strength: strength(*c, *intensity, 0.0),
+                to_world: Mat3A::IDENTITY,
+                to_light: Mat3A::IDENTITY,
+                map: None,
+                camera_visible: false,
+            }),
+            Light::Point(p) => {
+                if !p.position.is_finite() {
+                    return Ok(None);
+                }
+                Emitter::Point(PointLight {
+                    strength: strength(p.color, p.intensity, 0.0),
+                    position: Vec3A::from(p.position),
+                    spot: None,
+                })
+            }
+            Light::Spot {
+                emitter: p,
+                direction,
+                cone_angle,
+                cone_delta,
+                beam_distribution,
+            } => {
+                let Some(beam) = SpotBeam::new(Vec3A::from(*direction), *cone_angle, *cone_delta, *beam_distribution)
+                else {
+                    return Ok(None);
+                };
+                if !p.position.is_finite() {
+                    return Ok(None);
+                }
+                Emitter::Point(PointLight {
+                    strength: strength(p.color, p.intensity, 0.0),
+                    position: Vec3A::from(p.position),
+                    spot: Some(beam),
                 })
             }
             Light::Distant {
@@ -636,6 +682,16 @@ impl Lights {
                     mis: true,
                 }
             }
+            Emitter::Point(l) => {
+                let (wi, dist, radiance) = l.illuminate(p)?;
+                LightSample {
+                    wi,
+                    dist,
+                    radiance,
+                    pdf: select,
+                    mis: false,
+                }
+            }
         };
         if n != Vec3A::ZERO && sample.wi.dot(n) <= 0.0 {
             return None;
@@ -712,7 +768,9 @@ impl Lights {
             .emitters
             .iter()
             .map(|e| {
-                if let Emitter::Dome(d) = e {
+                if let Emitter::Dome(d) = e
+                    && d.camera_visible
+                {
                     d.radiance(dir)
                 } else {
                     Vec3A::ZERO
@@ -747,7 +805,7 @@ impl Lights {
         let pdf = match emitter {
             Emitter::Rect(r) => r.pdf(wi, t * len),
             Emitter::Sphere(s) => s.pdf(o),
-            Emitter::Dome(_) | Emitter::Distant(_) => 0.0,
+            Emitter::Dome(_) | Emitter::Distant(_) | Emitter::Point(_) => 0.0,
         };
         let (radiance, pdf) = if pdf > 0.0 {
             (emitter.strength(), pdf * select)

@@ -11,6 +11,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod classic;
 mod framing;
 pub mod gltf_scene;
 pub mod obj;
@@ -20,6 +21,7 @@ pub mod types;
 #[cfg(test)]
 mod test_support;
 
+pub use classic::*;
 pub use types::*;
 
 use std::path::Path;
@@ -54,7 +56,12 @@ pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     match ext.as_str() {
-        "rib" => Ok(rib::parse_file(path)?),
+        "rib" => {
+            // A classic scene often has no light (or only ones we skip): light it as glTF and OBJ are.
+            let mut scene = rib::parse_file(path)?;
+            framing::add_default_dome_if_unlit(&mut scene, &path.display().to_string());
+            Ok(scene)
+        }
         "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),
         "obj" => Ok(obj::load_obj(path, camera)?),
         _ => Err(LoadError::Format(path.display().to_string())),

@@ -13,18 +13,23 @@ use super::{Reader, RibError};
 use crate::types::{Mesh, Object, Shape, SubdivMesh};
 
 impl Reader {
-    /// Adds an object of `shape` with the current transform, material and dicing.
+    /// Adds an object of `shape` with the current transform, material and dicing (to the object
+    /// being defined, inside `ObjectBegin`).
     pub(super) fn add_object(&mut self, r: &Req<'_>, shape: Shape) {
-        self.scene.objects.push(Object {
+        let object = Object {
             shape,
             transform: self.ctm.to_motion(),
-            material: self.material,
+            material: self.current_material(),
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
-        });
+        };
+        match &mut self.retained.open {
+            Some(d) => d.objects.push(object),
+            None => self.scene.objects.push(object),
+        }
     }
 
-    /// `Sphere`, `Cylinder`, `Cone`, `Disk` and `Torus`.
+    /// `Sphere`, `Cylinder`, `Cone`, `Disk`, `Torus`, `Hyperboloid` and `Paraboloid`.
     pub(super) fn quadric(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let (shape, rest) = match r.name {
             "Sphere" => {
@@ -75,6 +80,31 @@ impl Reader {
                     rest,
                 )
             }
+            "Hyperboloid" => {
+                let ([x1, y1, z1, x2, y2, z2, theta_max], rest) =
+                    r.numbers::<7>(r.args, "x1 y1 z1 x2 y2 z2 thetamax")?;
+                (
+                    Shape::Hyperboloid {
+                        point1: Vec3::new(x1, y1, z1),
+                        point2: Vec3::new(x2, y2, z2),
+                        theta_max,
+                    },
+                    rest,
+                )
+            }
+            "Paraboloid" => {
+                let ([radius, z_min, z_max, theta_max], rest) =
+                    r.numbers::<4>(r.args, "rmax zmin zmax thetamax")?;
+                (
+                    Shape::Paraboloid {
+                        radius,
+                        z_min,
+                        z_max,
+                        theta_max,
+                    },
+                    rest,
+                )
+            }
             _ => {
                 let ([major_radius, minor_radius, phi_min, phi_max, theta_max], rest) =
                     r.numbers::<5>(r.args, "rmajor rminor phimin phimax thetamax")?;
@@ -90,7 +120,8 @@ impl Reader {
                 )
             }
         };
-        self.params(r, rest, &[], false)?;
+        let list = self.params(r, rest, &QUADRIC_PARAMETERS, false)?;
+        self.primitive_color(r, &list);
         self.add_object(r, shape);
         Ok(())
     }
@@ -152,7 +183,8 @@ impl Reader {
                 (Some(faces), rest)
             }
         };
-        let list = self.params(r, rest, &["vertex point P", "vertex normal N"], false)?;
+        let list = self.params(r, rest, &POLYGON_PARAMETERS, false)?;
+        self.primitive_color(r, &list);
         let (positions, normals) = self.points_and_normals(r, &list)?;
         let faces = match faces {
             Some(f) => f,
@@ -228,7 +260,8 @@ impl Reader {
             }
             _ => (None, rest),
         };
-        let list = self.params(r, rest, &["vertex point P"], false)?;
+        let list = self.params(r, rest, &POLYGON_PARAMETERS, false)?;
+        self.primitive_color(r, &list);
         let (positions, _) = self.points_and_normals(r, &list)?;
         let face_indices = check_indices(r, &verts, positions.len())?;
         let face_counts: Vec<u32> = face_counts.iter().map(|&n| n as u32).collect();
@@ -340,6 +373,28 @@ fn add_crease(r: &Req<'_>, ints: &[i64], floats: &[f32], mesh: &mut SubdivMesh) 
     }
     Ok(())
 }
+
+/// The primitive variables polygons and subdivision meshes read (`P`, `N`, the colour) or accept.
+const POLYGON_PARAMETERS: [&str; 8] = [
+    "vertex point P",
+    "vertex normal N",
+    "vertex color Cs",
+    "vertex color Os",
+    "vertex float s",
+    "vertex float t",
+    "vertex float[2] st",
+    "vertex float[2] uv",
+];
+
+/// The primitive variables a quadric may carry (its colour is used; the rest is accepted).
+const QUADRIC_PARAMETERS: [&str; 6] = [
+    "vertex color Cs",
+    "vertex color Os",
+    "vertex normal N",
+    "vertex float s",
+    "vertex float t",
+    "vertex float[2] st",
+];
 
 /// One polygon's loops (outline, then holes) of vertex indices as written.
 type FaceLoops = Vec<Vec<i64>>;

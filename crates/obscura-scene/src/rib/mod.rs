@@ -47,11 +47,17 @@
 //! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
 //! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
+mod classic_shaders;
+mod curves;
 mod geometry;
 mod lex;
+mod nupatch;
+mod objects;
 mod options;
+mod patch;
 mod request;
 mod shading;
+mod teapot;
 mod transform;
 mod triangulate;
 
@@ -139,7 +145,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 39] = {
+const REQUESTS: [Request; 65] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -189,6 +195,33 @@ const REQUESTS: [Request; 39] = {
         known("PointsPolygons", World, Reader::polygons),
         known("PointsGeneralPolygons", World, Reader::polygons),
         known("SubdivisionMesh", World, Reader::subdivision_mesh),
+        // Classic shading and geometry (classic_shaders.rs, patch.rs, nupatch.rs, curves.rs, objects.rs).
+        known("Color", Anywhere, Reader::color),
+        known("Opacity", Anywhere, Reader::opacity),
+        known("Surface", Anywhere, Reader::surface),
+        known("Displacement", Anywhere, Reader::other_shader),
+        known("Atmosphere", Anywhere, Reader::other_shader),
+        known("Interior", Anywhere, Reader::other_shader),
+        known("Exterior", Anywhere, Reader::other_shader),
+        known("Imager", Anywhere, Reader::other_shader),
+        known("Deformation", Anywhere, Reader::other_shader),
+        known("Illuminate", Anywhere, Reader::illuminate),
+        known("Basis", Anywhere, Reader::basis),
+        known("Hyperboloid", World, Reader::quadric),
+        known("Paraboloid", World, Reader::quadric),
+        known("Patch", World, Reader::patch),
+        known("PatchMesh", World, Reader::patch_mesh),
+        known("NuPatch", World, Reader::nu_patch),
+        known("TrimCurve", Anywhere, Reader::trim_curve),
+        known("Curves", World, Reader::curves),
+        known("Points", World, Reader::points),
+        known("Geometry", World, Reader::geometry),
+        known("ObjectBegin", Anywhere, Reader::object_begin),
+        known("ObjectEnd", Anywhere, Reader::object_end),
+        known("ObjectInstance", World, Reader::object_instance),
+        known("Procedural", World, Reader::procedural),
+        known("SolidBegin", World, Reader::solid),
+        known("SolidEnd", World, Reader::solid),
     ]
 };
 
@@ -214,6 +247,12 @@ struct Reader {
     warned_attributes: HashSet<String>,
     /// Options already warned about.
     warned_options: HashSet<String>,
+    /// Classic shading attributes (`Color`, `Opacity`, `Surface`, `Basis`).
+    classic: classic_shaders::ClassicAttributes,
+    /// Classic shading state across the file.
+    classic_state: classic_shaders::ClassicState,
+    /// Retained objects.
+    retained: objects::Retained,
 }
 
 impl Reader {
@@ -229,6 +268,9 @@ impl Reader {
             declared: HashMap::new(),
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),
+            classic: classic_shaders::ClassicAttributes::default(),
+            classic_state: classic_shaders::ClassicState::default(),
+            retained: objects::Retained::default(),
         }
     }
 

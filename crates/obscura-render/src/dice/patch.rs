@@ -1,0 +1,143 @@
+//! Bicubic Bézier patches (every `Patch`, `PatchMesh` and the teapot) → triangles.
+//!
+//! Each patch gets its own rate from the bounding sphere of its control points, and
+//! `n = ⌈A·k/m⌉` segments per direction (clamped to `[1, 4096]`), `A` the longest control-polygon
+//! row (for `u`) or column (for `v`): the control polygon is never shorter than the curve, so the
+//! surface's edges come out at most `m` pixels long. When the patches of one primitive together
+//! exceed [`MAX_QUADS_PER_PRIMITIVE`](super::MAX_QUADS_PER_PRIMITIVE) quads, every count is scaled
+//! down by the same factor. Vertices lie on the surface (Bernstein form, `f64`), normals are
+//! `∂P/∂u × ∂P/∂v` normalised (at a collapsed edge, the normal a small step inside the patch).
+
+use glam::{DVec3, Vec3};
+use obscura_scene::BezierPatch;
+
+use super::quadric::{Grid, Rate, tessellate};
+use super::{DicingContext, MAX_QUADS_PER_PRIMITIVE};
+use crate::ray::TriangleMesh;
+
+/// Cubic Bernstein values and derivatives at `t`.
+pub(super) fn bernstein(t: f64) -> ([f64; 4], [f64; 4]) {
+    let s = 1.0 - t;
+    (
+        [s * s * s, 3.0 * s * s * t, 3.0 * s * t * t, t * t * t],
+        [-3.0 * s * s, 3.0 * s * (s - 2.0 * t), 3.0 * t * (2.0 * s - t), 3.0 * t * t],
+    )
+}
+
+/// Position and the two partial derivatives of `p` at `(u, v)`.
+fn evaluate(p: &[DVec3; 16], u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+    let (bu, du) = bernstein(u);
+    let (bv, dv) = bernstein(v);
+    let (mut pos, mut pu, mut pv) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+    for j in 0..4 {
+        for i in 0..4 {
+            let c = p[4 * j + i];
+            pos += bu[i] * bv[j] * c;
+            pu += du[i] * bv[j] * c;
+            pv += bu[i] * dv[j] * c;
+        }
+    }
+    (pos, pu, pv)
+}
+
+/// The unit normal `∂u × ∂v` at `(u, v)`, stepping toward the centre where it vanishes.
+pub(super) fn surface_normal<F>(eval: F, u: f64, v: f64) -> DVec3
+where
+    F: Fn(f64, f64) -> (DVec3, DVec3, DVec3),
+{
+    let mut n = DVec3::ZERO;
+    for step in [0.0, 1e-4, 1e-3, 1e-2] {
+        let (_, pu, pv) = eval(u + step * (0.5 - u).signum(), v + step * (0.5 - v).signum());
+        n = pu.cross(pv).normalize_or_zero();
+        if n != DVec3::ZERO {
+            break;
+        }
+    }
+    if n == DVec3::ZERO { DVec3::Z } else { n }
+}
+
+/// The longest control polyline along `u` (rows) and along `v` (columns).
+fn hull_arcs(p: &[DVec3; 16]) -> (f64, f64) {
+    let mut au: f64 = 0.0;
+    let mut av: f64 = 0.0;
+    for k in 0..4 {
+        let row: f64 = (0..3).map(|i| p[4 * k + i].distance(p[4 * k + i + 1])).sum();
+        let col: f64 = (0..3).map(|j| p[4 * j + k].distance(p[4 * (j + 1) + k])).sum();
+        au = au.max(row);
+        av = av.max(col);
+    }
+    (au, av)
+}
+
+/// The centre and radius of a sphere holding `points` (their box's centre and farthest point).
+pub(super) fn bounding_sphere(points: impl Iterator<Item = DVec3> + Clone) -> (DVec3, f64) {
+    let (lo, hi) = points
+        .clone()
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let centre = 0.5 * (lo + hi);
+    let radius = points.map(|p| p.distance(centre)).fold(0.0, f64::max);
+    (centre, radius)
+}
+
+/// Scales every `(nu, nv)` down by one factor so their quads fit the per-primitive budget.
+pub(super) fn fit_all(counts: &mut [(u32, u32)]) {
+    let total: u64 = counts.iter().map(|&(a, b)| u64::from(a) * u64::from(b)).sum();
+    if total <= MAX_QUADS_PER_PRIMITIVE {
+        return;
+    }
+    let scale = (MAX_QUADS_PER_PRIMITIVE as f64 / total as f64).sqrt();
+    for c in counts {
+        c.0 = ((f64::from(c.0) * scale).floor() as u32).max(1);
+        c.1 = ((f64::from(c.1) * scale).floor() as u32).max(1);
+    }
+}
+
+/// Appends `m` to `out`.
+pub(super) fn append(out: &mut TriangleMesh, m: TriangleMesh) {
+    let base = out.positions.len() as u32;
+    out.positions.extend(m.positions);
+    if let (Some(o), Some(n)) = (out.normals.as_mut(), m.normals) {
+        o.extend(n);
+    }
+    out.triangles
+        .extend(m.triangles.into_iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+}
+
+/// The patches as one triangle mesh.
+pub(super) fn patches(list: &[BezierPatch], ctx: &DicingContext) -> TriangleMesh {
+    let control: Vec<[DVec3; 16]> = list
+        .iter()
+        .filter(|p| p.points.iter().all(|q| q.is_finite()))
+        .map(|p| p.points.map(Vec3::as_dvec3))
+        .collect();
+    let mut counts: Vec<(u32, u32)> = control
+        .iter()
+        .map(|p| {
+            let (centre, radius) = bounding_sphere(p.iter().copied());
+            let rate = Rate::new(ctx, centre, radius);
+            let (au, av) = hull_arcs(p);
+            (rate.segments(au, 0.0), rate.segments(av, 0.0))
+        })
+        .collect();
+    fit_all(&mut counts);
+    let mut out = TriangleMesh {
+        normals: Some(Vec::new()),
+        ..TriangleMesh::default()
+    };
+    for (p, &(nu, nv)) in control.iter().zip(&counts) {
+        let grid = Grid {
+            nu,
+            nv,
+            wrap_u: false,
+            wrap_v: false,
+            pole0: None,
+            pole1: None,
+        };
+        let eval = |u: f64, v: f64| evaluate(p, u, v);
+        append(
+            &mut out,
+            tessellate(&grid, |u, v| (eval(u, v).0, surface_normal(eval, u, v))),
+        );
+    }
+    out
+}
