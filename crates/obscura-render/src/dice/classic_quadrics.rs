@@ -104,3 +104,48 @@ pub(super) fn paraboloid(
         (DVec3::new(r * t.cos(), r * t.sin(), z), n)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+    use obscura_sdk::{DicingHint, Format};
+
+    use super::*;
+
+    fn ctx() -> DicingContext {
+        let mut c = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(64, 48));
+        c.object_to_camera = glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.0, 5.0));
+        c
+    }
+
+    #[test]
+    fn hyperboloid_vertices_lie_on_the_swept_line() {
+        let (p1, p2) = (Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 1.0));
+        let m = hyperboloid(p1, p2, 360.0, &ctx());
+        assert!(m.triangles.len() > 16);
+        for p in &m.positions {
+            // On the line at v = (z + 1)/2, at the line's distance from the axis.
+            let v = (p.z + 1.0) / 2.0;
+            let q = p1.lerp(p2, v);
+            assert!((p.truncate().length() - q.truncate().length()).abs() < 1e-4, "{p}");
+        }
+    }
+
+    #[test]
+    fn paraboloid_vertices_follow_r_rmax_sqrt_z_over_zmax() {
+        let m = paraboloid(2.0, 0.0, 4.0, 360.0, &ctx());
+        assert!(m.triangles.len() > 16);
+        for (p, n) in m.positions.iter().zip(m.normals.as_ref().unwrap()) {
+            let r = 2.0 * (p.z / 4.0).max(0.0).sqrt();
+            assert!((p.truncate().length() - r).abs() < 1e-4, "{p}");
+            // The normal is perpendicular to the profile's tangent (dr/dz, 1) turned about z.
+            let t = if p.truncate().length() > 1e-3 {
+                let dir = p.truncate().normalize();
+                Vec3::new(dir.x, dir.y, 0.0) * (1.0 / (p.z * 4.0).sqrt()) + Vec3::Z
+            } else {
+                continue;
+            };
+            assert!(Vec3::from(*n).dot(t).abs() < 1e-3, "normal {n} at {p}");
+        }
+    }
+}

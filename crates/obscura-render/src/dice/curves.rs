@@ -148,3 +148,57 @@ pub(super) fn points(points: &Points, ctx: &DicingContext) -> TriangleMesh {
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use obscura_scene::CurveSegment;
+    use obscura_sdk::Format;
+
+    use super::*;
+
+    fn ctx() -> DicingContext {
+        let mut c = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(64, 48));
+        c.object_to_camera = glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.0, 4.0));
+        c
+    }
+
+    #[test]
+    fn a_ribbon_faces_the_camera_and_has_its_width() {
+        let a = Vec3::new(-1.0, 0.0, 0.0);
+        let b = Vec3::new(1.0, 0.0, 0.0);
+        let c = Curves {
+            segments: vec![CurveSegment {
+                points: [a, a.lerp(b, 1.0 / 3.0), a.lerp(b, 2.0 / 3.0), b],
+                widths: [0.2, 0.4],
+                normals: None,
+            }],
+        };
+        let m = curves(&c, &ctx());
+        assert!(m.triangles.len() >= 2);
+        for pair in m.positions.chunks(2) {
+            let across = pair[1] - pair[0];
+            let x = 0.5 * (pair[0].x + pair[1].x);
+            let width = 0.2 + 0.2 * (x + 1.0) / 2.0;
+            assert!((across.length() - width).abs() < 1e-4, "{across} at {x}");
+            // Across the curve and across the view (the camera is at z = −4 in object space).
+            assert!(across.x.abs() < 1e-5 && across.z.abs() < 1e-3 * across.length());
+        }
+        for n in m.normals.unwrap() {
+            assert!(n.z < -0.99, "faces the camera: {n}");
+        }
+    }
+
+    #[test]
+    fn points_are_discs_of_their_width() {
+        let p = Points {
+            positions: vec![Vec3::ZERO, Vec3::X],
+            widths: vec![0.5, 1.0],
+        };
+        let m = points(&p, &ctx());
+        let first_fan = m.triangles.iter().take_while(|t| t[0] == 0).count() as u32;
+        for k in 1..=first_fan {
+            assert!((m.positions[k as usize].length() - 0.25).abs() < 1e-5);
+        }
+        assert!(m.triangles.len() as u32 > first_fan);
+    }
+}

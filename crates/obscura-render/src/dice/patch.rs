@@ -141,3 +141,46 @@ pub(super) fn patches(list: &[BezierPatch], ctx: &DicingContext) -> TriangleMesh
     }
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use obscura_sdk::{DicingHint, Format};
+
+    use super::*;
+
+    fn ctx(distance: f32) -> DicingContext {
+        let mut c = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(64, 48));
+        c.object_to_camera = glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.0, distance));
+        c
+    }
+
+    /// A patch whose Bézier points lie on `z = x² + y²` sampled so the surface is exactly that
+    /// paraboloid over the unit square (degree 2 in each direction, elevated to cubic).
+    fn bowl() -> BezierPatch {
+        // Quadratic Bézier of x² on [0, 1]: (0, 0, 1) → cubic (0, 0, 1/3, 1); x itself: thirds.
+        let f = [0.0, 0.0, 1.0 / 3.0, 1.0];
+        let points = std::array::from_fn(|k| {
+            let (i, j) = (k % 4, k / 4);
+            Vec3::new(i as f32 / 3.0, j as f32 / 3.0, f[i] + f[j])
+        });
+        BezierPatch { points }
+    }
+
+    #[test]
+    fn patch_vertices_lie_on_the_surface_and_normals_are_its_normals() {
+        let m = patches(&[bowl()], &ctx(3.0));
+        assert!(m.triangles.len() >= 8);
+        for (p, n) in m.positions.iter().zip(m.normals.as_ref().unwrap()) {
+            assert!((p.z - (p.x * p.x + p.y * p.y)).abs() < 1e-5, "{p}");
+            let want = Vec3::new(-2.0 * p.x, -2.0 * p.y, 1.0).normalize();
+            assert!((Vec3::from(*n) - want).length() < 1e-4, "{n} vs {want}");
+        }
+    }
+
+    #[test]
+    fn a_nearer_patch_dices_finer() {
+        let near = patches(&[bowl()], &ctx(2.0)).triangles.len();
+        let far = patches(&[bowl()], &ctx(50.0)).triangles.len();
+        assert!(near > 4 * far, "{near} vs {far}");
+    }
+}

@@ -90,3 +90,93 @@ impl PointLight {
         (atten > 0.0).then(|| (wi, d, self.strength * (atten / d2)))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use glam::Vec3;
+    use obscura_scene::{Light, PointEmitter};
+    use obscura_sdk::Rgb;
+
+    use super::*;
+    use crate::light::Lights;
+
+    fn emitter(intensity: f32) -> PointEmitter {
+        PointEmitter {
+            color: Rgb::new(1.0, 0.5, 0.25),
+            intensity,
+            position: Vec3::new(0.0, 0.0, 2.0),
+        }
+    }
+
+    #[test]
+    fn a_point_light_falls_off_as_one_over_d_squared() {
+        let lights = Lights::new(&[Light::Point(emitter(8.0))], Path::new(".")).unwrap();
+        let s = lights.sample(Vec3A::ZERO, Vec3A::Z, (0.3, 0.7), 0.5).unwrap();
+        assert!((s.wi - Vec3A::Z).length() < 1e-6 && (s.dist - 2.0).abs() < 1e-6);
+        assert!((s.radiance - Vec3A::new(2.0, 1.0, 0.5)).length() < 1e-6, "{}", s.radiance);
+        assert!(!s.mis && s.pdf == 1.0);
+        // The light is not seen by rays.
+        assert_eq!(lights.background(Vec3A::Z), Vec3A::ZERO);
+    }
+
+    /// The spec's `spotlight`, written out independently: `cosᵇ α / d² · smoothstep(...)`.
+    fn rsl_spotlight(cos: f64, cone: f64, delta: f64, beam: f64, d2: f64) -> f64 {
+        let (e0, e1) = (cone.cos(), (cone - delta).cos());
+        let t = ((cos - e0) / (e1 - e0)).clamp(0.0, 1.0);
+        if cos < e0 {
+            0.0
+        } else {
+            cos.powf(beam) / d2 * t * t * (3.0 - 2.0 * t)
+        }
+    }
+
+    #[test]
+    fn a_spot_light_follows_the_spec_shader_across_its_cone() {
+        let (cone, delta, beam) = (30f32.to_radians(), 5f32.to_radians(), 2.0);
+        let spot = Light::Spot {
+            emitter: PointEmitter {
+                color: Rgb::WHITE,
+                intensity: 1.0,
+                position: Vec3::ZERO,
+            },
+            direction: Vec3::Z,
+            cone_angle: cone,
+            cone_delta: delta,
+            beam_distribution: beam,
+        };
+        let lights = Lights::new(&[spot], Path::new(".")).unwrap();
+        let mut inside_edge = 0;
+        for k in 0..=80 {
+            let angle = (f64::from(k) * 0.5).to_radians(); // 0° … 40°
+            let p = Vec3A::new(angle.sin() as f32, 0.0, angle.cos() as f32) * 3.0;
+            let got = lights
+                .sample(p, Vec3A::ZERO, (0.5, 0.5), 0.5)
+                .map_or(0.0, |s| f64::from(s.radiance.x));
+            let want = rsl_spotlight(angle.cos(), f64::from(cone), f64::from(delta), 2.0, 9.0);
+            assert!((got - want).abs() < 1e-5 * want.max(1e-3), "{angle}: {got} vs {want}");
+            if want > 0.0 && want < rsl_spotlight(angle.cos(), f64::from(cone), 0.0, 2.0, 9.0) {
+                inside_edge += 1;
+            }
+        }
+        // The soft edge was crossed (not vacuous): some angles are between 0 and the hard-edged value.
+        assert!(inside_edge >= 5);
+        assert_eq!(smoothstep(0.0, 1.0, 0.5), 0.5);
+    }
+
+    #[test]
+    fn an_ambient_light_lights_surfaces_but_is_not_seen() {
+        let lights = Lights::new(
+            &[Light::Ambient {
+                color: Rgb::WHITE,
+                intensity: 0.5,
+            }],
+            Path::new("."),
+        )
+        .unwrap();
+        assert_eq!(lights.background(Vec3A::X), Vec3A::ZERO);
+        let (radiance, pdf) = lights.escaped(Vec3A::X);
+        assert!((radiance - Vec3A::splat(0.5)).length() < 1e-6 && pdf > 0.0);
+    }
+}

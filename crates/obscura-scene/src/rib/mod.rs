@@ -349,7 +349,7 @@ impl Reader {
             Scope::Options if self.world.is_some() => {
                 Err(r.err(format!("{} must come before WorldBegin", r.name)))
             }
-            Scope::World if self.world.is_none() => {
+            Scope::World if self.world.is_none() && self.retained.open.is_none() => {
                 Err(r.err(format!("{} must come after WorldBegin", r.name)))
             }
             _ => (request.handle)(self, r),

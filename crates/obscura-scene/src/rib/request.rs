@@ -125,6 +125,7 @@ impl<'a> Req<'a> {
 }
 
 /// Drops RIB's storage classes (`vertex point P` is `point P`): Obscura keeps every value as given.
+/// An `hpoint` (homogeneous point, `NuPatch`'s `Pw`) is kept as its four floats.
 pub(super) fn normalize_declaration(decl: &str) -> String {
     decl.split_whitespace()
         .filter(|w| {
@@ -133,6 +134,7 @@ pub(super) fn normalize_declaration(decl: &str) -> String {
                 "uniform" | "constant" | "vertex" | "varying" | "facevarying" | "facevertex"
             )
         })
+        .map(|w| if w == "hpoint" { "float[4]" } else { w })
         .collect::<Vec<_>>()
         .join(" ")
 }

@@ -1,6 +1,7 @@
 //! The RIB reader's tests, by topic; the helpers here parse text as a file `t.rib` in `/base`.
 
 mod archive;
+mod classic;
 mod geometry;
 mod lex;
 mod options;
