@@ -477,8 +477,12 @@ impl Lights {
                 cone_delta,
                 beam_distribution,
             } => {
-                let Some(beam) = SpotBeam::new(Vec3A::from(*direction), *cone_angle, *cone_delta, *beam_distribution)
-                else {
+                let Some(beam) = SpotBeam::new(
+                    Vec3A::from(*direction),
+                    *cone_angle,
+                    *cone_delta,
+                    *beam_distribution,
+                ) else {
                     return Ok(None);
                 };
                 if !p.position.is_finite() {

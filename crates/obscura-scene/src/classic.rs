@@ -69,3 +69,58 @@ pub struct Points {
     /// Diameters, object space, one per point.
     pub widths: Vec<f32>,
 }
+
+/// One operation of a [`Blobby`]'s program, as the RenderMan Interface encodes it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BlobOp {
+    /// `1000`: a constant field value.
+    Constant(f32),
+    /// `1001`: an ellipsoid, the unit sphere under `matrix` (column vectors); its field is
+    /// `(1 − r²)³` for `r² < 1`, `r` the distance from the centre in the sphere's own space.
+    Ellipsoid(glam::Mat4),
+    /// `1002`: a segment blob from `start` to `end` of `radius`, under `matrix`: the same field with
+    /// `r` the distance to the segment over the radius.
+    Segment {
+        /// Start, in the blob's space.
+        start: Vec3,
+        /// End, in the blob's space.
+        end: Vec3,
+        /// Radius.
+        radius: f32,
+        /// Blob space → object space.
+        matrix: glam::Mat4,
+    },
+    /// `0` (add), `1` (multiply), `2` (maximum), `3` (minimum) of the operands (earlier
+    /// instruction indices).
+    Combine {
+        /// 0 add, 1 multiply, 2 maximum, 3 minimum.
+        kind: u8,
+        /// Operand instruction indices.
+        operands: Vec<u32>,
+    },
+    /// `4` (subtract) or `5` (divide): `a − b` or `a / b`.
+    Binary {
+        /// 4 subtract, 5 divide.
+        kind: u8,
+        /// First operand.
+        a: u32,
+        /// Second operand.
+        b: u32,
+    },
+    /// `6` (negate) or `7` (identity) of one operand.
+    Unary {
+        /// 6 negate, 7 identity.
+        kind: u8,
+        /// The operand.
+        a: u32,
+    },
+}
+
+/// `Blobby`: the implicit surface where the program's field equals `0.421875` (`27/64`, at which a
+/// lone unit blob's surface has radius ½). The field is the last instruction's value when the
+/// program combines its leaves, else the sum of the leaves.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Blobby {
+    /// The instructions in order.
+    pub ops: Vec<BlobOp>,
+}

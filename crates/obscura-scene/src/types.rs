@@ -6,7 +6,7 @@ use glam::{Mat4, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::{ParamList, Rgb};
 
-use crate::classic::{BezierPatch, Curves, NuPatch, Points};
+use crate::classic::{BezierPatch, Blobby, Curves, NuPatch, Points};
 
 /// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
 /// least one. Matrices act on column vectors (`p' = M·p`).
@@ -148,6 +148,8 @@ pub enum Shape {
     Curves(Curves),
     /// Points, as discs facing the camera.
     Points(Points),
+    /// An implicit surface of blobs.
+    Blobby(Blobby),
     /// Polygons, already triangulated.
     Mesh(Mesh),
     /// A subdivision surface.

@@ -17,7 +17,12 @@ use super::quadric::{Grid, Rate, finite, fit_budget, min_segments, sweep, tessel
 use crate::ray::TriangleMesh;
 
 /// `Hyperboloid x1 y1 z1 x2 y2 z2 thetamax`.
-pub(super) fn hyperboloid(p1: glam::Vec3, p2: glam::Vec3, theta_max: f32, ctx: &DicingContext) -> TriangleMesh {
+pub(super) fn hyperboloid(
+    p1: glam::Vec3,
+    p2: glam::Vec3,
+    theta_max: f32,
+    ctx: &DicingContext,
+) -> TriangleMesh {
     let (a, b) = (p1.as_dvec3(), p2.as_dvec3());
     let Some(theta) = sweep(theta_max) else {
         return TriangleMesh::default();
@@ -30,7 +35,11 @@ pub(super) fn hyperboloid(p1: glam::Vec3, p2: glam::Vec3, theta_max: f32, ctx: &
     if r == 0.0 {
         return TriangleMesh::default();
     }
-    let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * (a.z + b.z)), r.hypot(0.5 * (b.z - a.z)));
+    let rate = Rate::new(
+        ctx,
+        DVec3::new(0.0, 0.0, 0.5 * (a.z + b.z)),
+        r.hypot(0.5 * (b.z - a.z)),
+    );
     let turn = theta.abs() / TAU;
     let nu = rate.segments(r * theta.abs(), turn);
     let nv = rate.segments(a.distance(b), 0.0);
@@ -54,7 +63,11 @@ pub(super) fn hyperboloid(p1: glam::Vec3, p2: glam::Vec3, theta_max: f32, ctx: &
         let mut n = du.cross(dv).normalize_or_zero();
         if n == DVec3::ZERO {
             // On the axis: the normal of the nearest ring, or z.
-            n = if q.truncate() == DVec2::ZERO { DVec3::Z } else { q.with_z(0.0).normalize() };
+            n = if q.truncate() == DVec2::ZERO {
+                DVec3::Z
+            } else {
+                q.with_z(0.0).normalize()
+            };
         }
         if n.truncate().dot(q.truncate()) < 0.0 {
             n = -n;
@@ -127,7 +140,10 @@ mod tests {
             // On the line at v = (z + 1)/2, at the line's distance from the axis.
             let v = (p.z + 1.0) / 2.0;
             let q = p1.lerp(p2, v);
-            assert!((p.truncate().length() - q.truncate().length()).abs() < 1e-4, "{p}");
+            assert!(
+                (p.truncate().length() - q.truncate().length()).abs() < 1e-4,
+                "{p}"
+            );
         }
     }
 

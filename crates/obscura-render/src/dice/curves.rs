@@ -42,14 +42,23 @@ pub(super) fn curves(curves: &Curves, ctx: &DicingContext) -> TriangleMesh {
     if segments.is_empty() {
         return TriangleMesh::default();
     }
-    let all = segments.iter().flat_map(|s| s.points.iter().map(|p| p.as_dvec3()));
+    let all = segments
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.as_dvec3()));
     let (centre, radius) = bounding_sphere(all);
-    let widest = segments.iter().flat_map(|s| s.widths).fold(0.0f32, |a, w| a.max(w.abs()));
+    let widest = segments
+        .iter()
+        .flat_map(|s| s.widths)
+        .fold(0.0f32, |a, w| a.max(w.abs()));
     let rate = Rate::new(ctx, centre, radius + f64::from(widest));
     let mut counts: Vec<u32> = segments
         .iter()
         .map(|s| {
-            let arc: f64 = s.points.windows(2).map(|w| w[0].as_dvec3().distance(w[1].as_dvec3())).sum();
+            let arc: f64 = s
+                .points
+                .windows(2)
+                .map(|w| w[0].as_dvec3().distance(w[1].as_dvec3()))
+                .sum();
             rate.segments(arc, 0.0)
         })
         .collect();
@@ -138,7 +147,8 @@ pub(super) fn points(points: &Points, ctx: &DicingContext) -> TriangleMesh {
         normals.push(facing.as_vec3a());
         for k in 0..sides {
             let a = TAU * f64::from(k) / f64::from(sides);
-            out.positions.push((c + 0.5 * w * (a.cos() * x + a.sin() * y)).as_vec3a());
+            out.positions
+                .push((c + 0.5 * w * (a.cos() * x + a.sin() * y)).as_vec3a());
             normals.push(facing.as_vec3a());
         }
         for k in 0..sides {

@@ -35,7 +35,9 @@
 //! | `patch` | bicubic Bézier patches (`Patch`, `PatchMesh`, the teapot) |
 //! | `nurbs` | NURBS patches (`NuPatch`) |
 //! | `curves` | curves as ribbons and points as discs, facing the camera |
+//! | `blobby` | implicit surfaces of blobs, by marching tetrahedra |
 
+mod blobby;
 mod classic_quadrics;
 mod curves;
 mod nurbs;
@@ -50,6 +52,7 @@ use glam::{Mat4, Vec3};
 use obscura_scene::Shape;
 use obscura_sdk::{DicingHint, Format, ScreenWindow};
 
+use self::blobby::blobby;
 use self::classic_quadrics::{hyperboloid, paraboloid};
 use self::curves::{curves, points};
 use self::nurbs::nu_patch;
@@ -273,6 +276,7 @@ pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceErro
         Shape::NuPatch(patch) => nu_patch(patch, ctx),
         Shape::Curves(c) => curves(c, ctx),
         Shape::Points(p) => points(p, ctx),
+        Shape::Blobby(b) => blobby(b, ctx),
         Shape::Mesh(mesh) => pass_through(mesh)?,
         Shape::Subdiv(mesh) => subdivision(mesh, ctx)?,
     };

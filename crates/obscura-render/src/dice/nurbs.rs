@@ -87,7 +87,10 @@ fn evaluate(patch: &NuPatch, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
     for (j, (&bv, &dbv)) in nv.iter().zip(&dnv).enumerate() {
         for (i, (&bu, &dbu)) in nu.iter().zip(&dnu).enumerate() {
             let q = patch.points[(iv + j) * cols + iu + i];
-            let (xyz, ww) = (DVec3::new(f64::from(q[0]), f64::from(q[1]), f64::from(q[2])), f64::from(q[3]));
+            let (xyz, ww) = (
+                DVec3::new(f64::from(q[0]), f64::from(q[1]), f64::from(q[2])),
+                f64::from(q[3]),
+            );
             a += bu * bv * xyz;
             au += dbu * bv * xyz;
             av += bu * dbv * xyz;
@@ -104,7 +107,9 @@ fn evaluate(patch: &NuPatch, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
 fn spans_in_range(axis: &NurbsAxis) -> u32 {
     let (lo, hi) = (axis.order as usize - 1, axis.count as usize);
     (lo..hi)
-        .filter(|&s| axis.knots[s + 1] > axis.knots[s] && axis.knots[s + 1] > axis.min && axis.knots[s] < axis.max)
+        .filter(|&s| {
+            axis.knots[s + 1] > axis.knots[s] && axis.knots[s + 1] > axis.min && axis.knots[s] < axis.max
+        })
         .count()
         .max(1) as u32
 }
@@ -134,11 +139,19 @@ pub(super) fn nu_patch(patch: &NuPatch, ctx: &DicingContext) -> TriangleMesh {
     let rate = Rate::new(ctx, centre, radius);
     let mut au: f64 = 0.0;
     for j in 0..cv {
-        au = au.max((1..cu).map(|i| points[j * cu + i].distance(points[j * cu + i - 1])).sum());
+        au = au.max(
+            (1..cu)
+                .map(|i| points[j * cu + i].distance(points[j * cu + i - 1]))
+                .sum(),
+        );
     }
     let mut av: f64 = 0.0;
     for i in 0..cu {
-        av = av.max((1..cv).map(|j| points[j * cu + i].distance(points[(j - 1) * cu + i])).sum());
+        av = av.max(
+            (1..cv)
+                .map(|j| points[j * cu + i].distance(points[(j - 1) * cu + i]))
+                .sum(),
+        );
     }
     let mut counts = [(
         rate.segments(au, 0.0).max(spans_in_range(&patch.u)),

@@ -20,7 +20,12 @@ pub(super) fn bernstein(t: f64) -> ([f64; 4], [f64; 4]) {
     let s = 1.0 - t;
     (
         [s * s * s, 3.0 * s * s * t, 3.0 * s * t * t, t * t * t],
-        [-3.0 * s * s, 3.0 * s * (s - 2.0 * t), 3.0 * t * (2.0 * s - t), 3.0 * t * t],
+        [
+            -3.0 * s * s,
+            3.0 * s * (s - 2.0 * t),
+            3.0 * t * (2.0 * s - t),
+            3.0 * t * t,
+        ],
     )
 }
 
@@ -73,7 +78,9 @@ fn hull_arcs(p: &[DVec3; 16]) -> (f64, f64) {
 pub(super) fn bounding_sphere(points: impl Iterator<Item = DVec3> + Clone) -> (DVec3, f64) {
     let (lo, hi) = points
         .clone()
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p), hi.max(p))
+        });
     let centre = 0.5 * (lo + hi);
     let radius = points.map(|p| p.distance(centre)).fold(0.0, f64::max);
     (centre, radius)
@@ -99,8 +106,11 @@ pub(super) fn append(out: &mut TriangleMesh, m: TriangleMesh) {
     if let (Some(o), Some(n)) = (out.normals.as_mut(), m.normals) {
         o.extend(n);
     }
-    out.triangles
-        .extend(m.triangles.into_iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+    out.triangles.extend(
+        m.triangles
+            .into_iter()
+            .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+    );
 }
 
 /// The patches as one triangle mesh.

@@ -151,15 +151,19 @@ fn scaled(c: Rgb, k: f32) -> Rgb {
     Rgb::new(f(c.r), f(c.g), f(c.b))
 }
 
-
-
 impl ClassicSurface {
     /// The physically based material for this surface with colour `cs`.
     pub(super) fn material(&self, cs: Rgb) -> Material {
         match *self {
-            ClassicSurface::Constant => Material::Constant { color: scaled(cs, 1.0) },
-            ClassicSurface::Matte { kd } => Material::Diffuse { color: scaled(cs, kd) },
-            ClassicSurface::Other => Material::Diffuse { color: scaled(cs, 1.0) },
+            ClassicSurface::Constant => Material::Constant {
+                color: scaled(cs, 1.0),
+            },
+            ClassicSurface::Matte { kd } => Material::Diffuse {
+                color: scaled(cs, kd),
+            },
+            ClassicSurface::Other => Material::Diffuse {
+                color: scaled(cs, 1.0),
+            },
             ClassicSurface::Plastic {
                 kd,
                 ks,
@@ -332,7 +336,9 @@ impl Reader {
     pub(super) fn primitive_color(&mut self, r: &Req<'_>, list: &ParamList) {
         if let Some(cs) = get_floats(list, "Cs").filter(|c| c.len() >= 3) {
             let n = (cs.len() / 3) as f32;
-            let sum = cs.chunks_exact(3).fold([0.0f32; 3], |a, c| [a[0] + c[0], a[1] + c[1], a[2] + c[2]]);
+            let sum = cs
+                .chunks_exact(3)
+                .fold([0.0f32; 3], |a, c| [a[0] + c[0], a[1] + c[1], a[2] + c[2]]);
             let first = &cs[..3];
             if cs.chunks_exact(3).any(|c| c != first) {
                 self.warn_once(
@@ -344,7 +350,11 @@ impl Reader {
             self.classic_state.primitive_color = Some(Rgb::new(sum[0] / n, sum[1] / n, sum[2] / n));
         }
         if get_floats(list, "Os").is_some_and(|o| o.iter().any(|&x| x < 1.0)) {
-            self.warn_once(r, "opacity", "Opacity below 1: the renderer draws every surface opaque".into());
+            self.warn_once(
+                r,
+                "opacity",
+                "Opacity below 1: the renderer draws every surface opaque".into(),
+            );
         }
     }
 
@@ -356,9 +366,9 @@ impl Reader {
         let cs = color.unwrap_or(Rgb::WHITE);
         let material = match &self.classic.surface {
             Some(s) => s.material(cs),
-            None if self.material == 0 && color.is_some() => {
-                Material::Diffuse { color: scaled(cs, 1.0) }
-            }
+            None if self.material == 0 && color.is_some() => Material::Diffuse {
+                color: scaled(cs, 1.0),
+            },
             None => return self.material,
         };
         self.intern_material(material)
@@ -454,7 +464,10 @@ mod tests {
         for n in [1.0f32, 8.0, 80.0, 800.0] {
             let closed = f64::from(classic_specular_albedo(n));
             let numeric = numeric_albedo(n);
-            assert!((closed - numeric).abs() < 1e-3 * numeric.max(1e-3), "n {n}: {closed} vs {numeric}");
+            assert!(
+                (closed - numeric).abs() < 1e-3 * numeric.max(1e-3),
+                "n {n}: {closed} vs {numeric}"
+            );
         }
         // Not vacuous: the spec's 1/r exponent would give another figure.
         assert!((classic_specular_albedo(10.0) - classic_specular_albedo(80.0)).abs() > 0.3);
@@ -486,15 +499,23 @@ mod tests {
     #[test]
     fn constant_and_matte_and_metal() {
         let red = Rgb::new(1.0, 0.0, 0.0);
-        assert_eq!(ClassicSurface::Constant.material(red), Material::Constant { color: red });
+        assert_eq!(
+            ClassicSurface::Constant.material(red),
+            Material::Constant { color: red }
+        );
         assert_eq!(
             ClassicSurface::Matte { kd: 0.8 }.material(red),
             Material::Diffuse {
                 color: Rgb::new(0.8, 0.0, 0.0)
             }
         );
-        let Material::Surface { diffuse, specular, .. } =
-            (ClassicSurface::Metal { ks: 1.0, roughness: 0.1 }).material(red)
+        let Material::Surface {
+            diffuse, specular, ..
+        } = (ClassicSurface::Metal {
+            ks: 1.0,
+            roughness: 0.1,
+        })
+        .material(red)
         else {
             panic!("metal is a PxrSurface");
         };

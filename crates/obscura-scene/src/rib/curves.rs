@@ -63,7 +63,11 @@ impl Reader {
                 points.len()
             )));
         }
-        let step = if cubic { self.classic.basis.v.step.max(1) } else { 1 };
+        let step = if cubic {
+            self.classic.basis.v.step.max(1)
+        } else {
+            1
+        };
         // Segments per curve and the start of each curve's points.
         let mut segs = Vec::with_capacity(counts.len());
         for (k, &n) in counts.iter().enumerate() {

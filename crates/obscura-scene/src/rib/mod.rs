@@ -47,6 +47,7 @@
 //! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
 //! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
 
+mod blobby;
 mod classic_shaders;
 mod curves;
 mod geometry;
@@ -145,7 +146,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 65] = {
+const REQUESTS: [Request; 66] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -222,6 +223,7 @@ const REQUESTS: [Request; 65] = {
         known("Procedural", World, Reader::procedural),
         known("SolidBegin", World, Reader::solid),
         known("SolidEnd", World, Reader::solid),
+        known("Blobby", World, Reader::blobby),
     ]
 };
 

@@ -10,7 +10,20 @@ use crate::types::Shape;
 impl Reader {
     /// `NuPatch nu uorder [uknot] umin umax nv vorder [vknot] vmin vmax "Pw"|"P" [...]`.
     pub(super) fn nu_patch(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        let [nu, uorder, uknot, umin, umax, nv, vorder, vknot, vmin, vmax, rest @ ..] = r.args else {
+        let [
+            nu,
+            uorder,
+            uknot,
+            umin,
+            umax,
+            nv,
+            vorder,
+            vknot,
+            vmin,
+            vmax,
+            rest @ ..,
+        ] = r.args
+        else {
             return Err(r.err(
                 "NuPatch expects nu uorder [uknot] umin umax nv vorder [vknot] vmin vmax then \"Pw\" [...]",
             ));
@@ -45,7 +58,10 @@ impl Reader {
                 v.count
             )));
         }
-        if let Some(k) = points.iter().position(|p| !(p[3] > 0.0) || !p.iter().all(|x| x.is_finite())) {
+        if let Some(k) = points
+            .iter()
+            .position(|p| !(p[3] > 0.0) || !p.iter().all(|x| x.is_finite()))
+        {
             return Err(r.err(format!(
                 "NuPatch: control point {k} has a weight that is not positive or a coordinate that is not finite"
             )));

@@ -40,7 +40,10 @@ fn handle(r: &Req<'_>) -> Result<String, RibError> {
     match r.args.first() {
         Some(Value::Num(n)) => Ok(n.value.to_string()),
         Some(Value::Str(s)) => Ok(s.clone()),
-        _ => Err(r.err(format!("{} expects an object handle (a number or a string)", r.name))),
+        _ => Err(r.err(format!(
+            "{} expects an object handle (a number or a string)",
+            r.name
+        ))),
     }
 }
 
@@ -66,7 +69,10 @@ impl Reader {
     pub(super) fn object_begin(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let handle = handle(r)?;
         if let Some(d) = &self.retained.open {
-            return Err(r.err(format!("ObjectBegin inside the ObjectBegin at {}: objects do not nest", d.at)));
+            return Err(r.err(format!(
+                "ObjectBegin inside the ObjectBegin at {}: objects do not nest",
+                d.at
+            )));
         }
         let saved_ctm = std::mem::replace(&mut self.ctm, Ctm::identity());
         self.retained.open = Some(Definition {
@@ -92,7 +98,9 @@ impl Reader {
     pub(super) fn object_instance(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let handle = handle(r)?;
         let Some(objects) = self.retained.objects.get(&handle) else {
-            return Err(r.err(format!("ObjectInstance: no object \"{handle}\" was defined (ObjectBegin)")));
+            return Err(r.err(format!(
+                "ObjectInstance: no object \"{handle}\" was defined (ObjectBegin)"
+            )));
         };
         let objects = objects.clone();
         let ctm = self.ctm.to_motion();

@@ -193,7 +193,9 @@ impl Reader {
             Ok(b)
         };
         let [u, ustep, v, vstep] = r.args else {
-            return Err(r.err("Basis expects ubasis ustep vbasis vstep, e.g. Basis \"bezier\" 3 \"bezier\" 3"));
+            return Err(
+                r.err("Basis expects ubasis ustep vbasis vstep, e.g. Basis \"bezier\" 3 \"bezier\" 3")
+            );
         };
         self.classic.basis = Basis {
             u: read(u, ustep)?,
@@ -204,7 +206,13 @@ impl Reader {
 
     /// The control points of a patch request: `"P"`, `"Pw"` (divided by w) or `"Pz"` (a height
     /// field on the `cols × rows` grid over `[0, 1]²`).
-    fn patch_points(&mut self, r: &Req<'_>, rest: &[Value], cols: usize, rows: usize) -> Result<Vec<Vec3>, RibError> {
+    fn patch_points(
+        &mut self,
+        r: &Req<'_>,
+        rest: &[Value],
+        cols: usize,
+        rows: usize,
+    ) -> Result<Vec<Vec3>, RibError> {
         let table = [
             "vertex point P",
             "vertex hpoint Pw",
@@ -229,7 +237,9 @@ impl Reader {
                     format!("{}: rational (\"Pw\" with w ≠ 1) patches are drawn through their points divided by w", r.name),
                 );
             }
-            p.chunks_exact(4).map(|q| Vec3::new(q[0], q[1], q[2]) / q[3]).collect()
+            p.chunks_exact(4)
+                .map(|q| Vec3::new(q[0], q[1], q[2]) / q[3])
+                .collect()
         } else if let Some(z) = get_floats(&list, "Pz") {
             let den = |n: usize| (n.max(2) - 1) as f32;
             z.iter()
@@ -237,7 +247,10 @@ impl Reader {
                 .map(|(k, &z)| Vec3::new((k % cols) as f32 / den(cols), (k / cols) as f32 / den(rows), z))
                 .collect()
         } else {
-            return Err(r.err(format!("{}: the positions \"P\" (or \"Pw\", \"Pz\") are missing", r.name)));
+            return Err(r.err(format!(
+                "{}: the positions \"P\" (or \"Pw\", \"Pz\") are missing",
+                r.name
+            )));
         };
         if points.len() != need {
             return Err(r.err(format!(
@@ -262,7 +275,11 @@ impl Reader {
             "bicubic" => {
                 let p = self.patch_points(r, rest, 4, 4)?;
                 let g: [Vec3; 16] = std::array::from_fn(|k| p[k]);
-                bicubic(&self.classic.basis.u.to_bezier(), &self.classic.basis.v.to_bezier(), &g)
+                bicubic(
+                    &self.classic.basis.u.to_bezier(),
+                    &self.classic.basis.v.to_bezier(),
+                    &g,
+                )
             }
             other => {
                 return Err(r.err(format!(
@@ -276,13 +293,23 @@ impl Reader {
 
     /// `PatchMesh type nu uwrap nv vwrap "P" [...]`.
     pub(super) fn patch_mesh(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        let [Value::Str(kind), nu, Value::Str(uwrap), nv, Value::Str(vwrap), rest @ ..] = r.args else {
+        let [
+            Value::Str(kind),
+            nu,
+            Value::Str(uwrap),
+            nv,
+            Value::Str(vwrap),
+            rest @ ..,
+        ] = r.args
+        else {
             return Err(r.err(
                 "PatchMesh expects type nu uwrap nv vwrap then \"P\" [...], e.g. PatchMesh \"bicubic\" 7 \"nonperiodic\" 4 \"nonperiodic\" \"P\" [...]",
             ));
         };
         let count = |v: &Value, what: &str| match v {
-            Value::Num(n) if n.value >= 1.0 && n.value.fract() == 0.0 && n.value < 1e8 => Ok(n.value as usize),
+            Value::Num(n) if n.value >= 1.0 && n.value.fract() == 0.0 && n.value < 1e8 => {
+                Ok(n.value as usize)
+            }
             _ => Err(r.err(format!("PatchMesh: {what} must be a positive integer"))),
         };
         let (nu, nv) = (count(nu, "nu")?, count(nv, "nv")?);
@@ -323,7 +350,10 @@ impl Reader {
             return Err(r.err("Geometry expects a name (a string), e.g. Geometry \"teapot\""));
         };
         if name != "teapot" {
-            self.warn(r, format!("Geometry \"{name}\" is not known (known: teapot), left out"));
+            self.warn(
+                r,
+                format!("Geometry \"{name}\" is not known (known: teapot), left out"),
+            );
             return Ok(());
         }
         let mut patches = Vec::new();
