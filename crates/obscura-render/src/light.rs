@@ -1,4 +1,5 @@
-//! The four RenderMan lights: `PxrDomeLight`, `PxrDistantLight`, `PxrRectLight`, `PxrSphereLight`.
+//! The four RenderMan lights: `PxrDomeLight`, `PxrDistantLight`, `PxrRectLight`, `PxrSphereLight`,
+//! and the classic RenderMan Interface's point, spot and ambient lights.
 //!
 //! Every light's strength is `S = color · intensity · 2^exposure` (negative or non-finite channels
 //! count as 0); its `transform` is light-to-world, taken at shutter open (lights do not move).
@@ -9,6 +10,8 @@
 //! | distant | radiance `S / Ω` inside a cone of half-angle `θ_c = angleExtent/2` around the direction *to* the light, `Ω = 2π(1 − cos θ_c)`; so `∫_cone L dω = S` and the irradiance at normal incidence is `S` | uniform in the cone, `p = 1/Ω`; `angleExtent = 0`: a delta |
 //! | rect | radiance `S` from the light's `+Z` side of the 1×1 square `[−½, ½]²` of the light's XY plane (one-sided; RenderMan's `normalize` off: `S` is radiance whatever the size) | uniform in area, `p = d² / (cos θ_l · A)` |
 //! | sphere | radiance `S` outward from the sphere of diameter 1 at the light's origin (radius `½ · ∛|det M|`) | uniform in the cone the sphere subtends, `p = 1 / (2π(1 − cos θ_max))`, `sin θ_max = r/d` |
+//! | point, spot (classic `pointlight`, `spotlight`; `light/classic.rs`) | irradiance `S / d²` facing the light, times the spot's `cosᵇ α · smoothstep(cos θ_c, cos(θ_c − δ), cos α)` | a delta: `p` = the selection probability, not seen by rays |
+//! | ambient (classic `ambientlight`) | a dome of radiance `S` without a map that camera rays do not see | as the dome |
 //!
 //! **Dome orientation.** With an identity transform `+Y` is up, and the centre of the lat-long map
 //! (`u = v = ½`) is seen looking down `+Z`. A light-space direction `d` reads the map at

@@ -235,3 +235,75 @@ fn procedurals_read_archives_or_name_what_is_missing() {
     let e = fail("WorldBegin\nProcedural \"RunProgram\" [\"gen\" \"\"] [0 1 0 1 0 1]\n");
     assert!(e.contains("t.rib:2") && e.contains("RunProgram"), "{e}");
 }
+
+#[test]
+fn a_varying_cs_is_averaged_with_one_warning() {
+    let scene = ok(
+        "WorldBegin\nSurface \"matte\"\nPolygon \"P\" [0 0 0 1 0 0 1 1 0] \"Cs\" [1 0 0 0 1 0 0 0 1]\nPolygon \"P\" [0 0 0 1 0 0 1 1 0] \"Cs\" [1 0 0 0 1 0 0 0 1]\nWorldEnd\n",
+    );
+    let third = 1.0 / 3.0;
+    assert_eq!(
+        scene.materials[scene.objects[0].material as usize],
+        Material::Diffuse {
+            color: Rgb::new(third, third, third)
+        }
+    );
+    let warned = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("\"Cs\" varies"))
+        .count();
+    assert_eq!(warned, 1, "{:?}", scene.warnings);
+}
+
+#[test]
+fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("dark.rib");
+    std::fs::write(
+        &path,
+        "WorldBegin\nSurface \"matte\"\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let scene = crate::load(
+        &path,
+        obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
+    )
+    .unwrap();
+    assert!(
+        matches!(scene.lights[..], [Light::Dome { .. }]),
+        "{:?}",
+        scene.lights
+    );
+    assert!(scene.warnings.iter().any(|w| w.contains("no light")));
+    // A scene with a light of its own keeps it alone.
+    std::fs::write(
+        &path,
+        "WorldBegin\nLightSource \"pointlight\" 1\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let scene = crate::load(
+        &path,
+        obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
+    )
+    .unwrap();
+    assert!(matches!(scene.lights[..], [Light::Point(_)]));
+}
+
+#[test]
+fn blobby_programs_are_decoded_and_checked() {
+    let scene = ok(
+        "WorldBegin\nBlobby 2 [1001 0 1001 16 0 2 0 1] [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 1 0 0 0 0 1 0 0 0 0 1 0 1 0 0 1] [\"\"]\nWorldEnd\n",
+    );
+    let Shape::Blobby(b) = &scene.objects[0].shape else {
+        panic!()
+    };
+    assert_eq!(b.ops.len(), 3);
+    assert!(
+        matches!(&b.ops[2], crate::classic::BlobOp::Combine { kind: 0, operands } if operands == &[0, 1])
+    );
+    let e = fail("WorldBegin\nBlobby 1 [1001 5] [0 0 0] [\"\"]\n");
+    assert!(e.contains("t.rib:2") && e.contains("float index 5"), "{e}");
+    let e = fail("WorldBegin\nBlobby 1 [1003 0 0] [0 0 0 0] [\"x\"]\n");
+    assert!(e.contains("opcode 1003"), "{e}");
+}
