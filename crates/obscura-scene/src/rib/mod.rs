@@ -4,7 +4,10 @@
 //! (`Format`, `ScreenWindow`, `CropWindow`, `Shutter`, `Clipping`, `PixelFilter`, `Hider`, `Display`,
 //! `Projection`, `Camera`), transforms and motion blocks, attribute and transform blocks, the quadrics,
 //! polygons (triangulated on load) and Catmull–Clark subdivision meshes, `Bxdf` materials, lights and
-//! `ReadArchive`.
+//! `ReadArchive`; and classic RenderMan Interface scenes: `Color`, `Opacity`, the standard `Surface`
+//! and `LightSource` shaders (mapped to physically based materials and lights), `Basis`, `Patch`,
+//! `PatchMesh`, `NuPatch`, `Hyperboloid`, `Paraboloid`, `Curves`, `Points`, `Blobby`,
+//! `Geometry "teapot"`, retained objects, `Procedural "DelayedReadArchive"` and `SolidBegin`.
 //!
 //! # Transforms
 //!
@@ -45,7 +48,9 @@
 //! `request.rs` gives those methods typed access to the arguments and parameter lists. The handlers
 //! are grouped by what they describe: `options.rs` (the image and the camera), `transform.rs` (the
 //! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
-//! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
+//! cut by `triangulate.rs`); the classic requests in `classic_shaders.rs`, `patch.rs` (with the
+//! teapot's data in `teapot.rs`), `nupatch.rs`, `curves.rs`, `blobby.rs` and `objects.rs`. A new
+//! request is one row of `REQUESTS` and one method.
 
 mod blobby;
 mod classic_shaders;
