@@ -58,10 +58,9 @@ impl Reader {
                 v.count
             )));
         }
-        if let Some(k) = points
-            .iter()
-            .position(|p| !(p[3] > 0.0) || !p.iter().all(|x| x.is_finite()))
-        {
+        if let Some(k) = points.iter().position(|p| {
+            p[3].partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !p.iter().all(|x| x.is_finite())
+        }) {
             return Err(r.err(format!(
                 "NuPatch: control point {k} has a weight that is not positive or a coordinate that is not finite"
             )));
@@ -109,12 +108,12 @@ fn axis(r: &Req<'_>, name: &str, args: [&Value; 5]) -> Result<NurbsAxis, RibErro
             count + order
         )));
     }
-    if knots.windows(2).any(|w| !(w[1] >= w[0])) || !knots.iter().all(|k| k.is_finite()) {
+    if !knots.iter().all(|k| k.is_finite()) || knots.windows(2).any(|w| w[1] < w[0]) {
         return Err(r.err(format!("NuPatch: [{name}knot] must be finite and non-decreasing")));
     }
     let (lo, hi) = (knots[order as usize - 1], knots[count as usize]);
     let (min, max) = (num(min, "min")?.max(lo), num(max, "max")?.min(hi));
-    if !(min < max) {
+    if min.partial_cmp(&max) != Some(std::cmp::Ordering::Less) {
         return Err(r.err(format!(
             "NuPatch: {name}min..{name}max is empty within the knots' range {lo}..{hi}"
         )));

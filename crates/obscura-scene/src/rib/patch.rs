@@ -110,7 +110,7 @@ fn named_basis(name: &str) -> Option<CubicBasis> {
 
 impl CubicBasis {
     /// `C = B⁻¹·M`: Bézier control point `i` is `Σₖ C[i][k]·G[k]`.
-    pub(super) fn to_bezier(&self) -> [[f64; 4]; 4] {
+    pub(super) fn to_bezier(self) -> [[f64; 4]; 4] {
         let mut c = [[0.0; 4]; 4];
         for (i, row) in c.iter_mut().enumerate() {
             for (k, out) in row.iter_mut().enumerate() {
@@ -430,9 +430,9 @@ mod tests {
 
     #[test]
     fn bezier_inverse_is_the_inverse() {
-        for i in 0..4 {
+        for (i, row) in BEZIER_INVERSE.iter().enumerate() {
             for k in 0..4 {
-                let x: f64 = (0..4).map(|j| BEZIER_INVERSE[i][j] * BEZIER[j][k]).sum();
+                let x: f64 = row.iter().zip(&BEZIER).map(|(a, b)| a * b[k]).sum();
                 assert!((x - f64::from(u8::from(i == k))).abs() < 1e-12);
             }
         }
