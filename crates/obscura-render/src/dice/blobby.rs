@@ -119,6 +119,28 @@ fn leaf_box(m: Mat4, extra: f32) -> (DVec3, DVec3) {
     (lo, hi)
 }
 
+/// True when the program's field is the sum of its leaves: no operations, or one final `add` of
+/// every leaf exactly once.
+fn additive(ops: &[BlobOp]) -> bool {
+    let leaves: Vec<u32> = (0..ops.len() as u32)
+        .filter(|&k| {
+            matches!(
+                ops[k as usize],
+                BlobOp::Constant(_) | BlobOp::Ellipsoid(_) | BlobOp::Segment { .. }
+            )
+        })
+        .collect();
+    match ops.split_last() {
+        _ if leaves.len() == ops.len() => true,
+        Some((BlobOp::Combine { kind: 0, operands }, rest)) if leaves.len() == rest.len() => {
+            let mut sorted = operands.clone();
+            sorted.sort_unstable();
+            sorted == leaves
+        }
+        _ => false,
+    }
+}
+
 /// The six tetrahedra of a cube, as corner indices (corner `k` is at `(k&1, k>>1&1, k>>2&1)`),
 /// all sharing the diagonal 0–7.
 const TETRAHEDRA: [[usize; 4]; 6] = [
@@ -194,22 +216,80 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
         counts.z as usize + 1,
     );
     let at = |i: usize, j: usize, k: usize| lo + DVec3::new(i as f64, j as f64, k as f64) * cell;
-    let mut scratch = Vec::new();
-    let mut values = vec![0.0; nx * ny * nz];
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                values[(k * ny + j) * nx + i] =
-                    field(&nodes, combined, at(i, j, k), &mut scratch) - BLOBBY_LEVEL;
+    let mut values = vec![-BLOBBY_LEVEL; nx * ny * nz];
+    if additive(&blob.ops) {
+        // A sum of leaves: each leaf adds itself over the grid points of its own box only.
+        for (node, op) in nodes.iter().zip(&blob.ops) {
+            let (a, b) = match op {
+                BlobOp::Ellipsoid(m) => leaf_box(*m, 0.0),
+                BlobOp::Segment {
+                    start,
+                    end,
+                    radius,
+                    matrix,
+                } => {
+                    let r = Mat4::from_scale(Vec3::splat(radius.abs()));
+                    let (a0, b0) = leaf_box(*matrix * Mat4::from_translation(*start) * r, 0.0);
+                    let (a1, b1) = leaf_box(*matrix * Mat4::from_translation(*end) * r, 0.0);
+                    (a0.min(a1), b0.max(b1))
+                }
+                BlobOp::Constant(c) => {
+                    values.iter_mut().for_each(|v| *v += f64::from(*c));
+                    continue;
+                }
+                _ => continue,
+            };
+            let index = |x: f64, n: usize| ((x / cell).floor().max(0.0) as usize).min(n - 1);
+            let (i0, j0, k0) = (
+                index(a.x - lo.x, nx),
+                index(a.y - lo.y, ny),
+                index(a.z - lo.z, nz),
+            );
+            let (i1, j1, k1) = (
+                index(b.x - lo.x + cell, nx),
+                index(b.y - lo.y + cell, ny),
+                index(b.z - lo.z + cell, nz),
+            );
+            let one = std::slice::from_ref(node);
+            let mut scratch = Vec::new();
+            for k in k0..=k1 {
+                for j in j0..=j1 {
+                    for i in i0..=i1 {
+                        values[(k * ny + j) * nx + i] += field(one, false, at(i, j, k), &mut scratch);
+                    }
+                }
+            }
+        }
+    } else {
+        let mut scratch = Vec::new();
+        for k in 0..nz {
+            for j in 0..ny {
+                for i in 0..nx {
+                    values[(k * ny + j) * nx + i] += field(&nodes, combined, at(i, j, k), &mut scratch);
+                }
             }
         }
     }
+    // The field's gradient at a grid point, by central differences on the grid.
+    let gradient = |g: usize| {
+        let (i, rest) = (g % nx, g / nx);
+        let (j, k) = (rest % ny, rest / ny);
+        let v = |i: usize, j: usize, k: usize| values[(k * ny + j) * nx + i];
+        let d = |lo_v: f64, hi_v: f64, span: f64| (hi_v - lo_v) / span;
+        let (il, ih) = (i.saturating_sub(1), (i + 1).min(nx - 1));
+        let (jl, jh) = (j.saturating_sub(1), (j + 1).min(ny - 1));
+        let (kl, kh) = (k.saturating_sub(1), (k + 1).min(nz - 1));
+        DVec3::new(
+            d(v(il, j, k), v(ih, j, k), (ih - il).max(1) as f64),
+            d(v(i, jl, k), v(i, jh, k), (jh - jl).max(1) as f64),
+            d(v(i, j, kl), v(i, j, kh), (kh - kl).max(1) as f64),
+        )
+    };
     let mut out = TriangleMesh {
         normals: Some(Vec::new()),
         ..TriangleMesh::default()
     };
     let mut edge_vertex: HashMap<(usize, usize), u32> = HashMap::new();
-    let grad_step = 0.25 * cell;
     for k in 0..nz - 1 {
         for j in 0..ny - 1 {
             for i in 0..nx - 1 {
@@ -234,13 +314,7 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
                         let (fa, fb) = (values[a], values[b]);
                         let t = (fa / (fa - fb)).clamp(0.0, 1.0);
                         let p = pos(a).lerp(pos(b), t);
-                        let mut s = Vec::new();
-                        let mut d = |axis: DVec3| {
-                            field(&nodes, combined, p + axis * grad_step, &mut s)
-                                - field(&nodes, combined, p - axis * grad_step, &mut s)
-                        };
-                        let (dx, dy, dz) = (d(DVec3::X), d(DVec3::Y), d(DVec3::Z));
-                        let n = -DVec3::new(dx, dy, dz);
+                        let n = -gradient(a).lerp(gradient(b), t);
                         let v = out.positions.len() as u32;
                         out.positions.push(p.as_vec3a());
                         if let Some(ns) = out.normals.as_mut() {
@@ -320,5 +394,17 @@ mod tests {
         let m = blobby(&two, &ctx);
         let mid = m.positions.iter().filter(|p| p.x.abs() < 0.05).count();
         assert!(mid > 0, "the blobs join at x = 0");
+        // With `max` instead of `add` (the general evaluator) they stay two spheres of radius ½.
+        let mut apart = two.clone();
+        apart.ops[2] = BlobOp::Combine {
+            kind: 2,
+            operands: vec![0, 1],
+        };
+        assert!(!additive(&apart.ops) && additive(&two.ops));
+        let m = blobby(&apart, &ctx);
+        for p in &m.positions {
+            let c = Vec3::new(0.4f32.copysign(p.x), 0.0, 0.0);
+            assert!((Vec3::from(*p).distance(c) - 0.5).abs() < 0.03, "{p}");
+        }
     }
 }
