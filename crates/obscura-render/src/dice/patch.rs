@@ -1,6 +1,9 @@
 //! Bicubic Bézier patches (every `Patch`, `PatchMesh` and the teapot) → triangles.
 //!
-//! Each patch gets its own rate from the bounding sphere of its control points, and
+//! A patch that would dice into more than 1024 quads is first split in half (de Casteljau, exact)
+//! across its longer direction, up to 12 times in a row, so each piece is measured at its own
+//! distance (REYES's split-then-dice): a floor running from the camera to the horizon dices finely
+//! only near the camera. Each piece gets its own rate from the bounding sphere of its control points, and
 //! `n = ⌈A·k/m⌉` segments per direction (clamped to `[1, 4096]`), `A` the longest control-polygon
 //! row (for `u`) or column (for `v`): the control polygon is never shorter than the curve, so the
 //! surface's edges come out at most `m` pixels long. When the patches of one primitive together
@@ -113,28 +116,71 @@ pub(super) fn append(out: &mut TriangleMesh, m: TriangleMesh) {
     );
 }
 
+/// Patches are split (de Casteljau, exactly) while one would dice into more than this many quads …
+const SPLIT_ABOVE_QUADS: u32 = 1024;
+
+/// … at most this many times in a row (a patch becomes at most `2^MAX_SPLIT_DEPTH` pieces).
+const MAX_SPLIT_DEPTH: u32 = 12;
+
+/// The halves of a cubic Bézier curve (de Casteljau at ½).
+fn halve(p: [DVec3; 4]) -> ([DVec3; 4], [DVec3; 4]) {
+    let m = |a: DVec3, b: DVec3| 0.5 * (a + b);
+    let (p01, p12, p23) = (m(p[0], p[1]), m(p[1], p[2]), m(p[2], p[3]));
+    let (p012, p123) = (m(p01, p12), m(p12, p23));
+    let mid = m(p012, p123);
+    ([p[0], p01, p012, mid], [mid, p123, p23, p[3]])
+}
+
+/// The two halves of a patch across `u` (`along_u`) or `v`.
+fn split(p: &[DVec3; 16], along_u: bool) -> ([DVec3; 16], [DVec3; 16]) {
+    let mut a = [DVec3::ZERO; 16];
+    let mut b = [DVec3::ZERO; 16];
+    for k in 0..4 {
+        let at = |i: usize| if along_u { 4 * k + i } else { 4 * i + k };
+        let (x, y) = halve([p[at(0)], p[at(1)], p[at(2)], p[at(3)]]);
+        for i in 0..4 {
+            a[at(i)] = x[i];
+            b[at(i)] = y[i];
+        }
+    }
+    (a, b)
+}
+
+/// A patch's segment counts from its own rate.
+fn counts(p: &[DVec3; 16], ctx: &DicingContext) -> (u32, u32) {
+    let (centre, radius) = bounding_sphere(p.iter().copied());
+    let rate = Rate::new(ctx, centre, radius);
+    let (au, av) = hull_arcs(p);
+    (rate.segments(au, 0.0), rate.segments(av, 0.0))
+}
+
+/// Splits `p` until each piece dices into at most [`SPLIT_ABOVE_QUADS`] quads (or the depth runs
+/// out), so the near part of a large patch dices finely and its far part coarsely: each piece is
+/// measured at its own distance. Pushes `(piece, nu, nv)`.
+fn split_to_fit(p: [DVec3; 16], ctx: &DicingContext, depth: u32, out: &mut Vec<([DVec3; 16], (u32, u32))>) {
+    let (nu, nv) = counts(&p, ctx);
+    if u64::from(nu) * u64::from(nv) <= u64::from(SPLIT_ABOVE_QUADS) || depth >= MAX_SPLIT_DEPTH {
+        out.push((p, (nu, nv)));
+        return;
+    }
+    let (a, b) = split(&p, nu >= nv);
+    split_to_fit(a, ctx, depth + 1, out);
+    split_to_fit(b, ctx, depth + 1, out);
+}
+
 /// The patches as one triangle mesh.
 pub(super) fn patches(list: &[BezierPatch], ctx: &DicingContext) -> TriangleMesh {
-    let control: Vec<[DVec3; 16]> = list
-        .iter()
-        .filter(|p| p.points.iter().all(|q| q.is_finite()))
-        .map(|p| p.points.map(Vec3::as_dvec3))
-        .collect();
-    let mut counts: Vec<(u32, u32)> = control
-        .iter()
-        .map(|p| {
-            let (centre, radius) = bounding_sphere(p.iter().copied());
-            let rate = Rate::new(ctx, centre, radius);
-            let (au, av) = hull_arcs(p);
-            (rate.segments(au, 0.0), rate.segments(av, 0.0))
-        })
-        .collect();
+    let mut pieces = Vec::new();
+    for p in list.iter().filter(|p| p.points.iter().all(|q| q.is_finite())) {
+        split_to_fit(p.points.map(Vec3::as_dvec3), ctx, 0, &mut pieces);
+    }
+    let mut counts: Vec<(u32, u32)> = pieces.iter().map(|p| p.1).collect();
     fit_all(&mut counts);
     let mut out = TriangleMesh {
         normals: Some(Vec::new()),
         ..TriangleMesh::default()
     };
-    for (p, &(nu, nv)) in control.iter().zip(&counts) {
+    for ((p, _), &(nu, nv)) in pieces.iter().zip(&counts) {
         let grid = Grid {
             nu,
             nv,
@@ -185,6 +231,41 @@ mod tests {
             let want = Vec3::new(-2.0 * p.x, -2.0 * p.y, 1.0).normalize();
             assert!((Vec3::from(*n) - want).length() < 1e-4, "{n} vs {want}");
         }
+    }
+
+    #[test]
+    fn split_halves_are_the_same_surface() {
+        let p = bowl().points.map(Vec3::as_dvec3);
+        for along_u in [true, false] {
+            let (a, b) = split(&p, along_u);
+            for t in [0.0, 0.3, 1.0] {
+                for s in [0.0, 0.6, 1.0] {
+                    // (t along the split direction, s across it)
+                    let uv = |x: f64| if along_u { (x, s) } else { (s, x) };
+                    let (ua, va) = uv(t);
+                    let (u0, v0) = uv(0.5 * t);
+                    let (u1, v1) = uv(0.5 + 0.5 * t);
+                    assert!(evaluate(&a, ua, va).0.distance(evaluate(&p, u0, v0).0) < 1e-12);
+                    assert!(evaluate(&b, ua, va).0.distance(evaluate(&p, u1, v1).0) < 1e-12);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_large_floor_dices_finely_only_near_the_camera() {
+        // A 40-unit floor from 1 unit in front of the camera to 41 units away.
+        let floor = BezierPatch {
+            points: std::array::from_fn(|k| {
+                let (i, j) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
+                Vec3::new(40.0 * i - 20.0, -1.0, 1.0 + 40.0 * j)
+            }),
+        };
+        let ctx = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(160, 120));
+        let split = patches(&[floor], &ctx).triangles.len();
+        let (nu, nv) = counts(&floor.points.map(Vec3::as_dvec3), &ctx);
+        let whole = 2 * nu as usize * nv as usize;
+        assert!(split * 8 < whole, "split {split} vs whole {whole}");
     }
 
     #[test]
