@@ -302,6 +302,15 @@ fn blobby_programs_are_decoded_and_checked() {
     assert!(
         matches!(&b.ops[2], crate::classic::BlobOp::Combine { kind: 0, operands } if operands == &[0, 1])
     );
+    // A declared `mpoint` primitive variable is read (and left out with a warning), not an error.
+    let scene = ok(
+        "WorldBegin\nBlobby 1 [1001 0] [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1] [\"\"] \"vertex mpoint Pref\" [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]\nWorldEnd\n",
+    );
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("Pref")),
+        "{:?}",
+        scene.warnings
+    );
     let e = fail("WorldBegin\nBlobby 1 [1001 5] [0 0 0] [\"\"]\n");
     assert!(e.contains("t.rib:2") && e.contains("float index 5"), "{e}");
     let e = fail("WorldBegin\nBlobby 1 [1003 0 0] [0 0 0 0] [\"x\"]\n");
