@@ -141,6 +141,14 @@ fn additive(ops: &[BlobOp]) -> bool {
     }
 }
 
+/// The object-space box of a segment blob: the boxes of the balls at its two ends, joined.
+fn segment_box(start: Vec3, end: Vec3, radius: f32, matrix: Mat4) -> (DVec3, DVec3) {
+    let r = Mat4::from_scale(Vec3::splat(radius.abs()));
+    let (a0, b0) = leaf_box(matrix * Mat4::from_translation(start) * r, 0.0);
+    let (a1, b1) = leaf_box(matrix * Mat4::from_translation(end) * r, 0.0);
+    (a0.min(a1), b0.max(b1))
+}
+
 /// The six tetrahedra of a cube, as corner indices (corner `k` is at `(k&1, k>>1&1, k>>2&1)`),
 /// all sharing the diagonal 0–7.
 const TETRAHEDRA: [[usize; 4]; 6] = [
@@ -178,18 +186,14 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
                 radius,
                 matrix,
             } => {
-                let r = radius.abs();
-                for p in [start, end] {
-                    let box_m = *matrix * Mat4::from_translation(*p) * Mat4::from_scale(Vec3::splat(r));
-                    let (a, b) = leaf_box(box_m, 0.0);
-                    lo = lo.min(a);
-                    hi = hi.max(b);
-                }
+                let (a, b) = segment_box(*start, *end, *radius, *matrix);
+                lo = lo.min(a);
+                hi = hi.max(b);
                 Node::Segment {
                     inverse: matrix.as_dmat4().inverse(),
                     start: start.as_dvec3(),
                     end: end.as_dvec3(),
-                    radius: f64::from(r),
+                    radius: f64::from(radius.abs()),
                 }
             }
             other => Node::Op(other.clone()),
@@ -227,12 +231,7 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
                     end,
                     radius,
                     matrix,
-                } => {
-                    let r = Mat4::from_scale(Vec3::splat(radius.abs()));
-                    let (a0, b0) = leaf_box(*matrix * Mat4::from_translation(*start) * r, 0.0);
-                    let (a1, b1) = leaf_box(*matrix * Mat4::from_translation(*end) * r, 0.0);
-                    (a0.min(a1), b0.max(b1))
-                }
+                } => segment_box(*start, *end, *radius, *matrix),
                 BlobOp::Constant(c) => {
                     values.iter_mut().for_each(|v| *v += f64::from(*c));
                     continue;

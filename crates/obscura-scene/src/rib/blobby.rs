@@ -4,6 +4,7 @@
 
 use glam::{Mat4, Vec3};
 
+use super::geometry::with_primitive_variables;
 use super::lex::Value;
 use super::request::Req;
 use super::{Reader, RibError};
@@ -25,13 +26,7 @@ impl Reader {
             [Value::Strs(_) | Value::Nums(_), more @ ..] => more,
             _ => rest,
         };
-        let table = [
-            "vertex color Cs",
-            "vertex color Os",
-            "vertex float s",
-            "vertex float t",
-        ];
-        let list = self.params(r, rest, &table, false)?;
+        let list = self.params(r, rest, &with_primitive_variables(&[]), false)?;
         self.primitive_color(r, &list);
         let ops = program(r, &code, &floats)?;
         self.add_object(r, Shape::Blobby(Blobby { ops }));

@@ -9,6 +9,7 @@
 
 use glam::Vec3;
 
+use super::geometry::with_primitive_variables;
 use super::lex::Value;
 use super::patch::bezier_points;
 use super::request::{Req, get_float, get_floats, to_points};
@@ -16,17 +17,8 @@ use super::{Reader, RibError};
 use crate::classic::{CurveSegment, Curves, Points};
 use crate::types::Shape;
 
-/// The parameters `Curves` and `Points` read.
-const TABLE: [&str; 8] = [
-    "vertex point P",
-    "vertex float width",
-    "float constantwidth",
-    "vertex normal N",
-    "vertex color Cs",
-    "vertex color Os",
-    "vertex float s",
-    "vertex float t",
-];
+/// The parameters `Curves` and `Points` read besides the primitive variables.
+const TABLE: [&str; 3] = ["vertex point P", "vertex float width", "float constantwidth"];
 
 impl Reader {
     /// `Curves "linear"|"cubic" [nvertices] "nonperiodic"|"periodic" "P" [...]`.
@@ -51,7 +43,7 @@ impl Reader {
             }
         };
         let counts = r.counts(counts, "[nvertices]")?;
-        let list = self.params(r, rest, &TABLE, false)?;
+        let list = self.params(r, rest, &with_primitive_variables(&TABLE), false)?;
         self.primitive_color(r, &list);
         let points = get_floats(&list, "P")
             .map(to_points)
@@ -141,7 +133,7 @@ impl Reader {
 
     /// `Points "P" [...]` with `"width"` or `"constantwidth"`.
     pub(super) fn points(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        let list = self.params(r, r.args, &TABLE, false)?;
+        let list = self.params(r, r.args, &with_primitive_variables(&TABLE), false)?;
         self.primitive_color(r, &list);
         let positions: Vec<Vec3> = get_floats(&list, "P")
             .map(to_points)

@@ -120,7 +120,7 @@ impl Reader {
                 )
             }
         };
-        let list = self.params(r, rest, &QUADRIC_PARAMETERS, false)?;
+        let list = self.params(r, rest, &PRIMITIVE_VARIABLES, false)?;
         self.primitive_color(r, &list);
         self.add_object(r, shape);
         Ok(())
@@ -183,7 +183,12 @@ impl Reader {
                 (Some(faces), rest)
             }
         };
-        let list = self.params(r, rest, &POLYGON_PARAMETERS, false)?;
+        let list = self.params(
+            r,
+            rest,
+            &with_primitive_variables(&["vertex point P", "vertex float[2] uv"]),
+            false,
+        )?;
         self.primitive_color(r, &list);
         let (positions, normals) = self.points_and_normals(r, &list)?;
         let faces = match faces {
@@ -260,7 +265,12 @@ impl Reader {
             }
             _ => (None, rest),
         };
-        let list = self.params(r, rest, &POLYGON_PARAMETERS, false)?;
+        let list = self.params(
+            r,
+            rest,
+            &with_primitive_variables(&["vertex point P", "vertex float[2] uv"]),
+            false,
+        )?;
         self.primitive_color(r, &list);
         let (positions, _) = self.points_and_normals(r, &list)?;
         let face_indices = check_indices(r, &verts, positions.len())?;
@@ -374,27 +384,21 @@ fn add_crease(r: &Req<'_>, ints: &[i64], floats: &[f32], mesh: &mut SubdivMesh) 
     Ok(())
 }
 
-/// The primitive variables polygons and subdivision meshes read (`P`, `N`, the colour) or accept.
-const POLYGON_PARAMETERS: [&str; 8] = [
-    "vertex point P",
+/// The primitive variables any primitive may carry: its colour is used (see `primitive_color`), the
+/// others are accepted.
+const PRIMITIVE_VARIABLES: [&str; 6] = [
     "vertex normal N",
     "vertex color Cs",
     "vertex color Os",
-    "vertex float s",
-    "vertex float t",
-    "vertex float[2] st",
-    "vertex float[2] uv",
-];
-
-/// The primitive variables a quadric may carry (its colour is used; the rest is accepted).
-const QUADRIC_PARAMETERS: [&str; 6] = [
-    "vertex color Cs",
-    "vertex color Os",
-    "vertex normal N",
     "vertex float s",
     "vertex float t",
     "vertex float[2] st",
 ];
+
+/// A request's parameter table: its own entries, then [`PRIMITIVE_VARIABLES`].
+pub(super) fn with_primitive_variables<'a>(own: &[&'a str]) -> Vec<&'a str> {
+    own.iter().copied().chain(PRIMITIVE_VARIABLES).collect()
+}
 
 /// One polygon's loops (outline, then holes) of vertex indices as written.
 type FaceLoops = Vec<Vec<i64>>;

@@ -1,6 +1,7 @@
 //! `NuPatch` (rational B-spline surfaces) and `TrimCurve` (warned about: patches are drawn
 //! untrimmed).
 
+use super::geometry::with_primitive_variables;
 use super::lex::Value;
 use super::request::{Req, get_floats};
 use super::{Reader, RibError};
@@ -30,16 +31,7 @@ impl Reader {
         };
         let u = axis(r, "u", [nu, uorder, uknot, umin, umax])?;
         let v = axis(r, "v", [nv, vorder, vknot, vmin, vmax])?;
-        let table = [
-            "vertex hpoint Pw",
-            "vertex point P",
-            "vertex normal N",
-            "vertex color Cs",
-            "vertex color Os",
-            "vertex float s",
-            "vertex float t",
-            "vertex float[2] st",
-        ];
+        let table = with_primitive_variables(&["vertex hpoint Pw", "vertex point P"]);
         let list = self.params(r, rest, &table, false)?;
         self.primitive_color(r, &list);
         let points: Vec<[f32; 4]> = if let Some(p) = get_floats(&list, "Pw") {

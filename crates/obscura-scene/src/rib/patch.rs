@@ -11,6 +11,7 @@
 
 use glam::Vec3;
 
+use super::geometry::with_primitive_variables;
 use super::lex::Value;
 use super::request::{Req, get_floats};
 use super::teapot::TEAPOT;
@@ -213,17 +214,7 @@ impl Reader {
         cols: usize,
         rows: usize,
     ) -> Result<Vec<Vec3>, RibError> {
-        let table = [
-            "vertex point P",
-            "vertex hpoint Pw",
-            "vertex float Pz",
-            "vertex normal N",
-            "vertex color Cs",
-            "vertex color Os",
-            "vertex float s",
-            "vertex float t",
-            "vertex float[2] st",
-        ];
+        let table = with_primitive_variables(&["vertex point P", "vertex hpoint Pw", "vertex float Pz"]);
         let list = self.params(r, rest, &table, false)?;
         self.primitive_color(r, &list);
         let need = cols * rows;
