@@ -59,7 +59,12 @@ pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
         "rib" => {
             // A classic scene often has no light (or only ones we skip): light it as glTF and OBJ are.
             let mut scene = rib::parse_file(path)?;
-            framing::add_default_dome_if_unlit(&mut scene, &path.display().to_string());
+            if scene.lights.is_empty() {
+                framing::add_default_dome_if_unlit(&mut scene, &path.display().to_string());
+                if let Some(w) = scene.warnings.last_mut() {
+                    w.push_str("; any LightSource in the file replaces it");
+                }
+            }
             Ok(scene)
         }
         "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),

@@ -275,7 +275,14 @@ fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
         "{:?}",
         scene.lights
     );
-    assert!(scene.warnings.iter().any(|w| w.contains("no light")));
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("no light") && w.contains("any LightSource in the file replaces it")),
+        "{:?}",
+        scene.warnings
+    );
     // A scene with a light of its own keeps it alone.
     std::fs::write(
         &path,
