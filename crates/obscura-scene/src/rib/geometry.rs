@@ -10,7 +10,7 @@ use super::lex::{Value, describe};
 use super::request::{Req, get_floats, to_points};
 use super::triangulate::triangulate;
 use super::{Reader, RibError};
-use crate::types::{Mesh, Object, Shape, SubdivMesh};
+use crate::types::{Identity, Mesh, Object, Shape, SubdivMesh};
 
 impl Reader {
     /// Adds an object of `shape` with the current transform, material and dicing (to the object
@@ -22,6 +22,10 @@ impl Reader {
             material: self.current_material(),
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
+            identity: Identity {
+                object: self.identifier.clone(),
+                instance: self.identifier.clone(),
+            },
         };
         match &mut self.retained.open {
             Some(d) => d.objects.push(object),

@@ -108,6 +108,7 @@ impl Reader {
         for mut o in objects {
             o.transform = compose(&ctm, &o.transform);
             o.material = material;
+            o.identity.instance.clone_from(&self.identifier);
             o.source = format!("{} (object \"{handle}\" of {})", r.at(), o.source);
             self.scene.objects.push(o);
         }
