@@ -1,4 +1,5 @@
-//! The four RenderMan lights: `PxrDomeLight`, `PxrDistantLight`, `PxrRectLight`, `PxrSphereLight`.
+//! The four RenderMan lights: `PxrDomeLight`, `PxrDistantLight`, `PxrRectLight`, `PxrSphereLight`,
+//! and the classic RenderMan Interface's point, spot and ambient lights.
 //!
 //! Every light's strength is `S = color · intensity · 2^exposure` (negative or non-finite channels
 //! count as 0); its `transform` is light-to-world, taken at shutter open (lights do not move).
@@ -9,6 +10,8 @@
 //! | distant | radiance `S / Ω` inside a cone of half-angle `θ_c = angleExtent/2` around the direction *to* the light, `Ω = 2π(1 − cos θ_c)`; so `∫_cone L dω = S` and the irradiance at normal incidence is `S` | uniform in the cone, `p = 1/Ω`; `angleExtent = 0`: a delta |
 //! | rect | radiance `S` from the light's `+Z` side of the 1×1 square `[−½, ½]²` of the light's XY plane (one-sided; RenderMan's `normalize` off: `S` is radiance whatever the size) | uniform in area, `p = d² / (cos θ_l · A)` |
 //! | sphere | radiance `S` outward from the sphere of diameter 1 at the light's origin (radius `½ · ∛|det M|`) | uniform in the cone the sphere subtends, `p = 1 / (2π(1 − cos θ_max))`, `sin θ_max = r/d` |
+//! | point, spot (classic `pointlight`, `spotlight`; `light/classic.rs`) | irradiance `S / d²` facing the light, times the spot's `cosᵇ α · smoothstep(cos θ_c, cos(θ_c − δ), cos α)` | a delta: `p` = the selection probability, not seen by rays |
+//! | ambient (classic `ambientlight`) | a dome of radiance `S` without a map that camera rays do not see | as the dome |
 //!
 //! **Dome orientation.** With an identity transform `+Y` is up, and the centre of the lat-long map
 //! (`u = v = ½`) is seen looking down `+Z`. A light-space direction `d` reads the map at
@@ -48,6 +51,9 @@ use glam::{Mat3A, Mat4, Vec3A};
 use obscura_host::distribution::Distribution1D;
 use obscura_scene::Light;
 
+mod classic;
+
+use self::classic::{PointLight, SpotBeam};
 use crate::material::{Frame, color, sanitize};
 use crate::ray::Ray;
 
@@ -172,6 +178,8 @@ struct Dome {
     to_world: Mat3A,
     to_light: Mat3A,
     map: Option<EnvMap>,
+    /// Seen by camera rays that escape (false for the classic `ambientlight`).
+    camera_visible: bool,
 }
 
 impl Dome {
@@ -368,6 +376,8 @@ enum Emitter {
     Distant(Distant),
     Rect(Rect),
     Sphere(SphereLight),
+    /// A point or spot light (a delta).
+    Point(PointLight),
 }
 
 impl Emitter {
@@ -378,6 +388,7 @@ impl Emitter {
             Emitter::Distant(d) => d.strength,
             Emitter::Rect(r) => r.strength,
             Emitter::Sphere(s) => s.strength,
+            Emitter::Point(p) => p.strength,
         }
     }
 
@@ -387,7 +398,7 @@ impl Emitter {
         match self {
             Emitter::Rect(r) => r.intersect(o, d, t_min, t_max),
             Emitter::Sphere(s) => s.intersect(o, d, t_min, t_max),
-            Emitter::Dome(_) | Emitter::Distant(_) => None,
+            Emitter::Dome(_) | Emitter::Distant(_) | Emitter::Point(_) => None,
         }
     }
 }
@@ -442,6 +453,48 @@ impl Lights {
                     to_world,
                     to_light: to_world.transpose(),
                     map,
+                    camera_visible: true,
+                })
+            }
+            Light::Ambient { color: c, intensity } => Emitter::Dome(Dome {
+                strength: strength(*c, *intensity, 0.0),
+                to_world: Mat3A::IDENTITY,
+                to_light: Mat3A::IDENTITY,
+                map: None,
+                camera_visible: false,
+            }),
+            Light::Point(p) => {
+                if !p.position.is_finite() {
+                    return Ok(None);
+                }
+                Emitter::Point(PointLight {
+                    strength: strength(p.color, p.intensity, 0.0),
+                    position: Vec3A::from(p.position),
+                    spot: None,
+                })
+            }
+            Light::Spot {
+                emitter: p,
+                direction,
+                cone_angle,
+                cone_delta,
+                beam_distribution,
+            } => {
+                let Some(beam) = SpotBeam::new(
+                    Vec3A::from(*direction),
+                    *cone_angle,
+                    *cone_delta,
+                    *beam_distribution,
+                ) else {
+                    return Ok(None);
+                };
+                if !p.position.is_finite() {
+                    return Ok(None);
+                }
+                Emitter::Point(PointLight {
+                    strength: strength(p.color, p.intensity, 0.0),
+                    position: Vec3A::from(p.position),
+                    spot: Some(beam),
                 })
             }
             Light::Distant {
@@ -636,6 +689,16 @@ impl Lights {
                     mis: true,
                 }
             }
+            Emitter::Point(l) => {
+                let (wi, dist, radiance) = l.illuminate(p)?;
+                LightSample {
+                    wi,
+                    dist,
+                    radiance,
+                    pdf: select,
+                    mis: false,
+                }
+            }
         };
         if n != Vec3A::ZERO && sample.wi.dot(n) <= 0.0 {
             return None;
@@ -712,7 +775,9 @@ impl Lights {
             .emitters
             .iter()
             .map(|e| {
-                if let Emitter::Dome(d) = e {
+                if let Emitter::Dome(d) = e
+                    && d.camera_visible
+                {
                     d.radiance(dir)
                 } else {
                     Vec3A::ZERO
@@ -747,7 +812,7 @@ impl Lights {
         let pdf = match emitter {
             Emitter::Rect(r) => r.pdf(wi, t * len),
             Emitter::Sphere(s) => s.pdf(o),
-            Emitter::Dome(_) | Emitter::Distant(_) => 0.0,
+            Emitter::Dome(_) | Emitter::Distant(_) | Emitter::Point(_) => 0.0,
         };
         let (radiance, pdf) = if pdf > 0.0 {
             (emitter.strength(), pdf * select)

@@ -11,6 +11,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod classic;
 mod framing;
 pub mod gltf_scene;
 pub mod obj;
@@ -20,6 +21,7 @@ pub mod types;
 #[cfg(test)]
 mod test_support;
 
+pub use classic::*;
 pub use types::*;
 
 use std::path::Path;
@@ -50,7 +52,11 @@ pub enum LoadError {
 /// As [`load`].
 pub fn load_frames(path: &Path, camera: CameraDesc) -> Result<Vec<rib::Frame>, LoadError> {
     if is_rib(path) {
-        return Ok(rib::parse_file_frames(path)?);
+        let mut frames = rib::parse_file_frames(path)?;
+        for frame in &mut frames {
+            light_if_unlit(&mut frame.scene, path);
+        }
+        return Ok(frames);
     }
     Ok(vec![rib::Frame {
         number: 1,
@@ -58,6 +64,17 @@ pub fn load_frames(path: &Path, camera: CameraDesc) -> Result<Vec<rib::Frame>, L
         world: String::new(),
         scene: load(path, camera)?,
     }])
+}
+
+/// A classic scene often has no light (or only ones the renderer skips): it is lit as glTF and OBJ
+/// scenes are, with a warning saying so.
+fn light_if_unlit(scene: &mut Scene, path: &Path) {
+    if scene.lights.is_empty() {
+        framing::add_default_dome_if_unlit(scene, &path.display().to_string());
+        if let Some(w) = scene.warnings.last_mut() {
+            w.push_str("; any LightSource in the file replaces it");
+        }
+    }
 }
 
 /// True when `path` names a RIB file by its extension (`.rib`, `.ribz`, `.rib.gz`).
@@ -81,7 +98,9 @@ pub fn load(path: &Path, camera: CameraDesc) -> Result<Scene, LoadError> {
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     if is_rib(path) {
-        return Ok(rib::parse_file(path)?);
+        let mut scene = rib::parse_file(path)?;
+        light_if_unlit(&mut scene, path);
+        return Ok(scene);
     }
     match ext.as_str() {
         "gltf" | "glb" => Ok(gltf_scene::load_gltf(path, camera)?),

@@ -6,6 +6,8 @@ use glam::{Mat4, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::{ParamList, Rgb};
 
+use crate::classic::{BezierPatch, Blobby, Curves, NuPatch, Points};
+
 /// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
 /// least one. Matrices act on column vectors (`p' = M·p`).
 #[derive(Debug, Clone, PartialEq)]
@@ -118,6 +120,36 @@ pub enum Shape {
         /// Sweep about z, degrees.
         theta_max: f32,
     },
+    /// `Hyperboloid x1 y1 z1 x2 y2 z2 thetamax`: the line from `point1` to `point2` swept about z.
+    Hyperboloid {
+        /// One end of the swept line.
+        point1: Vec3,
+        /// The other end.
+        point2: Vec3,
+        /// Sweep about z, degrees.
+        theta_max: f32,
+    },
+    /// `Paraboloid rmax zmin zmax thetamax`: `r = rmax·√(z/zmax)` for `z ∈ [zmin, zmax]`.
+    Paraboloid {
+        /// Radius at `z_max`.
+        radius: f32,
+        /// Lower z.
+        z_min: f32,
+        /// Upper z.
+        z_max: f32,
+        /// Sweep about z, degrees.
+        theta_max: f32,
+    },
+    /// Bicubic (and bilinear) patches and patch meshes, in Bézier form.
+    Patches(Vec<BezierPatch>),
+    /// A NURBS patch.
+    NuPatch(NuPatch),
+    /// Curves, as ribbons.
+    Curves(Curves),
+    /// Points, as discs facing the camera.
+    Points(Points),
+    /// An implicit surface of blobs.
+    Blobby(Blobby),
     /// Polygons, already triangulated.
     Mesh(Mesh),
     /// A subdivision surface.
@@ -198,6 +230,31 @@ pub enum Light {
         /// Light-to-world.
         transform: Mat4,
     },
+    /// A point light (the classic `pointlight`): irradiance `color · intensity / d²` at distance `d`,
+    /// facing it.
+    Point(PointEmitter),
+    /// A spot light (the classic `spotlight`): a point light whose irradiance is scaled by
+    /// `cosⁿ(α) · smoothstep(cos(cone), cos(cone − delta), cos α)`, `α` the angle from `direction`.
+    Spot {
+        /// Position and strength.
+        emitter: PointEmitter,
+        /// Unit world-space axis of the beam.
+        direction: Vec3,
+        /// Half-angle of the cone, radians (`coneangle`).
+        cone_angle: f32,
+        /// Width of the soft edge inside the cone, radians (`conedeltaangle`).
+        cone_delta: f32,
+        /// Exponent of the cosine falloff (`beamdistribution`).
+        beam_distribution: f32,
+    },
+    /// Uniform light from every direction (the classic `ambientlight`): radiance
+    /// `color · intensity`, not seen by camera rays.
+    Ambient {
+        /// Colour.
+        color: Rgb,
+        /// Intensity.
+        intensity: f32,
+    },
     /// `PxrSphereLight`: a sphere of diameter 1 at the light's origin, emitting outward.
     Sphere {
         /// Colour.
@@ -209,6 +266,17 @@ pub enum Light {
         /// Light-to-world.
         transform: Mat4,
     },
+}
+
+/// What [`Light::Point`] and [`Light::Spot`] share: where the light is and how strong.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointEmitter {
+    /// Colour.
+    pub color: Rgb,
+    /// Intensity: the irradiance at distance 1, facing the light, is `color · intensity`.
+    pub intensity: f32,
+    /// World-space position.
+    pub position: Vec3,
 }
 
 /// One piece of geometry in the world.

@@ -53,7 +53,17 @@
 //! | `quadric` | spheres, cylinders, cones, disks and tori: segment counts and the (u, v) grid |
 //! | `subdivision` | Catmull–Clark with semi-sharp creases: levels, topology, the limit surface |
 //! | `polygon` | polygon meshes, checked and passed through |
+//! | `classic_quadrics` | hyperboloids and paraboloids, on `quadric`'s grid |
+//! | `patch` | bicubic Bézier patches (`Patch`, `PatchMesh`, the teapot) |
+//! | `nurbs` | NURBS patches (`NuPatch`) |
+//! | `curves` | curves as ribbons and points as discs, facing the camera |
+//! | `blobby` | implicit surfaces of blobs, by marching tetrahedra |
 
+mod blobby;
+mod classic_quadrics;
+mod curves;
+mod nurbs;
+mod patch;
 mod polygon;
 mod quadric;
 mod subdivision;
@@ -64,6 +74,11 @@ use glam::{Mat4, Vec3};
 use obscura_scene::Shape;
 use obscura_sdk::{DicingHint, Format, ScreenWindow};
 
+use self::blobby::blobby;
+use self::classic_quadrics::{hyperboloid, paraboloid};
+use self::curves::{curves, points};
+use self::nurbs::nu_patch;
+use self::patch::patches;
 use self::polygon::pass_through;
 use self::quadric::{cone, cylinder, disk, sphere, torus};
 use self::subdivision::subdivision;
@@ -350,6 +365,22 @@ pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceErro
             phi_max,
             theta_max,
         } => torus(*major_radius, *minor_radius, *phi_min, *phi_max, *theta_max, ctx),
+        Shape::Hyperboloid {
+            point1,
+            point2,
+            theta_max,
+        } => hyperboloid(*point1, *point2, *theta_max, ctx),
+        Shape::Paraboloid {
+            radius,
+            z_min,
+            z_max,
+            theta_max,
+        } => paraboloid(*radius, *z_min, *z_max, *theta_max, ctx),
+        Shape::Patches(list) => patches(list, ctx),
+        Shape::NuPatch(patch) => nu_patch(patch, ctx),
+        Shape::Curves(c) => curves(c, ctx),
+        Shape::Points(p) => points(p, ctx),
+        Shape::Blobby(b) => blobby(b, ctx),
         Shape::Mesh(mesh) => pass_through(mesh)?,
         Shape::Subdiv(mesh) => subdivision(mesh, ctx)?,
     };

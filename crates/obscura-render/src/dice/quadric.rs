@@ -39,13 +39,13 @@ use super::{
 use crate::ray::TriangleMesh;
 
 /// The rate for one primitive.
-struct Rate {
+pub(super) struct Rate {
     pixels_per_unit: f64,
     micropolygon_length: f64,
 }
 
 impl Rate {
-    fn new(ctx: &DicingContext, centre: DVec3, radius: f64) -> Rate {
+    pub(super) fn new(ctx: &DicingContext, centre: DVec3, radius: f64) -> Rate {
         Rate {
             pixels_per_unit: f64::from(pixels_per_unit(ctx, centre.as_vec3(), radius as f32)),
             micropolygon_length: micropolygon_length(ctx),
@@ -53,7 +53,7 @@ impl Rate {
     }
 
     /// `clamp(⌈arc·k/m⌉, max(1, ⌈4·turn⌉), MAX_SEGMENTS)`.
-    fn segments(&self, arc: f64, turn: f64) -> u32 {
+    pub(super) fn segments(&self, arc: f64, turn: f64) -> u32 {
         let min = min_segments(turn);
         let want = (arc * self.pixels_per_unit / self.micropolygon_length).ceil();
         if want.is_nan() {
@@ -64,7 +64,7 @@ impl Rate {
     }
 }
 
-fn min_segments(turn: f64) -> u32 {
+pub(super) fn min_segments(turn: f64) -> u32 {
     let min = (f64::from(MIN_SEGMENTS_PER_TURN) * turn).ceil();
     if min.is_nan() {
         1
@@ -74,7 +74,7 @@ fn min_segments(turn: f64) -> u32 {
 }
 
 /// Scales `nu` and `nv` down together so that `nu·nv ≤ MAX_QUADS_PER_PRIMITIVE`.
-fn fit_budget(nu: u32, nv: u32, min_u: u32, min_v: u32) -> (u32, u32) {
+pub(super) fn fit_budget(nu: u32, nv: u32, min_u: u32, min_v: u32) -> (u32, u32) {
     let quads = u64::from(nu) * u64::from(nv);
     if quads <= MAX_QUADS_PER_PRIMITIVE {
         return (nu, nv);
@@ -85,23 +85,23 @@ fn fit_budget(nu: u32, nv: u32, min_u: u32, min_v: u32) -> (u32, u32) {
 }
 
 /// A sweep in degrees as radians in `[−2π, 2π]`; `None` when zero or not finite.
-fn sweep(degrees: f32) -> Option<f64> {
+pub(super) fn sweep(degrees: f32) -> Option<f64> {
     let d = f64::from(degrees);
     (d.is_finite() && d != 0.0).then(|| d.clamp(-360.0, 360.0).to_radians())
 }
 
 /// A (u, v) ∈ [0, 1]² grid of `nu × nv` cells over a surface.
-struct Grid {
-    nu: u32,
-    nv: u32,
+pub(super) struct Grid {
+    pub(super) nu: u32,
+    pub(super) nv: u32,
     /// u = 1 is u = 0 (a full turn): the seam column is shared.
-    wrap_u: bool,
+    pub(super) wrap_u: bool,
     /// v = 1 is v = 0.
-    wrap_v: bool,
+    pub(super) wrap_v: bool,
     /// Row v = 0 is the single point (position, normal).
-    pole0: Option<(DVec3, DVec3)>,
+    pub(super) pole0: Option<(DVec3, DVec3)>,
     /// Row v = 1 is the single point (position, normal).
-    pole1: Option<(DVec3, DVec3)>,
+    pub(super) pole1: Option<(DVec3, DVec3)>,
 }
 
 /// The grid of a surface swept `theta` around z from a circle of radius `r`, whose other direction
@@ -122,7 +122,7 @@ fn swept_grid(rate: &Rate, r: f64, theta: f64, length: f64, pole1: Option<(DVec3
 }
 
 /// Tessellates `surface(u, v) → (position, unit normal)` over `grid`.
-fn tessellate<F>(grid: &Grid, surface: F) -> TriangleMesh
+pub(super) fn tessellate<F>(grid: &Grid, surface: F) -> TriangleMesh
 where
     F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
 {
@@ -200,7 +200,7 @@ where
     }
 }
 
-fn finite(values: &[f64]) -> bool {
+pub(super) fn finite(values: &[f64]) -> bool {
     values.iter().all(|v| v.is_finite())
 }
 

@@ -13,22 +13,27 @@ use super::{Reader, RibError};
 use crate::types::{Identity, Mesh, Object, Shape, SubdivMesh};
 
 impl Reader {
-    /// Adds an object of `shape` with the current transform, material and dicing.
+    /// Adds an object of `shape` with the current transform, material and dicing (to the object
+    /// being defined, inside `ObjectBegin`).
     pub(super) fn add_object(&mut self, r: &Req<'_>, shape: Shape) {
-        self.scene.objects.push(Object {
+        let object = Object {
             shape,
             transform: self.ctm.to_motion(),
-            material: self.material,
+            material: self.current_material(),
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
             identity: Identity {
                 object: self.identifier.clone(),
                 instance: self.identifier.clone(),
             },
-        });
+        };
+        match &mut self.retained.open {
+            Some(d) => d.objects.push(object),
+            None => self.scene.objects.push(object),
+        }
     }
 
-    /// `Sphere`, `Cylinder`, `Cone`, `Disk` and `Torus`.
+    /// `Sphere`, `Cylinder`, `Cone`, `Disk`, `Torus`, `Hyperboloid` and `Paraboloid`.
     pub(super) fn quadric(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let (shape, rest) = match r.name {
             "Sphere" => {
@@ -79,6 +84,31 @@ impl Reader {
                     rest,
                 )
             }
+            "Hyperboloid" => {
+                let ([x1, y1, z1, x2, y2, z2, theta_max], rest) =
+                    r.numbers::<7>(r.args, "x1 y1 z1 x2 y2 z2 thetamax")?;
+                (
+                    Shape::Hyperboloid {
+                        point1: Vec3::new(x1, y1, z1),
+                        point2: Vec3::new(x2, y2, z2),
+                        theta_max,
+                    },
+                    rest,
+                )
+            }
+            "Paraboloid" => {
+                let ([radius, z_min, z_max, theta_max], rest) =
+                    r.numbers::<4>(r.args, "rmax zmin zmax thetamax")?;
+                (
+                    Shape::Paraboloid {
+                        radius,
+                        z_min,
+                        z_max,
+                        theta_max,
+                    },
+                    rest,
+                )
+            }
             _ => {
                 let ([major_radius, minor_radius, phi_min, phi_max, theta_max], rest) =
                     r.numbers::<5>(r.args, "rmajor rminor phimin phimax thetamax")?;
@@ -94,7 +124,8 @@ impl Reader {
                 )
             }
         };
-        self.params(r, rest, &[], false)?;
+        let list = self.params(r, rest, &PRIMITIVE_VARIABLES, false)?;
+        self.primitive_color(r, &list);
         self.add_object(r, shape);
         Ok(())
     }
@@ -156,7 +187,13 @@ impl Reader {
                 (Some(faces), rest)
             }
         };
-        let list = self.params(r, rest, &["vertex point P", "vertex normal N"], false)?;
+        let list = self.params(
+            r,
+            rest,
+            &with_primitive_variables(&["vertex point P", "vertex float[2] uv"]),
+            false,
+        )?;
+        self.primitive_color(r, &list);
         let (positions, normals) = self.points_and_normals(r, &list)?;
         let faces = match faces {
             Some(f) => f,
@@ -232,7 +269,13 @@ impl Reader {
             }
             _ => (None, rest),
         };
-        let list = self.params(r, rest, &["vertex point P"], false)?;
+        let list = self.params(
+            r,
+            rest,
+            &with_primitive_variables(&["vertex point P", "vertex float[2] uv"]),
+            false,
+        )?;
+        self.primitive_color(r, &list);
         let (positions, _) = self.points_and_normals(r, &list)?;
         let face_indices = check_indices(r, &verts, positions.len())?;
         let face_counts: Vec<u32> = face_counts.iter().map(|&n| n as u32).collect();
@@ -343,6 +386,22 @@ fn add_crease(r: &Req<'_>, ints: &[i64], floats: &[f32], mesh: &mut SubdivMesh) 
         mesh.creases.push((pair[0], pair[1], s));
     }
     Ok(())
+}
+
+/// The primitive variables any primitive may carry: its colour is used (see `primitive_color`), the
+/// others are accepted.
+const PRIMITIVE_VARIABLES: [&str; 6] = [
+    "vertex normal N",
+    "vertex color Cs",
+    "vertex color Os",
+    "vertex float s",
+    "vertex float t",
+    "vertex float[2] st",
+];
+
+/// A request's parameter table: its own entries, then [`PRIMITIVE_VARIABLES`].
+pub(super) fn with_primitive_variables<'a>(own: &[&'a str]) -> Vec<&'a str> {
+    own.iter().copied().chain(PRIMITIVE_VARIABLES).collect()
 }
 
 /// One polygon's loops (outline, then holes) of vertex indices as written.

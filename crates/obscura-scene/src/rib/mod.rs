@@ -4,7 +4,10 @@
 //! (`Format`, `ScreenWindow`, `CropWindow`, `Shutter`, `Clipping`, `PixelFilter`, `Hider`, `Display`,
 //! `Projection`, `Camera`), transforms and motion blocks, attribute and transform blocks, the quadrics,
 //! polygons (triangulated on load) and Catmull–Clark subdivision meshes, `Bxdf` materials, lights and
-//! `ReadArchive`.
+//! `ReadArchive`; and classic RenderMan Interface scenes: `Color`, `Opacity`, the standard `Surface`
+//! and `LightSource` shaders (mapped to physically based materials and lights), `Basis`, `Patch`,
+//! `PatchMesh`, `NuPatch`, `Hyperboloid`, `Paraboloid`, `Curves`, `Points`, `Blobby`,
+//! `Geometry "teapot"`, retained objects, `Procedural "DelayedReadArchive"` and `SolidBegin`.
 //!
 //! # Transforms
 //!
@@ -45,17 +48,26 @@
 //! `request.rs` gives those methods typed access to the arguments and parameter lists. The handlers
 //! are grouped by what they describe: `options.rs` (the image and the camera), `transform.rs` (the
 //! CTM, motion and blocks), `shading.rs` (dicing, materials, lights) and `geometry.rs` (with polygons
-//! cut by `triangulate.rs`). A new request is one row of `REQUESTS` and one method.
+//! cut by `triangulate.rs`); the classic requests in `classic_shaders.rs`, `patch.rs` (with the
+//! teapot's data in `teapot.rs`), `nupatch.rs`, `curves.rs`, `blobby.rs` and `objects.rs`. A new
+//! request is one row of `REQUESTS` and one method.
 
 mod binary;
+mod blobby;
 mod camera;
+mod classic_shaders;
+mod curves;
 mod display;
 mod frames;
 mod geometry;
 mod lex;
+mod nupatch;
+mod objects;
 mod options;
+mod patch;
 mod request;
 mod shading;
+mod teapot;
 mod transform;
 mod triangulate;
 
@@ -245,7 +257,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 49] = {
+const REQUESTS: [Request; 76] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -305,6 +317,34 @@ const REQUESTS: [Request; 49] = {
         known("PointsPolygons", World, Reader::polygons),
         known("PointsGeneralPolygons", World, Reader::polygons),
         known("SubdivisionMesh", World, Reader::subdivision_mesh),
+        // Classic shading and geometry (classic_shaders.rs, patch.rs, nupatch.rs, curves.rs, objects.rs).
+        known("Color", Anywhere, Reader::color),
+        known("Opacity", Anywhere, Reader::opacity),
+        known("Surface", Anywhere, Reader::surface),
+        known("Displacement", Anywhere, Reader::other_shader),
+        known("Atmosphere", Anywhere, Reader::other_shader),
+        known("Interior", Anywhere, Reader::other_shader),
+        known("Exterior", Anywhere, Reader::other_shader),
+        known("Imager", Anywhere, Reader::other_shader),
+        known("Deformation", Anywhere, Reader::other_shader),
+        known("Illuminate", Anywhere, Reader::illuminate),
+        known("Basis", Anywhere, Reader::basis),
+        known("Hyperboloid", World, Reader::quadric),
+        known("Paraboloid", World, Reader::quadric),
+        known("Patch", World, Reader::patch),
+        known("PatchMesh", World, Reader::patch_mesh),
+        known("NuPatch", World, Reader::nu_patch),
+        known("TrimCurve", Anywhere, Reader::trim_curve),
+        known("Curves", World, Reader::curves),
+        known("Points", World, Reader::points),
+        known("Geometry", World, Reader::geometry),
+        known("ObjectBegin", Anywhere, Reader::object_begin),
+        known("ObjectEnd", Anywhere, Reader::object_end),
+        known("ObjectInstance", World, Reader::object_instance),
+        known("Procedural", World, Reader::procedural),
+        known("SolidBegin", World, Reader::solid),
+        known("SolidEnd", World, Reader::solid),
+        known("Blobby", World, Reader::blobby),
     ]
 };
 
@@ -352,6 +392,12 @@ struct Reader {
     inline_archives: HashMap<String, Vec<lex::Command>>,
     /// The `ArchiveBegin` block being read.
     recording: Option<InlineArchive>,
+    /// Classic shading attributes (`Color`, `Opacity`, `Surface`, `Basis`).
+    classic: classic_shaders::ClassicAttributes,
+    /// Classic shading state across the file.
+    classic_state: classic_shaders::ClassicState,
+    /// Retained objects.
+    retained: objects::Retained,
 }
 
 /// An `ArchiveBegin` block being read.
@@ -388,6 +434,9 @@ impl Reader {
             coordinate_systems: HashMap::new(),
             inline_archives: HashMap::new(),
             recording: None,
+            classic: classic_shaders::ClassicAttributes::default(),
+            classic_state: classic_shaders::ClassicState::default(),
+            retained: objects::Retained::default(),
         }
     }
 
@@ -550,7 +599,7 @@ impl Reader {
             Scope::Options if self.world.is_some() => {
                 Err(r.err(format!("{} must come before WorldBegin", r.name)))
             }
-            Scope::World if self.world.is_none() => {
+            Scope::World if self.world.is_none() && self.retained.open.is_none() => {
                 Err(r.err(format!("{} must come after WorldBegin", r.name)))
             }
             _ => (request.handle)(self, r),

@@ -142,6 +142,8 @@ impl<'a> Req<'a> {
 }
 
 /// Drops RIB's storage classes (`vertex point P` is `point P`): Obscura keeps every value as given.
+/// An `hpoint` (homogeneous point, `NuPatch`'s `Pw`) is kept as its four floats, an `mpoint` (a
+/// blob's coordinate system, `Blobby`'s `Pref`) as its sixteen.
 pub(super) fn normalize_declaration(decl: &str) -> String {
     decl.split_whitespace()
         .filter(|w| {
@@ -149,6 +151,11 @@ pub(super) fn normalize_declaration(decl: &str) -> String {
                 *w,
                 "uniform" | "constant" | "vertex" | "varying" | "facevarying" | "facevertex"
             )
+        })
+        .map(|w| match w {
+            "hpoint" => "float[4]",
+            "mpoint" => "float[16]",
+            _ => w,
         })
         .collect::<Vec<_>>()
         .join(" ")

@@ -2,6 +2,7 @@
 
 use obscura_sdk::Rgb;
 
+use super::classic_shaders::CLASSIC_LIGHTS;
 use super::lex::Value;
 use super::request::{Req, get_color, get_float, get_string};
 use super::{Reader, RibError};
@@ -87,6 +88,7 @@ impl Reader {
         };
         self.material = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
+        self.classic.surface = None;
         Ok(())
     }
 
@@ -99,6 +101,9 @@ impl Reader {
                 r.name, r.name
             )));
         };
+        if CLASSIC_LIGHTS.contains(&kind.as_str()) {
+            return self.classic_light(r, kind, rest);
+        }
         let mut table = vec!["color lightColor", "float intensity", "float exposure"];
         match kind.as_str() {
             "PxrDomeLight" => table.push("string lightColorMap"),
@@ -108,7 +113,7 @@ impl Reader {
                 self.warn(
                     r,
                     format!(
-                        "{}: unknown light \"{other}\" (known: PxrDomeLight, PxrDistantLight, PxrRectLight, PxrSphereLight), skipped",
+                        "{}: unknown light \"{other}\" (known: PxrDomeLight, PxrDistantLight, PxrRectLight, PxrSphereLight, ambientlight, distantlight, pointlight, spotlight), skipped",
                         r.name
                     ),
                 );

@@ -107,6 +107,7 @@ pub(super) struct Block {
     pub(super) ctm: Ctm,
     pub(super) material: u32,
     pub(super) micropolygon_length: f32,
+    pub(super) classic: super::classic_shaders::ClassicAttributes,
     pub(super) identifier: String,
     pub(super) file: String,
     pub(super) line: u32,
@@ -168,6 +169,7 @@ impl Reader {
             ctm: self.ctm.clone(),
             material: self.material,
             micropolygon_length: self.micropolygon_length,
+            classic: self.classic.clone(),
             identifier: self.identifier.clone(),
             file: r.file.to_string(),
             line: r.line,
@@ -193,6 +195,7 @@ impl Reader {
         if kind == BlockKind::Attribute {
             self.material = b.material;
             self.micropolygon_length = b.micropolygon_length;
+            self.classic = b.classic;
             self.identifier = b.identifier;
         }
         Ok(())

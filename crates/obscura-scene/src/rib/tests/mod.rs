@@ -2,6 +2,7 @@
 
 mod archive;
 mod camera;
+mod classic;
 mod encoding;
 mod frames;
 mod geometry;

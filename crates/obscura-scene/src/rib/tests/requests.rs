@@ -164,6 +164,7 @@ fn full_example_scene_using_every_request_parses() {
             Shape::Torus { .. } => "torus",
             Shape::Mesh(_) => "mesh",
             Shape::Subdiv(_) => "subdiv",
+            _ => "classic",
         })
         .collect();
     assert_eq!(

@@ -1,0 +1,533 @@
+//! The RenderMan Interface's standard shaders, mapped to the renderer's physically based materials
+//! and lights: `Color`, `Opacity`, `Surface` (`constant`, `matte`, `metal`, `shinymetal`, `plastic`,
+//! `paintedplastic`) and `LightSource` (`ambientlight`, `distantlight`, `pointlight`, `spotlight`).
+//!
+//! # Lights
+//!
+//! A classic light of `intensity` `I` and `lightcolor` `C` lights a `matte` surface (`Kd·Cs`) to
+//! `Kd·Cs·C·I·cos θ` (its `diffuse()`); a Lambertian surface of albedo `ρ` under a physical light of
+//! irradiance `E` has radiance `ρ·E·cos θ / π`. So `distantlight`, `pointlight` and `spotlight`
+//! become physical lights of strength `π·I·C` (irradiance `π·I·C/d²` for the point and spot lights,
+//! the spec's `1/(L·L)` falloff) with `Kd·Cs` as the albedo, and the classic brightness is kept
+//! exactly. `from` and `to` are taken in the light's "shader" space, the CTM at the request:
+//!
+//! | light | physical light |
+//! |---|---|
+//! | `ambientlight` | [`Light::Ambient`]: uniform radiance `I·C` from every direction, not seen by the camera (an unoccluded Lambertian surface reflects `ρ·I·C`, the classic `Kd·ambient()` with `Ka = Kd`) |
+//! | `distantlight` | [`Light::Distant`] travelling along `to − from`, `angleExtent` 0 |
+//! | `pointlight` | [`Light::Point`] at `from` |
+//! | `spotlight` | [`Light::Spot`] at `from` along `to − from`: `coneangle`, `conedeltaangle` (radians, as in RIB), `beamdistribution`; the spec's attenuation `cosᵇ α · smoothstep(cos(cone), cos(cone − delta), cos α) / d²` |
+//!
+//! # Surfaces
+//!
+//! The classic `specular()` lobe is Blinn's `(N·H)ⁿ` with `n = 8/roughness` (Aqsis, BMRT and PRMan;
+//! the spec's example writes `1/roughness`). It becomes a GGX lobe of `α = √(2/(n + 2))` (the
+//! Blinn–Beckmann equivalence; `roughness_ggx = √α`) whose reflectance at normal incidence `F0` is
+//! the classic lobe's own directional albedo at normal incidence under the lights above,
+//! `F0 = Ks·specularcolor·a(n)`, `a(n) = 8/(n + 2)·(1 − 2^−(n+2)/2)`, so a highlight carries the
+//! energy the classic shader gives it (about 0.1·Ks at the default roughness 0.1).
+//!
+//! | surface | material |
+//! |---|---|
+//! | `constant` | `PxrConstant` emitting `Cs` (seen without any light) |
+//! | `matte` (`Kd` 1) | `PxrDiffuse`, albedo `Kd·Cs` |
+//! | `plastic`, `paintedplastic` (`Kd` .5, `Ks` .5, `roughness` .1, `specularcolor` 1) | `PxrSurface`: diffuse `Kd·Cs`, `F0 = Ks·specularcolor·a(n)` |
+//! | `metal`, `shinymetal` (`Ks` 1, `roughness` .1) | `PxrSurface`: no diffuse, `F0 = Ks·Cs·a(n)` |
+//! | any other | `PxrDiffuse` with albedo `Cs`, and a warning naming the shader |
+//!
+//! Albedos are clamped to `[0, 1]`. `Ka` has no physical counterpart (ambient light arrives through
+//! the diffuse lobe); `Kr` and `texturename` of `shinymetal` (a reflection map) are left out.
+//! `paintedplastic`'s `texturename` is named in a warning: the renderer shades one colour per surface.
+//! `Opacity` and `Os` below 1 render opaque, with a warning.
+
+use std::collections::HashSet;
+use std::f32::consts::PI;
+
+use glam::{Mat4, Vec3};
+use obscura_sdk::{ParamList, Rgb};
+
+use super::lex::Value;
+use super::patch::Basis;
+use super::request::{Req, get_color, get_float, get_floats, get_string};
+use super::{Reader, RibError};
+use crate::types::{Light, Material, PointEmitter};
+
+/// The classic shading attributes (saved and restored by attribute blocks).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct ClassicAttributes {
+    /// `Color`, when given.
+    pub(super) color: Option<Rgb>,
+    /// `Opacity`.
+    pub(super) opacity: Rgb,
+    /// The current `Surface`, when one was given after the last `Bxdf`.
+    pub(super) surface: Option<ClassicSurface>,
+    /// `Basis`.
+    pub(super) basis: Basis,
+}
+
+impl Default for ClassicAttributes {
+    fn default() -> Self {
+        ClassicAttributes {
+            color: None,
+            opacity: Rgb::WHITE,
+            surface: None,
+            basis: Basis::default(),
+        }
+    }
+}
+
+/// What the reader remembers across the file about classic shading.
+#[derive(Debug, Default)]
+pub(super) struct ClassicState {
+    /// The warning that classic shaders were mapped was given.
+    pub(super) mapped_warned: bool,
+    /// Messages given once per scene (keyed by a short name).
+    pub(super) warned: HashSet<String>,
+    /// Materials already in the scene, by their debug text, for reuse.
+    pub(super) materials: std::collections::HashMap<String, u32>,
+    /// The colour the next primitive's own `"Cs"` gives it (consumed by that primitive).
+    pub(super) primitive_color: Option<Rgb>,
+}
+
+/// A classic surface shader's parameters, as the material mapping needs them.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum ClassicSurface {
+    /// `constant`.
+    Constant,
+    /// `matte`.
+    Matte {
+        /// `Kd`.
+        kd: f32,
+    },
+    /// `plastic` and `paintedplastic`.
+    Plastic {
+        /// `Kd`.
+        kd: f32,
+        /// `Ks`.
+        ks: f32,
+        /// `roughness`.
+        roughness: f32,
+        /// `specularcolor`.
+        specular_color: Rgb,
+    },
+    /// `metal` and `shinymetal`.
+    Metal {
+        /// `Ks`.
+        ks: f32,
+        /// `roughness`.
+        roughness: f32,
+    },
+    /// Any other shader: a diffuse surface of colour `Cs`.
+    Other,
+}
+
+/// The Blinn exponent of the classic `specular()` at `roughness`: `8/roughness` (roughness floored
+/// at 10⁻³).
+#[must_use]
+pub(crate) fn classic_exponent(roughness: f32) -> f32 {
+    8.0 / roughness.max(1e-3)
+}
+
+/// The GGX roughness (`√α`) equivalent to a Blinn exponent `n`: `α = √(2/(n + 2))`.
+#[must_use]
+pub(crate) fn ggx_roughness(exponent: f32) -> f32 {
+    (2.0 / (exponent.max(0.0) + 2.0)).sqrt().sqrt()
+}
+
+/// The directional albedo at normal incidence of the classic lobe `Ks·(N·H)ⁿ` per unit `Ks`, lit by
+/// lights of strength `π·I` (see the module documentation): `8/(n + 2)·(1 − 2^−(n+2)/2)`.
+#[must_use]
+pub(crate) fn classic_specular_albedo(exponent: f32) -> f32 {
+    let m = exponent.max(0.0) + 2.0;
+    8.0 / m * (1.0 - (-0.5 * m).exp2())
+}
+
+/// `c` scaled by `k`, each channel clamped to `[0, 1]` (NaN → 0).
+fn scaled(c: Rgb, k: f32) -> Rgb {
+    let f = |x: f32| {
+        let y = x * k;
+        if y.is_nan() { 0.0 } else { y.clamp(0.0, 1.0) }
+    };
+    Rgb::new(f(c.r), f(c.g), f(c.b))
+}
+
+impl ClassicSurface {
+    /// The physically based material for this surface with colour `cs`.
+    pub(super) fn material(&self, cs: Rgb) -> Material {
+        match *self {
+            ClassicSurface::Constant => Material::Constant {
+                color: scaled(cs, 1.0),
+            },
+            ClassicSurface::Matte { kd } => Material::Diffuse {
+                color: scaled(cs, kd),
+            },
+            ClassicSurface::Other => Material::Diffuse {
+                color: scaled(cs, 1.0),
+            },
+            ClassicSurface::Plastic {
+                kd,
+                ks,
+                roughness,
+                specular_color,
+            } => {
+                let n = classic_exponent(roughness);
+                Material::Surface {
+                    diffuse: scaled(cs, kd),
+                    specular: scaled(specular_color, ks * classic_specular_albedo(n)),
+                    roughness: ggx_roughness(n),
+                }
+            }
+            ClassicSurface::Metal { ks, roughness } => {
+                let n = classic_exponent(roughness);
+                Material::Surface {
+                    diffuse: Rgb::BLACK,
+                    specular: scaled(cs, ks * classic_specular_albedo(n)),
+                    roughness: ggx_roughness(n),
+                }
+            }
+        }
+    }
+}
+
+/// The parameters the classic surfaces and lights know, for names written bare.
+const SURFACE_PARAMETERS: [&str; 8] = [
+    "float Ka",
+    "float Kd",
+    "float Ks",
+    "float Kr",
+    "float roughness",
+    "color specularcolor",
+    "string texturename",
+    "string mapname",
+];
+
+/// The parameters of the classic lights, for names written bare.
+const LIGHT_PARAMETERS: [&str; 7] = [
+    "float intensity",
+    "color lightcolor",
+    "point from",
+    "point to",
+    "float coneangle",
+    "float conedeltaangle",
+    "float beamdistribution",
+];
+
+/// The classic light shaders.
+pub(super) const CLASSIC_LIGHTS: [&str; 4] = ["ambientlight", "distantlight", "pointlight", "spotlight"];
+
+impl Reader {
+    /// Gives, once per scene, the warning that classic shaders were mapped.
+    fn classic_mapped(&mut self, r: &Req<'_>) {
+        if !self.classic_state.mapped_warned {
+            self.classic_state.mapped_warned = true;
+            self.warn(
+                r,
+                "classic RenderMan shaders (Surface, LightSource) are mapped to the renderer's physically based materials and lights; the look is close to, not the same as, the shaders' own"
+                    .into(),
+            );
+        }
+    }
+
+    /// Warns once per scene under `key`.
+    pub(super) fn warn_once(&mut self, r: &Req<'_>, key: &str, message: String) {
+        if self.classic_state.warned.insert(key.to_string()) {
+            self.warn(r, message);
+        }
+    }
+
+    /// `Color [r g b]` (or three numbers).
+    pub(super) fn color(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [red, green, blue] = r.only_numbers::<3>("a colour: 3 numbers, e.g. Color [1 0.5 0]")?;
+        self.classic.color = Some(Rgb::new(red, green, blue));
+        Ok(())
+    }
+
+    /// `Opacity [r g b]`: recorded; below 1 renders opaque with a warning.
+    pub(super) fn opacity(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [red, green, blue] = r.only_numbers::<3>("an opacity: 3 numbers, e.g. Opacity [1 1 1]")?;
+        self.classic.opacity = Rgb::new(red, green, blue);
+        if red < 1.0 || green < 1.0 || blue < 1.0 {
+            self.warn_once(
+                r,
+                "opacity",
+                "Opacity below 1: the renderer draws every surface opaque".into(),
+            );
+        }
+        Ok(())
+    }
+
+    /// `Surface "name" params`: a classic surface shader becomes the current material.
+    pub(super) fn surface(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [Value::Str(name), rest @ ..] = r.args else {
+            return Err(r.err("Surface expects a shader name (a string) then parameters"));
+        };
+        let list = self.params(r, rest, &SURFACE_PARAMETERS, true)?;
+        let f = |key: &str, default: f32| get_float(&list, key).unwrap_or(default);
+        let surface = match name.as_str() {
+            "constant" => ClassicSurface::Constant,
+            "matte" => ClassicSurface::Matte { kd: f("Kd", 1.0) },
+            "plastic" | "paintedplastic" => ClassicSurface::Plastic {
+                kd: f("Kd", 0.5),
+                ks: f("Ks", 0.5),
+                roughness: f("roughness", 0.1),
+                specular_color: get_color(&list, "specularcolor").unwrap_or(Rgb::WHITE),
+            },
+            "metal" | "shinymetal" => ClassicSurface::Metal {
+                ks: f("Ks", 1.0),
+                roughness: f("roughness", 0.1),
+            },
+            other => {
+                self.warn(
+                    r,
+                    format!(
+                        "Surface \"{other}\" is not a standard shader (constant, matte, metal, shinymetal, plastic, paintedplastic); drawn as matte in its Color"
+                    ),
+                );
+                ClassicSurface::Other
+            }
+        };
+        if name == "paintedplastic"
+            && let Some(t) = get_string(&list, "texturename").filter(|t| !t.is_empty())
+        {
+            let path = r.resolve(t);
+            self.warn(
+                r,
+                format!(
+                    "Surface \"paintedplastic\": its texture \"{}\" is left out (the renderer shades one colour per surface); drawn as plastic",
+                    path.display()
+                ),
+            );
+        }
+        if surface != ClassicSurface::Other {
+            self.classic_mapped(r);
+        }
+        self.classic.surface = Some(surface);
+        Ok(())
+    }
+
+    /// `Displacement`, `Atmosphere`, `Interior`, `Exterior`, `Imager`, `Deformation`: warned about by
+    /// the shader's name and left out.
+    pub(super) fn other_shader(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let shader = match r.args.first() {
+            Some(Value::Str(s)) => s.as_str(),
+            _ => "",
+        };
+        let key = format!("{} {shader}", r.name);
+        self.warn_once(
+            r,
+            &key,
+            format!("{} shader \"{shader}\" is not supported, left out", r.name),
+        );
+        Ok(())
+    }
+
+    /// `Illuminate`: every light lights every surface here, so switching lights is warned about.
+    pub(super) fn illuminate(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        self.warn_once(
+            r,
+            "illuminate",
+            "Illuminate is not supported: every light lights every surface".into(),
+        );
+        Ok(())
+    }
+
+    /// Records a primitive's own `"Cs"` for the next object: one colour, or several averaged with a
+    /// warning (the renderer shades one colour per primitive). `"Os"` below 1 is warned about.
+    pub(super) fn primitive_color(&mut self, r: &Req<'_>, list: &ParamList) {
+        if let Some(cs) = get_floats(list, "Cs").filter(|c| c.len() >= 3) {
+            let n = (cs.len() / 3) as f32;
+            let sum = cs
+                .chunks_exact(3)
+                .fold([0.0f32; 3], |a, c| [a[0] + c[0], a[1] + c[1], a[2] + c[2]]);
+            let first = &cs[..3];
+            if cs.chunks_exact(3).any(|c| c != first) {
+                self.warn_once(
+                    r,
+                    "varying Cs",
+                    format!("{}: \"Cs\" varies over the primitive; drawn in its average colour (one colour per primitive)", r.name),
+                );
+            }
+            self.classic_state.primitive_color = Some(Rgb::new(sum[0] / n, sum[1] / n, sum[2] / n));
+        }
+        if get_floats(list, "Os").is_some_and(|o| o.iter().any(|&x| x < 1.0)) {
+            self.warn_once(
+                r,
+                "opacity",
+                "Opacity below 1: the renderer draws every surface opaque".into(),
+            );
+        }
+    }
+
+    /// The material of the next primitive: the classic surface in the current colour when one is
+    /// set, else the current `Bxdf` (or, with a `Color` and neither, a diffuse surface of that colour).
+    pub(super) fn current_material(&mut self) -> u32 {
+        let own = self.classic_state.primitive_color.take();
+        let color = own.or(self.classic.color);
+        let cs = color.unwrap_or(Rgb::WHITE);
+        let material = match &self.classic.surface {
+            Some(s) => s.material(cs),
+            None if self.material == 0 && color.is_some() => Material::Diffuse {
+                color: scaled(cs, 1.0),
+            },
+            None => return self.material,
+        };
+        self.intern_material(material)
+    }
+
+    /// The index of `material` in the scene, adding it when new.
+    fn intern_material(&mut self, material: Material) -> u32 {
+        let key = format!("{material:?}");
+        if let Some(&k) = self.classic_state.materials.get(&key) {
+            return k;
+        }
+        let k = self.scene.materials.len() as u32;
+        self.scene.materials.push(material);
+        self.classic_state.materials.insert(key, k);
+        k
+    }
+
+    /// A classic `LightSource` (`kind` one of [`CLASSIC_LIGHTS`]).
+    pub(super) fn classic_light(&mut self, r: &Req<'_>, kind: &str, rest: &[Value]) -> Result<(), RibError> {
+        let list = self.params(r, rest, &LIGHT_PARAMETERS, true)?;
+        self.classic_mapped(r);
+        let intensity = get_float(&list, "intensity").unwrap_or(1.0);
+        let color = get_color(&list, "lightcolor").unwrap_or(Rgb::WHITE);
+        let m = self.ctm.first();
+        let point = |list: &ParamList, key: &str, default: Vec3| match get_floats(list, key) {
+            Some([x, y, z, ..]) => Vec3::new(*x, *y, *z),
+            _ => default,
+        };
+        let from = point(&list, "from", Vec3::ZERO);
+        let to = point(&list, "to", Vec3::Z);
+        let world_from = m.transform_point3(from);
+        let axis = (m.transform_point3(to) - world_from).normalize_or_zero();
+        let emitter = PointEmitter {
+            color,
+            intensity: PI * intensity,
+            position: world_from,
+        };
+        let light = match kind {
+            "ambientlight" => Light::Ambient { color, intensity },
+            "distantlight" | "spotlight" if axis == Vec3::ZERO => {
+                return Err(r.err(format!(
+                    "LightSource \"{kind}\": \"from\" and \"to\" are the same point; the light has no direction"
+                )));
+            }
+            "distantlight" => Light::Distant {
+                color,
+                intensity: PI * intensity,
+                exposure: 0.0,
+                angle_extent: 0.0,
+                transform: rotation_to_z(axis),
+            },
+            "pointlight" => Light::Point(emitter),
+            _ => Light::Spot {
+                emitter,
+                direction: axis,
+                cone_angle: get_float(&list, "coneangle").unwrap_or(30f32.to_radians()),
+                cone_delta: get_float(&list, "conedeltaangle").unwrap_or(5f32.to_radians()),
+                beam_distribution: get_float(&list, "beamdistribution").unwrap_or(2.0),
+            },
+        };
+        self.scene.lights.push(light);
+        Ok(())
+    }
+}
+
+/// A rotation taking +Z to the unit vector `axis` (a right-handed frame around it).
+fn rotation_to_z(axis: Vec3) -> Mat4 {
+    let (x, y) = axis.any_orthonormal_pair();
+    Mat4::from_cols(x.extend(0.0), y.extend(0.0), axis.extend(0.0), glam::Vec4::W)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The classic lobe's albedo at normal incidence, integrated numerically over the hemisphere of
+    /// incoming directions: `1/π ∫ (N·H)ⁿ dω` (the `cos θᵢ` of the physical estimator cancels the one
+    /// the classic shader does not have).
+    fn numeric_albedo(n: f32) -> f64 {
+        let n = f64::from(n);
+        let steps = 20_000;
+        let mut sum = 0.0;
+        for k in 0..steps {
+            let theta = (f64::from(k) + 0.5) / f64::from(steps) * std::f64::consts::FRAC_PI_2;
+            let half = 0.5 * theta; // wo = N, so the half vector is at θ/2
+            sum += half.cos().powf(n) * theta.sin() * 2.0 * std::f64::consts::PI;
+        }
+        sum * std::f64::consts::FRAC_PI_2 / f64::from(steps) / std::f64::consts::PI
+    }
+
+    #[test]
+    fn the_classic_specular_albedo_matches_its_integral() {
+        for n in [1.0f32, 8.0, 80.0, 800.0] {
+            let closed = f64::from(classic_specular_albedo(n));
+            let numeric = numeric_albedo(n);
+            assert!(
+                (closed - numeric).abs() < 1e-3 * numeric.max(1e-3),
+                "n {n}: {closed} vs {numeric}"
+            );
+        }
+        // Not vacuous: the spec's 1/r exponent would give another figure.
+        assert!((classic_specular_albedo(10.0) - classic_specular_albedo(80.0)).abs() > 0.3);
+    }
+
+    #[test]
+    fn plastic_keeps_kd_ks_roughness_and_specularcolor() {
+        let s = ClassicSurface::Plastic {
+            kd: 0.5,
+            ks: 0.5,
+            roughness: 0.1,
+            specular_color: Rgb::new(1.0, 0.5, 0.0),
+        };
+        let Material::Surface {
+            diffuse,
+            specular,
+            roughness,
+        } = s.material(Rgb::new(1.0, 0.2, 0.4))
+        else {
+            panic!("plastic is a PxrSurface");
+        };
+        assert_eq!(diffuse, Rgb::new(0.5, 0.1, 0.2));
+        let a = 0.5 * classic_specular_albedo(80.0);
+        assert!((specular.r - a).abs() < 1e-6 && (specular.g - 0.5 * a).abs() < 1e-6 && specular.b == 0.0);
+        // α = √(2/82), roughness = √α.
+        assert!((roughness - (2.0f32 / 82.0).sqrt().sqrt()).abs() < 1e-6);
+    }
+
+    #[test]
+    fn constant_and_matte_and_metal() {
+        let red = Rgb::new(1.0, 0.0, 0.0);
+        assert_eq!(
+            ClassicSurface::Constant.material(red),
+            Material::Constant { color: red }
+        );
+        assert_eq!(
+            ClassicSurface::Matte { kd: 0.8 }.material(red),
+            Material::Diffuse {
+                color: Rgb::new(0.8, 0.0, 0.0)
+            }
+        );
+        let Material::Surface {
+            diffuse, specular, ..
+        } = (ClassicSurface::Metal {
+            ks: 1.0,
+            roughness: 0.1,
+        })
+        .material(red)
+        else {
+            panic!("metal is a PxrSurface");
+        };
+        assert_eq!(diffuse, Rgb::BLACK);
+        assert!(specular.r > 0.0 && specular.g == 0.0);
+    }
+
+    #[test]
+    fn rotation_to_z_sends_z_to_the_axis() {
+        let axis = Vec3::new(1.0, -2.0, 0.5).normalize();
+        let m = rotation_to_z(axis);
+        assert!(m.transform_vector3(Vec3::Z).distance(axis) < 1e-6);
+        assert!((m.determinant() - 1.0).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,325 @@
+//! Classic shading and geometry: `Color`, `Surface`, classic lights, patches, curves, points,
+//! retained objects and procedurals.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+use obscura_sdk::Rgb;
+
+use super::{fail, ok};
+use crate::types::{Light, Material, Shape};
+
+#[test]
+fn surfaces_take_the_current_color_and_attribute_blocks_restore_them() {
+    let scene = ok(
+        "WorldBegin\nAttributeBegin\nColor [1 0 0]\nSurface \"plastic\" \"Kd\" 0.8\nSphere 1 -1 1 360\nAttributeEnd\nSurface \"matte\"\nSphere 1 -1 1 360\nBxdf \"PxrDiffuse\" \"d\"\nSphere 1 -1 1 360\nWorldEnd\n",
+    );
+    let m = |k: usize| scene.materials[scene.objects[k].material as usize];
+    let Material::Surface { diffuse, .. } = m(0) else {
+        panic!("plastic is a PxrSurface: {:?}", m(0));
+    };
+    assert_eq!(diffuse, Rgb::new(0.8, 0.0, 0.0));
+    assert_eq!(m(1), Material::Diffuse { color: Rgb::WHITE });
+    assert_eq!(
+        m(2),
+        Material::Diffuse {
+            color: Rgb::new(0.18, 0.18, 0.18)
+        }
+    );
+    let mapped = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("classic RenderMan shaders"))
+        .count();
+    assert_eq!(mapped, 1, "{:?}", scene.warnings);
+}
+
+#[test]
+fn other_shaders_are_named_in_a_warning() {
+    let scene =
+        ok("WorldBegin\nSurface \"wood\" \"Kd\" 1\nDisplacement \"bumpy\"\nSphere 1 -1 1 360\nWorldEnd\n");
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("t.rib:2:") && w.contains("\"wood\"")),
+        "{:?}",
+        scene.warnings
+    );
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.starts_with("t.rib:3:") && w.contains("\"bumpy\""))
+    );
+}
+
+#[test]
+fn classic_lights_become_physical_lights_in_world_space() {
+    let scene = ok(
+        "WorldBegin\nLightSource \"ambientlight\" 1 \"intensity\" 0.2\nTranslate 0 1 0\nLightSource \"distantlight\" 2 \"from\" [0 0 0] \"to\" [1 0 0] \"intensity\" 2\nLightSource \"pointlight\" 3 \"from\" [0 0 1] \"lightcolor\" [1 0.5 0]\nLightSource \"spotlight\" 4 \"from\" [0 0 0] \"to\" [0 -1 0] \"coneangle\" 0.5 \"conedeltaangle\" 0.1 \"beamdistribution\" 3\nWorldEnd\n",
+    );
+    let [ambient, distant, point, spot] = &scene.lights[..] else {
+        panic!("{:?}", scene.lights);
+    };
+    assert_eq!(
+        *ambient,
+        Light::Ambient {
+            color: Rgb::WHITE,
+            intensity: 0.2
+        }
+    );
+    let Light::Distant {
+        intensity,
+        transform,
+        angle_extent,
+        ..
+    } = distant
+    else {
+        panic!("{distant:?}");
+    };
+    assert!((intensity - 2.0 * PI).abs() < 1e-5 && *angle_extent == 0.0);
+    assert!(transform.transform_vector3(Vec3::Z).distance(Vec3::X) < 1e-6);
+    let Light::Point(p) = point else {
+        panic!("{point:?}")
+    };
+    assert_eq!(p.position, Vec3::new(0.0, 1.0, 1.0));
+    assert_eq!(p.color, Rgb::new(1.0, 0.5, 0.0));
+    assert!((p.intensity - PI).abs() < 1e-6);
+    let Light::Spot {
+        emitter,
+        direction,
+        cone_angle,
+        cone_delta,
+        beam_distribution,
+    } = spot
+    else {
+        panic!("{spot:?}");
+    };
+    assert_eq!(emitter.position, Vec3::Y);
+    assert!(direction.distance(-Vec3::Y) < 1e-6);
+    assert_eq!((*cone_angle, *cone_delta, *beam_distribution), (0.5, 0.1, 3.0));
+}
+
+#[test]
+fn a_constant_surface_is_an_emitter_of_its_color() {
+    let scene = ok("WorldBegin\nColor 0 1 0\nSurface \"constant\"\nSphere 1 -1 1 360\nWorldEnd\n");
+    assert_eq!(
+        scene.materials[scene.objects[0].material as usize],
+        Material::Constant {
+            color: Rgb::new(0.0, 1.0, 0.0)
+        }
+    );
+}
+
+#[test]
+fn patch_meshes_are_cut_as_the_spec_says() {
+    let pts: String = (0..28).map(|k| format!("{} {} 0 ", k % 7, k / 7)).collect();
+    let scene = ok(&format!(
+        "WorldBegin\nPatchMesh \"bicubic\" 7 \"nonperiodic\" 4 \"nonperiodic\" \"P\" [{pts}]\nBasis \"b-spline\" 1 \"b-spline\" 1\nPatchMesh \"bicubic\" 7 \"periodic\" 4 \"nonperiodic\" \"P\" [{pts}]\nPatchMesh \"bilinear\" 7 \"nonperiodic\" 4 \"nonperiodic\" \"P\" [{pts}]\nWorldEnd\n"
+    ));
+    let count = |k: usize| match &scene.objects[k].shape {
+        Shape::Patches(p) => p.len(),
+        other => panic!("{other:?}"),
+    };
+    assert_eq!((count(0), count(1), count(2)), (2, 7, 18));
+    // A bezier mesh's patch corners are its control points (0,0) and (3,3).
+    let Shape::Patches(p) = &scene.objects[0].shape else {
+        unreachable!()
+    };
+    assert_eq!(p[0].points[0], Vec3::ZERO);
+    assert_eq!(p[0].points[15], Vec3::new(3.0, 3.0, 0.0));
+    let e = fail(
+        "WorldBegin\nPatchMesh \"bicubic\" 3 \"nonperiodic\" 4 \"nonperiodic\" \"P\" [0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0]\n",
+    );
+    assert!(e.contains("t.rib:2") && e.contains("3 × 4"), "{e}");
+}
+
+#[test]
+fn the_teapot_is_28_bezier_patches_standing_on_z_zero() {
+    let scene = ok("WorldBegin\nGeometry \"teapot\"\nWorldEnd\n");
+    let Shape::Patches(p) = &scene.objects[0].shape else {
+        panic!()
+    };
+    assert_eq!(p.len(), 28);
+    let zmin = p
+        .iter()
+        .flat_map(|q| q.points)
+        .map(|v| v.z)
+        .fold(f32::INFINITY, f32::min);
+    assert_eq!(zmin, 0.0);
+}
+
+#[test]
+fn nupatch_is_read_and_checked() {
+    let scene = ok(
+        "WorldBegin\nNuPatch 2 2 [0 0 1 1] 0 1 2 2 [0 0 1 1] 0 1 \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 1]\nTrimCurve [1] [2] [0 0 1 1] [0] [1] [2] [0 1] [0 1] [1 1]\nWorldEnd\n",
+    );
+    assert!(matches!(&scene.objects[0].shape, Shape::NuPatch(p) if p.points.len() == 4));
+    assert!(scene.warnings.iter().any(|w| w.contains("TrimCurve")));
+    let e = fail(
+        "WorldBegin\nNuPatch 2 2 [0 0 1] 0 1 2 2 [0 0 1 1] 0 1 \"Pw\" [0 0 0 1 1 0 0 1 0 1 0 1 1 1 0 1]\n",
+    );
+    assert!(e.contains("t.rib:2") && e.contains("[uknot] has 3 knots"), "{e}");
+}
+
+#[test]
+fn curves_are_cut_into_segments_with_their_widths() {
+    let scene = ok(
+        "WorldBegin\nCurves \"linear\" [3 2] \"nonperiodic\" \"P\" [0 0 0 1 0 0 2 0 0 0 1 0 1 1 0] \"width\" [1 2 3 4 5]\nCurves \"cubic\" [7] \"nonperiodic\" \"P\" [0 0 0 1 0 0 2 0 0 3 0 0 4 0 0 5 0 0 6 0 0] \"constantwidth\" 0.1\nWorldEnd\n",
+    );
+    let Shape::Curves(c) = &scene.objects[0].shape else {
+        panic!()
+    };
+    let widths: Vec<[f32; 2]> = c.segments.iter().map(|s| s.widths).collect();
+    assert_eq!(widths, [[1.0, 2.0], [2.0, 3.0], [4.0, 5.0]]);
+    let Shape::Curves(c) = &scene.objects[1].shape else {
+        panic!()
+    };
+    assert_eq!(c.segments.len(), 2);
+    assert_eq!(c.segments[1].points[3], Vec3::new(6.0, 0.0, 0.0));
+    let e =
+        fail("WorldBegin\nCurves \"linear\" [3] \"nonperiodic\" \"P\" [0 0 0 1 0 0 2 0 0] \"width\" [1 2]\n");
+    assert!(e.contains("\"width\" has 2 values; 3 expected"), "{e}");
+}
+
+#[test]
+fn points_and_quadrics() {
+    let scene = ok(
+        "WorldBegin\nPoints \"P\" [0 0 0 1 1 1] \"constantwidth\" 0.5\nHyperboloid 1 0 -1 0 1 1 360\nParaboloid 1 0 2 360\nWorldEnd\n",
+    );
+    assert!(matches!(&scene.objects[0].shape, Shape::Points(p) if p.widths == [0.5, 0.5]));
+    assert!(matches!(scene.objects[1].shape, Shape::Hyperboloid { .. }));
+    assert!(matches!(
+        scene.objects[2].shape,
+        Shape::Paraboloid { radius: 1.0, .. }
+    ));
+}
+
+#[test]
+fn instances_take_the_current_transform_and_color() {
+    let scene = ok(
+        "ObjectBegin 1\nTranslate 0 0 1\nSphere 1 -1 1 360\nObjectEnd\nWorldBegin\nTranslate 5 0 0\nColor [0 0 1]\nObjectInstance 1\nObjectInstance 1\nWorldEnd\n",
+    );
+    assert_eq!(scene.objects.len(), 2);
+    let m = scene.objects[0].transform.samples[0].1;
+    assert_eq!(m.transform_point3(Vec3::ZERO), Vec3::new(5.0, 0.0, 1.0));
+    assert_eq!(
+        scene.materials[scene.objects[0].material as usize],
+        Material::Diffuse {
+            color: Rgb::new(0.0, 0.0, 1.0)
+        }
+    );
+    let e = fail("WorldBegin\nObjectInstance 7\n");
+    assert!(e.contains("t.rib:2") && e.contains("no object \"7\""), "{e}");
+}
+
+#[test]
+fn procedurals_read_archives_or_name_what_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("part.rib"), "Sphere 1 -1 1 360\n").unwrap();
+    let main = dir.path().join("main.rib");
+    std::fs::write(
+        &main,
+        "WorldBegin\nProcedural \"DelayedReadArchive\" [\"part.rib\"] [-1 1 -1 1 -1 1]\nSolidBegin \"union\"\nSphere 1 -1 1 360\nSolidEnd\nWorldEnd\n",
+    )
+    .unwrap();
+    let scene = crate::rib::parse_file(&main).unwrap();
+    assert_eq!(scene.objects.len(), 2);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("constructive solid geometry"))
+    );
+    let e = fail("WorldBegin\nProcedural \"RunProgram\" [\"gen\" \"\"] [0 1 0 1 0 1]\n");
+    assert!(e.contains("t.rib:2") && e.contains("RunProgram"), "{e}");
+}
+
+#[test]
+fn a_varying_cs_is_averaged_with_one_warning() {
+    let scene = ok(
+        "WorldBegin\nSurface \"matte\"\nPolygon \"P\" [0 0 0 1 0 0 1 1 0] \"Cs\" [1 0 0 0 1 0 0 0 1]\nPolygon \"P\" [0 0 0 1 0 0 1 1 0] \"Cs\" [1 0 0 0 1 0 0 0 1]\nWorldEnd\n",
+    );
+    let third = 1.0 / 3.0;
+    assert_eq!(
+        scene.materials[scene.objects[0].material as usize],
+        Material::Diffuse {
+            color: Rgb::new(third, third, third)
+        }
+    );
+    let warned = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("\"Cs\" varies"))
+        .count();
+    assert_eq!(warned, 1, "{:?}", scene.warnings);
+}
+
+#[test]
+fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("dark.rib");
+    std::fs::write(
+        &path,
+        "WorldBegin\nSurface \"matte\"\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let scene = crate::load(
+        &path,
+        obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
+    )
+    .unwrap();
+    assert!(
+        matches!(scene.lights[..], [Light::Dome { .. }]),
+        "{:?}",
+        scene.lights
+    );
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("no light") && w.contains("any LightSource in the file replaces it")),
+        "{:?}",
+        scene.warnings
+    );
+    // A scene with a light of its own keeps it alone.
+    std::fs::write(
+        &path,
+        "WorldBegin\nLightSource \"pointlight\" 1\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let scene = crate::load(
+        &path,
+        obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
+    )
+    .unwrap();
+    assert!(matches!(scene.lights[..], [Light::Point(_)]));
+}
+
+#[test]
+fn blobby_programs_are_decoded_and_checked() {
+    let scene = ok(
+        "WorldBegin\nBlobby 2 [1001 0 1001 16 0 2 0 1] [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 1 0 0 0 0 1 0 0 0 0 1 0 1 0 0 1] [\"\"]\nWorldEnd\n",
+    );
+    let Shape::Blobby(b) = &scene.objects[0].shape else {
+        panic!()
+    };
+    assert_eq!(b.ops.len(), 3);
+    assert!(
+        matches!(&b.ops[2], crate::classic::BlobOp::Combine { kind: 0, operands } if operands == &[0, 1])
+    );
+    // A declared `mpoint` primitive variable is read (and left out with a warning), not an error.
+    let scene = ok(
+        "WorldBegin\nBlobby 1 [1001 0] [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1] [\"\"] \"vertex mpoint Pref\" [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1]\nWorldEnd\n",
+    );
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("Pref")),
+        "{:?}",
+        scene.warnings
+    );
+    let e = fail("WorldBegin\nBlobby 1 [1001 5] [0 0 0] [\"\"]\n");
+    assert!(e.contains("t.rib:2") && e.contains("float index 5"), "{e}");
+    let e = fail("WorldBegin\nBlobby 1 [1003 0 0] [0 0 0 0] [\"x\"]\n");
+    assert!(e.contains("opcode 1003"), "{e}");
+}
