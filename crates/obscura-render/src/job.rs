@@ -14,6 +14,7 @@ use obscura_scene::{Aov, Display, DisplayDriver, LoadError, Scene};
 use obscura_sdk::{DeclarationError, Format, ParamList};
 
 use crate::deep::{DeepCompression, write_deep_exr};
+use crate::limits::{self, LimitError, OutputKind};
 use crate::output::{OutputError, write_exr, write_png};
 use crate::render::RenderOutput;
 
@@ -247,6 +248,72 @@ pub fn write_displays(
         written.push(d.path.clone());
     }
     Ok(written)
+}
+
+/// Checks a render job before any work ([`crate::limits`]): the image size (`size_source` names
+/// what set it: `--format`, the scene file's `Format`, a calibration file), the samples per pixel
+/// (`spp`, else the scene's), the memory the film, the outputs and any deep samples need, and every
+/// display's file (extension, directory).
+///
+/// # Errors
+/// The first [`LimitError`] found.
+pub fn check_render(
+    scene: &Scene,
+    displays: &[Display],
+    spp: Option<u32>,
+    size_source: &str,
+) -> Result<(), LimitError> {
+    let f = scene.camera.format;
+    limits::check_image_size(f.width, f.height, size_source)?;
+    let samples = match spp {
+        Some(n) => {
+            limits::check_samples(n, "--spp")?;
+            n
+        }
+        None => {
+            limits::check_samples(scene.samples_per_pixel, "the scene's Hider \"int maxsamples\"")?;
+            scene.samples_per_pixel
+        }
+    };
+    for d in displays {
+        let kind = match d.driver {
+            DisplayDriver::OpenExr | DisplayDriver::DeepExr => OutputKind::Exr,
+            DisplayDriver::Png => OutputKind::Png,
+        };
+        limits::check_output(&d.path, kind)?;
+    }
+    let channels = displays
+        .iter()
+        .map(|d| d.aovs.iter().map(|&a| aov_channels(a)).sum::<u64>())
+        .max()
+        .unwrap_or(0);
+    let pixels = scene.camera.pixels().len() as u64;
+    let need = limits::render_bytes(pixels, channels, wants_deep(displays).then_some(samples));
+    let crop = scene.camera.pixels();
+    let what = format!(
+        "a {}x{} render{} with {channels} channels{}",
+        f.width,
+        f.height,
+        if crop.len() as u64 == u64::from(f.width) * u64::from(f.height) {
+            String::new()
+        } else {
+            format!(" (crop {}x{})", crop.width(), crop.height())
+        },
+        if wants_deep(displays) {
+            format!(" and {samples} deep samples per pixel")
+        } else {
+            String::new()
+        }
+    );
+    limits::check_memory(need, &what)
+}
+
+/// The number of EXR channels of an AOV.
+fn aov_channels(aov: Aov) -> u64 {
+    match aov {
+        Aov::Ci | Aov::N | Aov::P | Aov::CameraDirection => 3,
+        Aov::Alpha | Aov::Z => 1,
+    }
 }
 
 /// A flag set by the first Ctrl-C: the render stops after the tiles in flight and writes what it has.

@@ -15,6 +15,7 @@
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
+//! | [`limits`] | image size, memory, threads, samples and output files, checked before any work |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -26,6 +27,7 @@ pub mod filter;
 pub mod integrator;
 pub mod job;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod motion;
 pub mod output;
