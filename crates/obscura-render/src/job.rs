@@ -252,7 +252,7 @@ pub fn write_displays(
 
 /// Checks a render job before any work ([`crate::limits`]): the image size (`size_source` names
 /// what set it: `--format`, the scene file's `Format`, a calibration file), the samples per pixel
-/// (`spp`, else the scene's), the memory the film, the outputs and any deep samples need, and every
+/// (`spp`, else the scene's), every object's transform being finite, the memory the film, the outputs and any deep samples need, and every
 /// display's file (extension, directory).
 ///
 /// # Errors
@@ -265,6 +265,14 @@ pub fn check_render(
 ) -> Result<(), LimitError> {
     let f = scene.camera.format;
     limits::check_image_size(f.width, f.height, size_source)?;
+    for o in &scene.objects {
+        if let Some((time, _)) = o.transform.samples.iter().find(|(_, m)| !m.is_finite()) {
+            return Err(LimitError::Transform {
+                object: o.source.clone(),
+                time: *time,
+            });
+        }
+    }
     let samples = match spp {
         Some(n) => {
             limits::check_samples(n, "--spp")?;

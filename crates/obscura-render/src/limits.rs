@@ -48,7 +48,7 @@ const RAY_LAYER_BYTES: u64 = 64 + 2 * 17 * 4;
 const STMAP_BYTES: u64 = 12 + 2 * 4 * 4;
 
 /// A job refused before it started. Each message names what set the value and the limit.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LimitError {
     /// An image side of zero or over [`MAX_IMAGE_SIDE`], or over [`MAX_IMAGE_PIXELS`] in all.
     #[error(
@@ -97,6 +97,17 @@ pub enum LimitError {
         path: String,
         /// Why it cannot be written.
         reason: String,
+    },
+    /// An object whose transform is not finite (it would vanish from the render).
+    #[error(
+        "{object}: the object-to-world transform at time {time} is not finite (a Translate, Scale or matrix \
+         beyond f32's range of ±3.4e38); the object would vanish from the render"
+    )]
+    Transform {
+        /// Where the object was declared (`scene.rib:42`, a glTF node).
+        object: String,
+        /// The motion sample's time.
+        time: f32,
     },
     /// `OBSCURA_MEMORY_LIMIT` does not read as a size.
     #[error(
