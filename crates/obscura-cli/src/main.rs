@@ -251,6 +251,9 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     let mut params = calibration.as_ref().map(|c| c.params.clone()).unwrap_or_default();
     merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
     let cam = camera(a, calibration.as_ref());
+    if a.samples > obscura_host::sampler::MAX_SAMPLES {
+        return Err(obscura_render::raymap::RayMapError::TooManySamples(a.samples).to_string());
+    }
     let source = size_source(a.format, a.calibration.as_deref(), "the default size");
     limits::check_image_size(cam.format.width, cam.format.height, &source).map_err(|e| e.to_string())?;
     limits::check_memory(
