@@ -467,32 +467,22 @@ fn plugins(name: Option<&str>, names_only: bool, search: &PluginSearch) -> Resul
 
 /// Warns about `--plugin-path` directories and `OBSCURA_PLUGIN_PATH` entries that are not directories.
 fn check_plugin_path(cli: &Cli) {
-    for dir in &cli.plugin_path {
+    let given = cli.plugin_path.iter().map(|d| ("--plugin-path", d.clone()));
+    let env = std::env::var_os("OBSCURA_PLUGIN_PATH")
+        .map(|list| std::env::split_paths(&list).collect::<Vec<_>>())
+        .unwrap_or_default();
+    let env = env
+        .into_iter()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map(|d| ("OBSCURA_PLUGIN_PATH entry", d));
+    for (label, dir) in given.chain(env) {
         if !dir.is_dir() {
-            eprintln!(
-                "warning: --plugin-path {}: {}",
-                dir.display(),
-                if dir.exists() {
-                    "not a directory"
-                } else {
-                    "no such directory"
-                }
-            );
-        }
-    }
-    if let Some(list) = std::env::var_os("OBSCURA_PLUGIN_PATH") {
-        for dir in std::env::split_paths(&list).filter(|d| !d.as_os_str().is_empty()) {
-            if !dir.is_dir() {
-                eprintln!(
-                    "warning: OBSCURA_PLUGIN_PATH entry {}: {}",
-                    dir.display(),
-                    if dir.exists() {
-                        "not a directory"
-                    } else {
-                        "no such directory"
-                    }
-                );
-            }
+            let what = if dir.exists() {
+                "not a directory"
+            } else {
+                "no such directory"
+            };
+            eprintln!("warning: {label} {}: {what}", dir.display());
         }
     }
 }

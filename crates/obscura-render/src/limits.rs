@@ -247,7 +247,7 @@ pub fn parse_size(text: &str) -> Option<u64> {
         _ => (t, 1),
     };
     let v: f64 = number.trim().parse().ok()?;
-    (v.is_finite() && v >= 0.0 && v * (scale as f64) < u64::MAX as f64).then(|| (v * scale as f64) as u64)
+    (v.is_finite() && v >= 0.0 && v * (scale as f64) < u64::MAX as f64).then_some((v * scale as f64) as u64)
 }
 
 /// Checks `need` bytes for the job described by `what` against [`memory_limit`].
