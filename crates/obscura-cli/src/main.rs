@@ -23,6 +23,7 @@ use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::limits::{self, OutputKind};
 use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
+use obscura_render::sequence::{FrameSpec, frame_displays};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
 mod args;
@@ -79,6 +80,11 @@ struct RenderArgs {
     /// Use this projection instead of the scene's.
     #[arg(short, long, conflicts_with = "calibration")]
     projection: Option<String>,
+    /// The frames to render: N, A-B, or a list such as 1-10,20. A run of # in an output's file name
+    /// becomes the zero-padded frame number (out.####.exr); without one, several frames write
+    /// out.0001.exr, out.0002.exr, … by frame number.
+    #[arg(long = "frames", visible_alias = "frame", value_name = "SPEC")]
+    frames: Option<FrameSpec>,
     /// Render through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
     /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. The image size defaults to
     /// the calibration's; --format resamples the same camera. --param adds to or replaces its parameters.
@@ -393,8 +399,17 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     if let Some(note) = out.stats.partial_note() {
         attributes.push(("obscura:partial", note));
     }
-    let written = job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
-        .map_err(|e| e.to_string())?;
+    // A scene without frames of its own is the same at every frame: rendered once, written as each
+    // selected frame.
+    let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+    let mut written = Vec::new();
+    for &frame in &frames {
+        let displays = frame_displays(&displays, frame, frames.len() > 1);
+        written.extend(
+            job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
+                .map_err(|e| e.to_string())?,
+        );
+    }
     drop(cancellable);
     let s = &out.stats;
     if let Some(w) = s.contract.warning(&scene.projection) {

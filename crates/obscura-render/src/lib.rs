@@ -16,6 +16,7 @@
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
 //! | [`limits`] | image size, memory, threads, samples and output files, checked before any work |
+//! | [`sequence`] | frame selections (`--frames 1-24`) and each frame's output path |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -35,4 +36,5 @@ pub mod ray;
 pub mod raymap;
 pub mod render;
 pub mod rng;
+pub mod sequence;
 pub mod stmap;
