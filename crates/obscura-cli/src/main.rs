@@ -26,6 +26,7 @@ use obscura_render::render::{RenderOptions, prepare};
 use obscura_render::sequence::{FrameSpec, frame_displays};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
+mod animation;
 mod args;
 mod check;
 mod params;
@@ -117,6 +118,14 @@ struct RenderArgs {
     /// No progress bar, summary or notes. Warnings and errors are still printed.
     #[arg(short, long)]
     quiet: bool,
+    /// Ground-truth AOVs to add to every EXR: cameraZ, distance, Pcamera, Ncamera, objectId,
+    /// instanceId, materialId, flowForward, flowBackward, flowValid, or all of them with 'all'.
+    /// Repeatable or comma-separated. IDs and flow also write <image>.ids.json and <image>.camera.json.
+    #[arg(long = "aov", value_name = "NAME", value_delimiter = ',', value_parser = animation::parse_aovs)]
+    aovs: Vec<Vec<obscura_scene::Aov>>,
+    /// Frames per second of an animated scene (glTF): frame N is posed at (N − 1)/fps seconds.
+    #[arg(long, default_value_t = 24.0, value_parser = animation::parse_fps)]
+    fps: f32,
 }
 
 #[derive(Args, Debug)]
@@ -345,7 +354,13 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    let displays = job::displays(&scene, a.output.as_deref());
+    let mut displays = job::displays(&scene, a.output.as_deref());
+    let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
+    obscura_render::frame::add_aovs(&mut displays, &aovs);
+    if scene.animation_seconds.is_none() {
+        // A still scene has no previous frame.
+        displays = obscura_render::frame::without_backward_flow(&displays, false);
+    }
     let scene_size = match &a.scene {
         Some(path) => format!("{}: Format", path.display()),
         None => "the built-in scene's Format".to_string(),
@@ -367,6 +382,26 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             .num_threads(n)
             .build_global()
             .map_err(|e| e.to_string())?;
+    }
+    // An animated scene is posed per frame (frame 1 without --frames), so its flow reaches the next.
+    if scene.animation_seconds.is_some()
+        && let Some(path) = a.scene.as_deref()
+    {
+        let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+        let job = animation::Animation {
+            path,
+            fps: a.fps,
+            format: Format::new(width, height),
+            overrides: &overrides,
+            projection: &scene.projection,
+            base_dir: &base_dir,
+            displays: &displays,
+            opts: &opts,
+            quiet: a.quiet,
+        };
+        // From here a signal finishes the frame in flight and writes what is rendered.
+        let _cancellable = signals::Cancellable::enter();
+        return job.render(&frames, &mut registry);
     }
     let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
@@ -391,14 +426,34 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             b.set_position(done as u64);
         }
     };
-    let out = prepared.render(&opts, &progress, &job::CANCEL);
+    let mut out = prepared.render(&opts, &progress, &job::CANCEL);
     if let Some(b) = &bar {
         b.finish_and_clear();
+    }
+    let flow_warnings = obscura_render::frame::run_flow(
+        &scene,
+        &prepared,
+        &mut out,
+        &displays,
+        obscura_render::frame::Neighbours::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    for w in flow_warnings {
+        eprintln!("{w}");
     }
     let mut attributes = vec![("obscura:projection", scene.projection.clone())];
     if let Some(note) = out.stats.partial_note() {
         attributes.push(("obscura:partial", note));
     }
+    attributes.extend(
+        obscura_render::frame::header_attributes(&scene, &prepared, None).map_err(|e| e.to_string())?,
+    );
+    // Sidecars go with ground truth: a display with a ground-truth AOV.
+    let sidecars = (displays.iter()).any(|d| {
+        d.aovs
+            .iter()
+            .any(|x| obscura_scene::Aov::GROUND_TRUTH.contains(x))
+    });
     // A scene without frames of its own is the same at every frame: rendered once, written as each
     // selected frame.
     let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
@@ -409,6 +464,16 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
                 .map_err(|e| e.to_string())?,
         );
+        if sidecars {
+            let number = a.frames.is_some().then_some(frame);
+            written.extend(obscura_render::frame::write_sidecars(
+                &scene,
+                &prepared,
+                &displays,
+                number,
+                out.stats.cancelled,
+            )?);
+        }
     }
     drop(cancellable);
     let s = &out.stats;
@@ -436,6 +501,8 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
             if s.cancelled {
                 format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
+            } else if s.flow_seconds > 0.0 {
+                format!("; flow pass {:.3} s", s.flow_seconds)
             } else {
                 String::new()
             }

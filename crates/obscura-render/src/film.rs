@@ -19,6 +19,8 @@ use obscura_host::PixelRect;
 use obscura_sdk::Rgb;
 
 use crate::filter::Filter;
+use crate::flow::FlowPixel;
+use crate::truth::Truth;
 
 /// What one camera sample contributes. Ci already multiplied by the projection's tint (the renderer
 /// does that); everything else untinted.
@@ -36,6 +38,11 @@ pub struct SampleValues {
     pub p: Vec3,
     /// The camera ray's direction, world space (0 for a culled sample).
     pub camera_direction: Vec3,
+    /// Depths, camera-space position and normal, IDs: unfiltered, like `z`.
+    pub truth: Truth,
+    /// The pixel's optical flow: not a per-sample value; [`Film::pixel`] fills it from the flow pass
+    /// ([`Film::set_flow`]).
+    pub flow: FlowPixel,
 }
 
 impl SampleValues {
@@ -48,6 +55,8 @@ impl SampleValues {
         n: Vec3::ZERO,
         p: Vec3::ZERO,
         camera_direction: Vec3::ZERO,
+        truth: Truth::EMPTY,
+        flow: FlowPixel::NONE,
     };
 }
 
@@ -65,6 +74,7 @@ struct Accum {
     n: Vec3,
     p: Vec3,
     camera_direction: Vec3,
+    truth: Truth,
 }
 
 impl Accum {
@@ -78,6 +88,7 @@ impl Accum {
         n: Vec3::ZERO,
         p: Vec3::ZERO,
         camera_direction: Vec3::ZERO,
+        truth: Truth::EMPTY,
     };
 
     fn splat(&mut self, w: f32, v: &SampleValues) {
@@ -103,6 +114,7 @@ impl Accum {
             self.n = v.n;
             self.p = v.p;
             self.camera_direction = v.camera_direction;
+            self.truth = v.truth;
         }
     }
 
@@ -119,6 +131,7 @@ impl Accum {
             self.n = o.n;
             self.p = o.p;
             self.camera_direction = o.camera_direction;
+            self.truth = o.truth;
         }
     }
 
@@ -138,6 +151,7 @@ impl Accum {
             v.n = self.n;
             v.p = self.p;
             v.camera_direction = self.camera_direction;
+            v.truth = self.truth;
         }
         v
     }
@@ -170,9 +184,14 @@ pub struct Film {
     crop: PixelRect,
     filter: Filter,
     pixels: Vec<Accum>,
+    /// The flow pass's result over the crop, row by row, once set.
+    flow: Option<Vec<FlowPixel>>,
 }
 
 impl Film {
+    /// The bytes the film stores per pixel of its crop (for the memory estimate of a job).
+    pub const BYTES_PER_PIXEL: usize = std::mem::size_of::<Accum>();
+
     /// An empty film of format `width`×`height` that stores the pixels of `crop`.
     ///
     /// A crop reaching past the format is clipped to it; an inverted one is empty.
@@ -191,7 +210,17 @@ impl Film {
             crop,
             filter,
             pixels: vec![Accum::ZERO; crop.len()],
+            flow: None,
         }
+    }
+
+    /// Stores the flow pass's pixels (the crop's, row by row), reported by [`Film::pixel`].
+    ///
+    /// # Panics
+    /// When `flow` does not hold one entry per crop pixel (a bug of the caller).
+    pub fn set_flow(&mut self, flow: Vec<FlowPixel>) {
+        assert_eq!(flow.len(), self.pixels.len(), "one flow pixel per crop pixel");
+        self.flow = Some(flow);
     }
 
     /// The format size `(W, H)`: the display window.
@@ -265,7 +294,13 @@ impl Film {
     /// [`SampleValues::EMPTY`] outside the crop and where nothing was recorded.
     #[must_use]
     pub fn pixel(&self, x: u32, y: u32) -> SampleValues {
-        index_in(self.crop, x as i64, y as i64).map_or(SampleValues::EMPTY, |i| self.pixels[i].resolve())
+        index_in(self.crop, x as i64, y as i64).map_or(SampleValues::EMPTY, |i| {
+            let mut v = self.pixels[i].resolve();
+            if let Some(flow) = &self.flow {
+                v.flow = flow[i];
+            }
+            v
+        })
     }
 
     /// Fraction of the crop's pixels in which at least one sample landed (0 for an empty crop): how

@@ -292,7 +292,12 @@ pub fn check_render(
     }
     let channels = displays
         .iter()
-        .map(|d| d.aovs.iter().map(|&a| aov_channels(a)).sum::<u64>())
+        .map(|d| {
+            d.aovs
+                .iter()
+                .map(|&a| crate::output::channel_names(a).len() as u64)
+                .sum::<u64>()
+        })
         .max()
         .unwrap_or(0);
     let pixels = scene.camera.pixels().len() as u64;
@@ -314,14 +319,6 @@ pub fn check_render(
         }
     );
     limits::check_memory(need, &what)
-}
-
-/// The number of EXR channels of an AOV.
-fn aov_channels(aov: Aov) -> u64 {
-    match aov {
-        Aov::Ci | Aov::N | Aov::P | Aov::CameraDirection => 3,
-        Aov::Alpha | Aov::Z => 1,
-    }
 }
 
 /// A flag set by the first Ctrl-C: the render stops after the tiles in flight and writes what it has.

@@ -35,10 +35,10 @@ pub const MAX_THREADS: usize = 1024;
 /// `G` or `T` suffix (powers of 1024): `OBSCURA_MEMORY_LIMIT=8G`.
 pub const MEMORY_LIMIT_VAR: &str = "OBSCURA_MEMORY_LIMIT";
 
-/// Bytes per pixel of the film (its accumulator: weight, colour and alpha in f64, the rest in f32).
-const FILM_BYTES: u64 = 88;
-/// Bytes per pixel of one resolved pixel at writing (every AOV in f32).
-const RESOLVED_BYTES: u64 = 56;
+/// Bytes per pixel of the film (its accumulator).
+const FILM_BYTES: u64 = crate::film::Film::BYTES_PER_PIXEL as u64;
+/// Bytes per pixel of one resolved pixel at writing (every AOV).
+const RESOLVED_BYTES: u64 = std::mem::size_of::<crate::film::SampleValues>() as u64;
 /// Bytes per pixel of one deep sample (Z, ZBack, colour, alpha), times the samples per pixel.
 const DEEP_SAMPLE_BYTES: u64 = 32;
 /// Bytes per pixel of one ray-map layer (screen, ray, tint, time) and its 17 EXR channels, twice
@@ -420,7 +420,8 @@ mod tests {
     #[test]
     fn the_estimates_grow_with_pixels_channels_deep_samples_and_layers() {
         // The film's accumulator is what the allocator refused in issue 16 (880000000000 bytes for
-        // 10^10 pixels): 88 bytes a pixel.
+        // 10^10 pixels): at least 88 bytes a pixel.
+        assert!(FILM_BYTES >= 88);
         assert_eq!(render_bytes(1, 0, None), FILM_BYTES + RESOLVED_BYTES);
         assert!(render_bytes(1, 14, None) > render_bytes(1, 4, None));
         assert!(render_bytes(1, 4, Some(64)) > render_bytes(1, 4, None) + 63 * 32);

@@ -46,6 +46,7 @@ use crate::light::{Lights, ShadeError};
 use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
 use crate::rng::Rng;
+use crate::truth::{IdTable, Truth};
 
 /// Why a render could not start.
 #[derive(Debug, thiserror::Error)]
@@ -120,6 +121,8 @@ pub struct RenderStats {
     pub rays_traced: u64,
     /// Seconds spent tracing and shading (summed over threads).
     pub shading_seconds: f64,
+    /// Wall-clock seconds of the flow pass (0 when no flow was asked for).
+    pub flow_seconds: f64,
     /// Camera samples handed to the projection, culled ones and contract breaches.
     pub contract: ContractReport,
     /// Tiles finished / all tiles.
@@ -162,6 +165,8 @@ pub struct Prepared {
     /// Camera-to-world over the shutter (shutter-normalised time).
     camera_to_world: Motion,
     deep_metric: DeepMetric,
+    /// Object, instance and material IDs of the scene's objects.
+    ids: IdTable,
     setup_seconds: f64,
 }
 
@@ -211,7 +216,7 @@ impl Tracer for CountingTracer<'_> {
 /// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, not clamped, so motion
 /// keys outside the shutter keep their place (a shutter shorter than the motion blurs less). For an
 /// instantaneous shutter, `t − open`: rays at time 0 then see the transform at the shutter time.
-fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
+pub(crate) fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
     let span = shutter.1 - shutter.0;
     if span > 0.0 {
         (t - shutter.0) / span
@@ -239,7 +244,7 @@ pub fn prepare(
     )?;
     let props = *stage.properties();
     let shutter = scene.camera.shutter;
-    let camera_to_world = camera_motion(&stage, shutter)?;
+    let camera_to_world = camera_motion(stage.environment().world_to_camera(), shutter)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
     let meshes = dice_objects(scene, &props, world_to_camera_open)?;
     let instances: Vec<Instance> = scene
@@ -274,18 +279,22 @@ pub fn prepare(
         shading,
         samples_per_pixel: spp,
         camera_to_world,
+        ids: IdTable::new(scene),
         setup_seconds: start.elapsed().as_secs_f64(),
     })
 }
 
-/// Camera-to-world over the shutter (shutter-normalised time), from the camera stage's world-to-camera
-/// motion samples.
+/// Camera-to-world over the shutter (shutter-normalised time), from world-to-camera motion samples
+/// (the camera stage's, or another frame's).
 ///
 /// # Errors
 /// [`RenderError::Camera`] when a sample's transform is singular or not finite.
-fn camera_motion(stage: &CameraStage, shutter: (f32, f32)) -> Result<Motion, RenderError> {
+pub(crate) fn camera_motion(
+    world_to_camera: &[obscura_sdk::MotionSample],
+    shutter: (f32, f32),
+) -> Result<Motion, RenderError> {
     let mut camera_to_world = Vec::new();
-    for s in stage.environment().world_to_camera() {
+    for s in world_to_camera {
         let world_to_camera = glam_from_sdk(&s.world_to_camera);
         let det = world_to_camera.determinant();
         let inverse = world_to_camera.inverse();
@@ -363,6 +372,41 @@ impl Prepared {
     #[must_use]
     pub fn accel(&self) -> &SceneAccel {
         &self.accel
+    }
+
+    /// The scene's object, instance and material IDs.
+    #[must_use]
+    pub fn ids(&self) -> &IdTable {
+        &self.ids
+    }
+
+    /// The camera-space ray taken to world space with the camera's motion at `time`; its `min_dist` and
+    /// `max_dist` become world-space bounds. `None` when the transform collapses or blows up the
+    /// direction.
+    pub(crate) fn world_ray(&self, r: &RayGeometry, time: f32) -> Option<WorldRay> {
+        let c2w = self.camera_to_world.object_to_world(time);
+        let origin_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
+        // Normalised here so that a ray length is exact even for a projection whose directions are unit
+        // only to the contract's tolerance.
+        let direction_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
+        let d_world = c2w.transform_vector3a(direction_cam);
+        let stretch = d_world.length();
+        if !(stretch > 0.0 && stretch.is_finite()) {
+            return None;
+        }
+        Some(WorldRay {
+            ray: Ray {
+                origin: c2w.transform_point3a(origin_cam),
+                direction: d_world / stretch,
+                t_min: r.min_dist * stretch,
+                t_max: r.max_dist * stretch,
+                time,
+            },
+            origin_cam,
+            direction_cam,
+            stretch,
+            camera_to_world: c2w,
+        })
     }
 
     /// Renders every tile of the crop. `progress(done, total)` is called after each tile; `cancel` is
@@ -522,6 +566,7 @@ impl Accumulator {
                 sampling_seconds: seconds(self.sampling_ns),
                 rays_traced: self.rays_traced.into_inner(),
                 shading_seconds: seconds(self.shading_ns),
+                flow_seconds: 0.0,
                 contract: self
                     .report
                     .into_inner()
@@ -595,14 +640,16 @@ struct ProjectedSample {
 }
 
 /// A camera ray taken to world space at its own time.
-struct WorldRay {
-    ray: Ray,
+pub(crate) struct WorldRay {
+    pub(crate) ray: Ray,
     /// The camera-space origin and (normalised) direction the ray came from.
-    origin_cam: Vec3A,
-    direction_cam: Vec3A,
+    pub(crate) origin_cam: Vec3A,
+    pub(crate) direction_cam: Vec3A,
     /// The length the camera-to-world transform gives a unit camera-space direction: camera-space
     /// distances times `stretch` are world-space distances.
-    stretch: f32,
+    pub(crate) stretch: f32,
+    /// Camera-to-world at the ray's time.
+    pub(crate) camera_to_world: Affine3A,
 }
 
 impl<'a> TileIntegrator<'a> {
@@ -714,7 +761,7 @@ impl<'a> TileIntegrator<'a> {
     /// One camera sample: its ray to world space at its own time, the path traced, its AOVs splatted
     /// (and its deep value kept, when asked for).
     fn render_sample(&self, tile: &mut TileState<'_>, sample: &ProjectedSample) {
-        let Some(world) = self.world_ray(&sample.ray, sample.time) else {
+        let Some(world) = self.prepared.world_ray(&sample.ray, sample.time) else {
             return;
         };
         let (px, py) = sample.pixel;
@@ -746,49 +793,40 @@ impl<'a> TileIntegrator<'a> {
         }
     }
 
-    /// The camera-space ray taken to world space with the camera's motion at `time`; its `min_dist` and
-    /// `max_dist` become world-space bounds. `None` when the transform collapses or blows up the
-    /// direction.
-    fn world_ray(&self, r: &RayGeometry, time: f32) -> Option<WorldRay> {
-        let c2w = self.prepared.camera_to_world.object_to_world(time);
-        let origin_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
-        // Normalised here so that a ray length is exact even for a projection whose directions are unit
-        // only to the contract's tolerance.
-        let direction_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
-        let d_world = c2w.transform_vector3a(direction_cam);
-        let stretch = d_world.length();
-        if !(stretch > 0.0 && stretch.is_finite()) {
-            return None;
-        }
-        Some(WorldRay {
-            ray: Ray {
-                origin: c2w.transform_point3a(origin_cam),
-                direction: d_world / stretch,
-                t_min: r.min_dist * stretch,
-                t_max: r.max_dist * stretch,
-                time,
-            },
-            origin_cam,
-            direction_cam,
-            stretch,
-        })
-    }
-
     /// The sample's AOVs: `Ci` is the radiance times the projection's tint; alpha, z (camera units, in
     /// the projection's deep metric), N, P and cameraDirection are untinted.
     fn aovs(&self, path: &PathResult, world: &WorldRay, tint: Rgb) -> SampleValues {
         let radiance = path.radiance;
         let ci = Rgb::new(radiance.x * tint.r, radiance.y * tint.g, radiance.z * tint.b);
-        let (z, n, p) = match path.first_hit {
+        let (z, n, p, truth) = match path.first_hit {
             Some(h) => {
                 let t_cam = h.t / world.stretch;
+                let p_camera = world.origin_cam + world.direction_cam * t_cam;
                 let z = match self.prepared.deep_metric {
-                    DeepMetric::CameraZ => world.origin_cam.z + world.direction_cam.z * t_cam,
+                    DeepMetric::CameraZ => p_camera.z,
                     DeepMetric::RayLength => t_cam,
                 };
-                (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
+                // Normals go to camera space by the inverse transpose of world-to-camera, which is the
+                // transpose of camera-to-world's linear part.
+                let n_camera = world
+                    .camera_to_world
+                    .matrix3
+                    .transpose()
+                    .mul_vec3a(h.shading_normal)
+                    .normalize_or_zero();
+                let (object_id, instance_id, material_id) = self.prepared.ids.ids(h.instance);
+                let truth = Truth {
+                    camera_z: p_camera.z,
+                    distance: t_cam,
+                    p_camera: p_camera.into(),
+                    n_camera: n_camera.into(),
+                    object_id,
+                    instance_id,
+                    material_id,
+                };
+                (z, Vec3::from(h.shading_normal), Vec3::from(h.position), truth)
             }
-            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
+            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO, Truth::EMPTY),
         };
         SampleValues {
             ci,
@@ -797,6 +835,8 @@ impl<'a> TileIntegrator<'a> {
             n,
             p,
             camera_direction: Vec3::from(world.ray.direction),
+            truth,
+            flow: crate::flow::FlowPixel::NONE,
         }
     }
 }
