@@ -15,9 +15,9 @@ use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::shutter::ShutterDesc;
 use obscura_host::{CameraDesc, CameraStage};
-use obscura_plugins::builtin_registry;
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all};
+use obscura_plugins::{builtin_registry, isolate};
 use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::limits::{self, OutputKind};
@@ -29,6 +29,7 @@ use obscura_sdk::{Format, ParamList, ScreenWindow};
 mod animation;
 mod args;
 mod check;
+mod lens;
 mod params;
 mod signals;
 mod stdout;
@@ -46,6 +47,14 @@ struct Cli {
     /// Repeatable.
     #[arg(long = "plugin-path", value_name = "DIR", global = true)]
     plugin_path: Vec<PathBuf>,
+    /// Run every plugin library in worker processes: a crash, abort or hang in a plugin costs the
+    /// batch it was projecting (counted and reported), never the run. OBSCURA_ISOLATE_PLUGINS=Name,…
+    /// isolates only the plugins named (`*`: all).
+    #[arg(long, global = true)]
+    isolate_plugins: bool,
+    /// Seconds an isolated plugin's call may take before its worker is killed and the batch lost.
+    #[arg(long, value_name = "SECONDS", global = true, default_value = "10", value_parser = args::parse_timeout)]
+    plugin_timeout: std::time::Duration,
 }
 
 #[derive(Subcommand, Debug)]
@@ -68,6 +77,9 @@ enum Command {
     /// Check a projection against the contract (directions, times, spread, field of view, deep metric,
     /// dicing hint, unproject, determinism, thread safety, property types); exit 0 when clean, 1 when a check failed, 2 when it could not run.
     Check(Box<check::CheckArgs>),
+    /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
+    /// drawing with traced ray fans (--diagram out.svg|png).
+    Lens(Box<lens::LensArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -299,7 +311,7 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     }
     write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
     outln!(
-        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} culled for breaking the contract",
+        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} lost to failed project calls, {} culled for breaking the contract",
         a.output.display(),
         report.samples,
         projection,
@@ -308,7 +320,8 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
         map.layers.len(),
         if map.layers.len() == 1 { "" } else { "s" },
         report.culled,
-        report.violations()
+        report.lost(),
+        report.breaches()
     );
     Ok(())
 }
@@ -483,7 +496,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     if !a.quiet {
         let frame = s.render_seconds.max(1e-9);
         outln!(
-            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, \
+            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, {} lost to failed project calls, \
              {:.1} Mrays/s traced (camera, bounce and shadow rays); \
              camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
             scene.camera.pixels().width(),
@@ -494,6 +507,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             s.triangles,
             s.contract.samples,
             s.contract.culled,
+            s.contract.lost(),
             s.rays_traced as f64 / frame * 1e-6,
             100.0 * s.camera_stage_seconds
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
@@ -570,14 +584,29 @@ fn check_plugin_path(cli: &Cli) {
 }
 
 fn main() -> ExitCode {
+    if std::env::args_os()
+        .nth(1)
+        .is_some_and(|a| a == isolate::WORKER_ARG)
+    {
+        // A host started this process to run a plugin for it (`--isolate-plugins`).
+        return ExitCode::from(u8::try_from(isolate::worker_main()).unwrap_or(2));
+    }
     signals::install();
     let cli = Cli::parse();
     check_plugin_path(&cli);
-    let search = PluginSearch::from_env(&cli.plugin_path);
+    let isolation = match isolate::Isolation::from_env(cli.isolate_plugins, cli.plugin_timeout) {
+        Ok(i) => i,
+        Err(e) => {
+            eprintln!("error: --isolate-plugins: cannot find this executable to run plugin workers: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let search = PluginSearch::from_env(&cli.plugin_path).with_isolation(isolation);
     let result = match &cli.command {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
+        Command::Lens(a) => lens::run(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),
