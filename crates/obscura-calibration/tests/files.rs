@@ -605,6 +605,17 @@ fn ocamcalib_errors_name_the_line_and_field() {
     assert_error(&e, "r.txt", 15, &["no inverse"]);
     let e = error(&good, "r.txt", Some("1"));
     assert!(e.message.contains("single camera"), "{e}");
+    // Issue 16: a bad a0 was blamed on the centre's line (11), not pol's (3).
+    for a0 in ["0.000000e+00", "2.0e+02"] {
+        let c = parse(
+            &good.replace("5 -2.000000e+02", &format!("5 {a0}")),
+            "r.txt",
+            None,
+        )
+        .unwrap();
+        let e = c.param_list().unwrap_err();
+        assert_error(&e, "r.txt", 3, &["pol's a0 must be < 0"]);
+    }
 }
 
 // ----- Parameter lists ----------------------------------------------------------------------------

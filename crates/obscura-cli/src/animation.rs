@@ -7,6 +7,8 @@ use std::path::Path;
 use obscura_host::CameraDesc;
 use obscura_render::frame::{self, Neighbours};
 use obscura_render::job::{self, Overrides};
+
+use crate::stdout::outln;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_render::sequence::frame_displays;
 use obscura_scene::{Aov, Display, Scene};
@@ -125,7 +127,7 @@ impl Animation<'_> {
                 ));
             }
             if !self.quiet {
-                println!(
+                outln!(
                     "frame {n}: {:.2} s (flow {:.3} s), wrote {}",
                     out.stats.render_seconds,
                     out.stats.flow_seconds,
@@ -139,7 +141,7 @@ impl Animation<'_> {
         }
         registry.end_render();
         if !self.quiet && skipped > 0 {
-            println!("{skipped} complete frame(s) skipped");
+            outln!("{skipped} complete frame(s) skipped");
         }
         Ok(())
     }

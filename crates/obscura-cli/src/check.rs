@@ -4,6 +4,7 @@
 
 use crate::args::{load_calibration, parse_checked_format};
 use crate::params::merge_param_args;
+use crate::stdout::outln;
 use clap::Args;
 use obscura_check::{CheckOptions, check_registered};
 use obscura_plugins::builtin_registry;
@@ -126,7 +127,7 @@ pub fn run(a: &CheckArgs, search: &PluginSearch) -> Outcome {
         Ok(Some(failed)) => Outcome::Broken(failed),
         Err(e) => {
             if a.json {
-                println!("{{\"error\": {}}}", json_string(&e));
+                outln!("{{\"error\": {}}}", json_string(&e));
             }
             Outcome::CouldNotRun(e)
         }
@@ -176,9 +177,9 @@ fn run_report(a: &CheckArgs, search: &PluginSearch) -> Result<Option<String>, St
     std::panic::set_hook(hook);
     let report = report.map_err(|e| e.to_string())?;
     if a.json {
-        println!("{}", report.to_json());
+        outln!("{}", report.to_json());
     } else {
-        println!("{report}");
+        outln!("{report}");
     }
     let failed = report.failed();
     if failed.is_empty() {

@@ -4,6 +4,8 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use crate::stdout::{out, outln};
+
 use clap::Args;
 use obscura_projections::lens_system::glass::LAMBDA_D;
 use obscura_projections::lens_system::prescription::Prescription;
@@ -74,9 +76,9 @@ pub fn run(a: &LensArgs) -> Result<(), String> {
     let cam = LensSystem::new(&prescription, settings, &env).map_err(|e| format!("{}: {e}", a.file))?;
     let f = figures(&prescription, &cam, a.film_diagonal);
     if a.json {
-        println!("{}", json(&f));
+        outln!("{}", json(&f));
     } else {
-        print!("{}", text(&f));
+        out!("{}", text(&f));
     }
     if let Some(path) = &a.diagram {
         let drawing = diagram(&cam, f.corner_mm, f.field_mm);

@@ -6,7 +6,7 @@
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use crate::args::{crop_window, load_calibration, parse_format};
@@ -20,6 +20,7 @@ use obscura_plugins::loader::{PluginSearch, ensure, load_all};
 use obscura_plugins::{builtin_registry, isolate};
 use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
+use obscura_render::limits::{self, OutputKind};
 use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_render::sequence::{FrameSpec, sequence_displays};
@@ -31,7 +32,11 @@ mod args;
 mod check;
 mod lens;
 mod params;
+mod signals;
+mod stdout;
 mod stmap;
+
+use crate::stdout::{out, outln};
 
 /// Obscura: RenderMan-style camera projection plugins, and the host that drives them.
 #[derive(Parser, Debug)]
@@ -111,7 +116,7 @@ struct RenderArgs {
     /// Samples per pixel (default: the scene's Hider maxsamples).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     spp: Option<u32>,
-    /// Worker threads (default: all cores).
+    /// Worker threads, 1 to 1024 (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
     /// CropWindow xmin xmax ymin ymax, in NDC (y down).
@@ -127,7 +132,7 @@ struct RenderArgs {
     /// Seed of the sample sequences.
     #[arg(long, default_value_t = 0)]
     seed: u32,
-    /// No progress bar or summary.
+    /// No progress bar, summary or notes. Warnings and errors are still printed.
     #[arg(short, long)]
     quiet: bool,
     /// Ground-truth AOVs to add to every EXR: cameraZ, distance, Pcamera, Ncamera, objectId,
@@ -253,7 +258,17 @@ fn camera(a: &RaysArgs, calibration: Option<&Calibrated>) -> CameraDesc {
     cam
 }
 
+/// What set the image size, for messages: `--format`, a calibration file, or `default`.
+fn size_source(format: Option<(u32, u32)>, calibration: Option<&Path>, default: &str) -> String {
+    match (format, calibration) {
+        (Some(_), _) => "--format".to_string(),
+        (None, Some(path)) => format!("{}: the calibration's image size", path.display()),
+        (None, None) => default.to_string(),
+    }
+}
+
 fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
+    limits::check_output(&a.output, OutputKind::Exr).map_err(|e| e.to_string())?;
     let mut registry = builtin_registry();
     let calibration = a
         .calibration
@@ -268,6 +283,19 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     let mut params = calibration.as_ref().map(|c| c.params.clone()).unwrap_or_default();
     merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
     let cam = camera(a, calibration.as_ref());
+    if a.samples > obscura_host::sampler::MAX_SAMPLES {
+        return Err(obscura_render::raymap::RayMapError::TooManySamples(a.samples).to_string());
+    }
+    let source = size_source(a.format, a.calibration.as_deref(), "the default size");
+    limits::check_image_size(cam.format.width, cam.format.height, &source).map_err(|e| e.to_string())?;
+    limits::check_memory(
+        limits::ray_map_bytes(cam.pixels().len() as u64, a.samples),
+        &format!(
+            "a {}x{} ray map with {} sample layer(s)",
+            cam.format.width, cam.format.height, a.samples
+        ),
+    )
+    .map_err(|e| e.to_string())?;
     if let Some(w) = calibration.as_ref().and_then(|c| c.aspect_warning(cam.format)) {
         eprintln!("warning: {w}");
     }
@@ -287,7 +315,7 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
         attributes.push(("obscura:calibration", c.calibration.summary()));
     }
     write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
-    println!(
+    outln!(
         "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} lost to failed project calls, {} culled for breaking the contract",
         a.output.display(),
         report.samples,
@@ -304,6 +332,14 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
 }
 
 fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
+    if let Some(n) = a.threads {
+        limits::check_threads(n).map_err(|e| e.to_string())?;
+    }
+    if let Some(output) = &a.output {
+        // Before the scene is read: a bad -o is known at once.
+        let kind = OutputKind::of_path(output).unwrap_or(OutputKind::Exr);
+        limits::check_output(output, kind).map_err(|e| e.to_string())?;
+    }
     let (width, height) = a.format.unwrap_or(job::DEFAULT_FORMAT);
     let (frames, base_dir) =
         job::load_frames(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
@@ -314,18 +350,10 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         .transpose()?;
     if let Some(n) = a.threads {
         rayon::ThreadPoolBuilder::new()
-            .num_threads(n.max(1))
+            .num_threads(n)
             .build_global()
             .map_err(|e| e.to_string())?;
     }
-    let _ = ctrlc::set_handler(|| {
-        if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        eprintln!(
-            "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
-        );
-    });
     // An animated scene (glTF) is posed per frame (frame 1 without --frames), so its flow reaches the
     // next.
     if let [still] = frames.as_slice()
@@ -349,6 +377,8 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             opts: &opts,
             quiet: a.quiet,
         };
+        // From here a signal finishes the frame in flight and writes what is rendered.
+        let _cancellable = signals::Cancellable::enter();
         return job.render(&frames, &mut registry);
     }
     let jobs = frame_jobs(a.frames.as_ref(), &frames)?;
@@ -364,7 +394,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     for image in images {
         let frame = &frames[image];
         if !a.quiet && frames.len() > 1 {
-            println!("frame {} ({})", frame.number, frame.world);
+            outln!("frame {} ({})", frame.number, frame.world);
         }
         let writes: Vec<(u32, &[obscura_scene::Display])> = jobs
             .iter()
@@ -467,15 +497,12 @@ fn configure(
         param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
     overrides.apply(scene).map_err(|e| e.to_string())?;
     scene.projection = projection;
-    if !a.quiet
-        && let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format))
-    {
+    // Warnings are printed even with --quiet, which only silences progress, summaries and notes.
+    if let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format)) {
         eprintln!("warning: {w}");
     }
-    if !a.quiet {
-        for w in &scene.warnings {
-            eprintln!("warning: {w}");
-        }
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
     }
     Ok((registry, overrides))
 }
@@ -492,12 +519,22 @@ fn render_image(
 ) -> Result<(), String> {
     let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
     let first: &[obscura_scene::Display] = writes.first().map_or(&[], |w| w.1);
+    let scene_size = match &a.scene {
+        Some(path) => format!("{}: Format", path.display()),
+        None => "the built-in scene's Format".to_string(),
+    };
+    let source = size_source(a.format, a.calibration.as_deref(), &scene_size);
+    for &(_, displays) in writes {
+        job::check_render(&scene, displays, a.spp, &source).map_err(|e| e.to_string())?;
+    }
     let opts = render_options(a, first);
     let prepared = prepare(&scene, &mut registry, base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
     for w in prepared.stage().setup_warnings() {
         eprintln!("{w}");
     }
+    // From here a signal finishes the tiles in flight and writes what is rendered.
+    let cancellable = signals::Cancellable::enter();
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
@@ -530,6 +567,9 @@ fn render_image(
         eprintln!("{w}");
     }
     let mut attributes = vec![("obscura:projection", scene.projection.clone())];
+    if let Some(note) = out.stats.partial_note() {
+        attributes.push(("obscura:partial", note));
+    }
     attributes.extend(
         obscura_render::frame::header_attributes(&scene, &prepared, None).map_err(|e| e.to_string())?,
     );
@@ -556,13 +596,14 @@ fn render_image(
             )?);
         }
     }
+    drop(cancellable);
     let s = &out.stats;
     if let Some(w) = s.contract.warning(&scene.projection) {
         eprintln!("{w}");
     }
     if !a.quiet {
         let frame = s.render_seconds.max(1e-9);
-        println!(
+        outln!(
             "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, {} lost to failed project calls, \
              {:.1} Mrays/s traced (camera, bounce and shadow rays); \
              camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
@@ -589,14 +630,17 @@ fn render_image(
             }
         );
         for p in &written {
-            println!("wrote {}", p.display());
+            outln!("wrote {}", p.display());
         }
     }
     if s.cancelled {
         return Err(format!(
-            "interrupted: wrote the {} of {} tiles that were rendered",
+            "interrupted: wrote the {} of {} tiles that were rendered (marked in the EXR header as obscura:partial)",
             s.tiles.0, s.tiles.1
         ));
+    }
+    if let Some(signal) = signals::received() {
+        eprintln!("note: signal {signal} arrived after every tile was rendered; the outputs are complete");
     }
     Ok(())
 }
@@ -617,12 +661,34 @@ fn plugins(name: Option<&str>, names_only: bool, search: &PluginSearch) -> Resul
         }
     };
     if names_only {
-        registry.names().iter().for_each(|n| println!("{n}"));
+        registry.names().iter().for_each(|n| outln!("{n}"));
         return Ok(());
     }
     let text = listing::list(&registry, name.as_deref()).map_err(|e| e.to_string())?;
-    print!("{text}");
+    out!("{text}");
     Ok(())
+}
+
+/// Warns about `--plugin-path` directories and `OBSCURA_PLUGIN_PATH` entries that are not directories.
+fn check_plugin_path(cli: &Cli) {
+    let given = cli.plugin_path.iter().map(|d| ("--plugin-path", d.clone()));
+    let env = std::env::var_os("OBSCURA_PLUGIN_PATH")
+        .map(|list| std::env::split_paths(&list).collect::<Vec<_>>())
+        .unwrap_or_default();
+    let env = env
+        .into_iter()
+        .filter(|d| !d.as_os_str().is_empty())
+        .map(|d| ("OBSCURA_PLUGIN_PATH entry", d));
+    for (label, dir) in given.chain(env) {
+        if !dir.is_dir() {
+            let what = if dir.exists() {
+                "not a directory"
+            } else {
+                "no such directory"
+            };
+            eprintln!("warning: {label} {}: {what}", dir.display());
+        }
+    }
 }
 
 fn main() -> ExitCode {
@@ -633,7 +699,9 @@ fn main() -> ExitCode {
         // A host started this process to run a plugin for it (`--isolate-plugins`).
         return ExitCode::from(u8::try_from(isolate::worker_main()).unwrap_or(2));
     }
+    signals::install();
     let cli = Cli::parse();
+    check_plugin_path(&cli);
     let isolation = match isolate::Isolation::from_env(cli.isolate_plugins, cli.plugin_timeout) {
         Ok(i) => i,
         Err(e) => {
@@ -661,10 +729,11 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e}");
-            if job::CANCEL.load(std::sync::atomic::Ordering::SeqCst) {
-                ExitCode::from(130)
-            } else {
-                ExitCode::FAILURE
+            match signals::received() {
+                Some(signal) if job::CANCEL.load(std::sync::atomic::Ordering::SeqCst) => {
+                    ExitCode::from(signals::exit_status(signal))
+                }
+                _ => ExitCode::FAILURE,
             }
         }
     }

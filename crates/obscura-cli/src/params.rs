@@ -22,6 +22,14 @@ pub enum ParamArgError {
         /// The argument.
         arg: String,
     },
+    /// A RIB-form argument whose quotes or brackets do not close, or that has text after its array.
+    #[error("--param '{arg}': {what}")]
+    Unbalanced {
+        /// The argument.
+        arg: String,
+        /// What does not close.
+        what: &'static str,
+    },
     /// An untyped name the projection does not declare.
     #[error("--param '{arg}': {plugin} has no parameter \"{name}\"{hint}; give its type (e.g. 'float {name}=...') or see `obscura plugins {plugin}`",
         hint = suggestion.as_ref().map(|s| format!(" (did you mean \"{s}\"?)")).unwrap_or_default())]
@@ -58,7 +66,13 @@ pub fn push_param_arg(
     let form = || ParamArgError::Form { arg: arg.to_string() };
     let origin = Some(format!("--param '{arg}'"));
     let (decl, values): (String, Vec<String>) = if arg.trim_start().starts_with('"') {
-        parse_rib(arg).ok_or_else(form)?
+        parse_rib(arg).map_err(|what| match what {
+            Some(what) => ParamArgError::Unbalanced {
+                arg: arg.to_string(),
+                what,
+            },
+            None => form(),
+        })?
     } else {
         let (lhs, rhs) = arg.split_once('=').ok_or_else(form)?;
         let lhs = lhs.trim();
@@ -133,24 +147,47 @@ pub fn merge_param_args(
 }
 
 /// `"type name" [v v v]` or `"type name" v` → (declaration, values). Strings may be quoted.
-fn parse_rib(arg: &str) -> Option<(String, Vec<String>)> {
+///
+/// # Errors
+/// `Some(what)` for a quote or bracket that does not close (or closes twice, or is followed by more
+/// values); `None` for no declaration at all.
+fn parse_rib(arg: &str) -> Result<(String, Vec<String>), Option<&'static str>> {
     let mut tokens = Vec::new();
     let mut chars = arg.chars().peekable();
+    // 0: before the array, 1: inside it, 2: after it.
+    let mut array = 0;
     while let Some(&c) = chars.peek() {
         match c {
             '"' => {
                 chars.next();
                 let mut s = String::new();
                 loop {
-                    match chars.next()? {
-                        '"' => break,
-                        ch => s.push(ch),
+                    match chars.next() {
+                        Some('"') => break,
+                        Some(ch) => s.push(ch),
+                        None => return Err(Some("unterminated string: a '\"' does not close")),
                     }
+                }
+                if array == 2 {
+                    return Err(Some("unexpected value after the closing ']'"));
                 }
                 tokens.push(s);
             }
-            '[' | ']' => {
+            '[' => {
                 chars.next();
+                if array != 0 || tokens.is_empty() {
+                    return Err(Some(
+                        "unexpected '[': expected one array of values after the declaration",
+                    ));
+                }
+                array = 1;
+            }
+            ']' => {
+                chars.next();
+                if array != 1 {
+                    return Err(Some("unexpected ']' without an opening '['"));
+                }
+                array = 2;
             }
             c if c.is_whitespace() || c == ',' => {
                 chars.next();
@@ -164,13 +201,19 @@ fn parse_rib(arg: &str) -> Option<(String, Vec<String>)> {
                     s.push(ch);
                     chars.next();
                 }
+                if array == 2 {
+                    return Err(Some("unexpected value after the closing ']'"));
+                }
                 tokens.push(s);
             }
         }
     }
+    if array == 1 {
+        return Err(Some("unterminated array: a '[' does not close (expected ']')"));
+    }
     let mut it = tokens.into_iter();
-    let decl = it.next()?;
-    Some((decl, it.collect()))
+    let decl = it.next().ok_or(None)?;
+    Ok((decl, it.collect()))
 }
 
 #[cfg(test)]
@@ -232,5 +275,34 @@ mod tests {
         let e = one("flaot fov=1").unwrap_err().to_string();
         assert!(e.contains("unknown parameter type \"flaot\""), "{e}");
         assert!(one("\"float fov [60]").is_err());
+    }
+
+    /// Issue 16: `--param '"float fov" [60'` was accepted.
+    #[test]
+    fn unbalanced_rib_arguments_say_what_does_not_close() {
+        for (arg, what) in [
+            (
+                "\"float fov\" [60",
+                "unterminated array: a '[' does not close (expected ']')",
+            ),
+            ("\"float fov\" 60]", "unexpected ']' without an opening '['"),
+            ("\"float fov\" [60]]", "unexpected ']' without an opening '['"),
+            (
+                "\"float fov\" [[60]]",
+                "unexpected '[': expected one array of values after the declaration",
+            ),
+            ("\"float fov\" [60] 70", "unexpected value after the closing ']'"),
+            (
+                "\"string eye\" [\"left]",
+                "unterminated string: a '\"' does not close",
+            ),
+            ("\"float fov", "unterminated string: a '\"' does not close"),
+        ] {
+            assert_eq!(
+                one(arg).unwrap_err().to_string(),
+                format!("--param '{arg}': {what}")
+            );
+        }
+        assert!(one("\"float fov\" [ 60 ]").is_ok());
     }
 }

@@ -5,9 +5,11 @@ use std::path::{Path, PathBuf};
 
 use crate::args::{load_calibration, parse_format};
 use crate::params::{merge_param_args, param_list};
+use crate::stdout::outln;
 use clap::Args;
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_render::job::CALIBRATED;
+use obscura_render::limits::{self, OutputKind};
 use obscura_render::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
 use obscura_sdk::{Format, ParamList, Registry};
 
@@ -120,6 +122,7 @@ fn side(
 /// # Errors
 /// A message naming the option at fault, the projection or the file.
 pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Result<(), String> {
+    limits::check_output(&a.output, OutputKind::Exr).map_err(|e| e.to_string())?;
     // Either side may be a plugin on the plugin path, a path to one, or a calibration file; A is
     // resolved (and any error about it reported) before B.
     let options = [
@@ -148,6 +151,24 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
         Some((w, h)) => Format::new(w, h),
         None => to_format,
     };
+    let to_source = if a.format.is_some() {
+        "--format"
+    } else {
+        "the map's image size (--to-calibration)"
+    };
+    limits::check_image_size(tw, th, to_source).map_err(|e| e.to_string())?;
+    let from_source = if a.from_format.is_some() {
+        "--from-format"
+    } else {
+        "the source image size"
+    };
+    limits::check_image_size(from_format.width, from_format.height, from_source)
+        .map_err(|e| e.to_string())?;
+    limits::check_memory(
+        limits::stmap_bytes(u64::from(tw) * u64::from(th)),
+        &format!("a {tw}x{th} ST-map"),
+    )
+    .map_err(|e| e.to_string())?;
     let (from, to) = stages(
         registry,
         (&from_side.name, &from_side.params, from_format),
@@ -190,7 +211,7 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
         ),
     ];
     write_stmap_exr(&map, &attributes, &a.output).map_err(|e| e.to_string())?;
-    println!(
+    outln!(
         "wrote {}: ST-map {} -> {} ({}x{} from {}x{}): {} of {} pixels mapped, {} culled by {}, \
          {} not seen by {}, {} outside its frame, {} culled by it",
         a.output.display(),

@@ -216,7 +216,7 @@ fn bad_input_gets_a_clear_error_and_exit_code() {
         ),
         (
             vec!["rays", "-o", "/nonexistent-dir/x.exr"],
-            "cannot write /nonexistent-dir/x.exr",
+            "output /nonexistent-dir/x.exr: the directory /nonexistent-dir does not exist",
         ),
         (vec!["plugins", "Nope"], "known projections: CalibratedCamera, "),
     ] {

@@ -203,7 +203,10 @@ fn bad_requests_are_clear_errors_and_leave_no_file() {
         "/nonexistent-dir/map.exr",
     ]);
     assert!(!run.status.success());
-    assert!(String::from_utf8_lossy(&run.stderr).contains("cannot write /nonexistent-dir/map.exr"));
+    assert!(
+        String::from_utf8_lossy(&run.stderr)
+            .contains("output /nonexistent-dir/map.exr: the directory /nonexistent-dir does not exist")
+    );
 }
 
 #[test]

@@ -89,9 +89,9 @@ impl CropWindow {
 /// A camera description is inconsistent.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum CameraError {
-    /// `Format` is not positive.
+    /// `Format` is not positive, or its pixel aspect ratio is outside [`PIXEL_ASPECT_RANGE`].
     #[error(
-        "Format: expected a positive width, height and pixel aspect ratio, got {width}x{height} with pixel aspect {pixel_aspect}"
+        "Format: expected a positive width and height and a pixel aspect ratio in [1e-6, 1e6], got {width}x{height} with pixel aspect {pixel_aspect:?}"
     )]
     Format {
         /// Width given.
@@ -101,9 +101,34 @@ pub enum CameraError {
         /// Pixel aspect given.
         pixel_aspect: f32,
     },
-    /// `ScreenWindow` has no area or is not finite.
-    #[error("ScreenWindow: expected finite left < right and bottom < top, got {0} {1} {2} {3}")]
+    /// `ScreenWindow` has no area, is not finite or reaches beyond [`SCREEN_WINDOW_LIMIT`].
+    #[error(
+        "ScreenWindow: expected finite left < right and bottom < top within [-1e6, 1e6], got {0:?} {1:?} {2:?} {3:?}"
+    )]
     ScreenWindow(f32, f32, f32, f32),
+    /// No `ScreenWindow` was given and the default one of the format's frame aspect is unusable.
+    #[error(
+        "Format {width}x{height} with pixel aspect {pixel_aspect:?}: the frame aspect {aspect:e} puts the default \
+         ScreenWindow at {left:?} {right:?} {bottom:?} {top:?}, beyond [-1e6, 1e6]: expected a frame aspect in [1e-6, 1e6]"
+    )]
+    FrameAspect {
+        /// Width given.
+        width: u32,
+        /// Height given.
+        height: u32,
+        /// Pixel aspect given.
+        pixel_aspect: f32,
+        /// `width · pixel_aspect / height`.
+        aspect: f64,
+        /// The default window's left edge.
+        left: f32,
+        /// Its right edge.
+        right: f32,
+        /// Its bottom edge.
+        bottom: f32,
+        /// Its top edge.
+        top: f32,
+    },
     /// `CropWindow` is outside [0, 1] or selects no pixel.
     #[error(
         "CropWindow: expected 0 <= xmin < xmax <= 1 and 0 <= ymin < ymax <= 1 selecting at least one pixel, got {0} {1} {2} {3}"
@@ -122,6 +147,13 @@ pub enum CameraError {
     #[error(transparent)]
     ShutterOpening(#[from] ShutterError),
 }
+
+/// The pixel aspect ratios a `Format` may have: OpenEXR's own range (its files refuse others).
+pub const PIXEL_ASPECT_RANGE: (f32, f32) = (1e-6, 1e6);
+
+/// The largest magnitude of a `ScreenWindow` edge. Beyond it screen coordinates squared overflow
+/// `f32` in the projections' ray math (every ray would be NaN and culled).
+pub const SCREEN_WINDOW_LIMIT: f32 = 1e6;
 
 /// Everything about the camera that is not the projection: what RIB's `Format`, `ScreenWindow`,
 /// `CropWindow`, `Shutter`, `Clipping`, the camera transform and `Camera` options say.
@@ -168,7 +200,8 @@ impl CameraDesc {
     /// The first inconsistency found.
     pub fn validate(&self) -> Result<(), CameraError> {
         let f = self.format;
-        if f.width == 0 || f.height == 0 || !(f.pixel_aspect.is_finite() && f.pixel_aspect > 0.0) {
+        let (pa_min, pa_max) = PIXEL_ASPECT_RANGE;
+        if f.width == 0 || f.height == 0 || !(pa_min..=pa_max).contains(&f.pixel_aspect) {
             return Err(CameraError::Format {
                 width: f.width,
                 height: f.height,
@@ -176,8 +209,22 @@ impl CameraDesc {
             });
         }
         let w = self.screen_window();
-        let finite = [w.left, w.right, w.bottom, w.top].iter().all(|v| v.is_finite());
-        if !finite || w.left >= w.right || w.bottom >= w.top {
+        let bounded = [w.left, w.right, w.bottom, w.top]
+            .iter()
+            .all(|v| v.abs() <= SCREEN_WINDOW_LIMIT);
+        if !bounded || w.left >= w.right || w.bottom >= w.top {
+            if self.screen_window.is_none() {
+                return Err(CameraError::FrameAspect {
+                    width: f.width,
+                    height: f.height,
+                    pixel_aspect: f.pixel_aspect,
+                    aspect: f64::from(f.width) * f64::from(f.pixel_aspect) / f64::from(f.height),
+                    left: w.left,
+                    right: w.right,
+                    bottom: w.bottom,
+                    top: w.top,
+                });
+            }
             return Err(CameraError::ScreenWindow(w.left, w.right, w.bottom, w.top));
         }
         let c = self.crop_window;
@@ -327,5 +374,49 @@ mod tests {
         });
         assert!(cam.validate().unwrap_err().to_string().starts_with("Format:"));
         assert!(CameraDesc::new(Format::new(64, 64)).validate().is_ok());
+    }
+
+    /// Issue 16: `Format 64 48 1e-45` blamed a ScreenWindow the file did not have, `Format 64 48
+    /// 1e-30` failed only when the EXR was written, `ScreenWindow -2 1e32 -2 2` made every ray NaN.
+    #[test]
+    fn degenerate_formats_and_screen_windows_are_refused_naming_the_request_at_fault() {
+        let with_aspect = |pixel_aspect| {
+            CameraDesc::new(Format {
+                width: 64,
+                height: 48,
+                pixel_aspect,
+            })
+            .validate()
+            .map_err(|e| e.to_string())
+        };
+        for pa in [1e-45, 1e-30, 1e-7, 2e6, f32::NAN, f32::INFINITY, -1.0] {
+            let e = with_aspect(pa).unwrap_err();
+            assert!(
+                e.starts_with(
+                    "Format: expected a positive width and height and a pixel aspect ratio in [1e-6, 1e6]"
+                ),
+                "{e}"
+            );
+        }
+        assert_eq!(with_aspect(1e-6), Ok(()));
+        assert_eq!(with_aspect(1e5), Ok(()));
+        // An extreme frame aspect from an in-range pixel aspect: the Format is blamed, not a window.
+        let cam = CameraDesc::new(Format {
+            width: 1,
+            height: 65536,
+            pixel_aspect: 1e-6,
+        });
+        let e = cam.validate().unwrap_err().to_string();
+        assert!(
+            e.starts_with("Format 1x65536 with pixel aspect 1e-6: the frame aspect"),
+            "{e}"
+        );
+        assert!(e.contains("expected a frame aspect in [1e-6, 1e6]"), "{e}");
+        let mut cam = CameraDesc::new(Format::new(64, 48));
+        cam.screen_window = Some(ScreenWindow::new(-2.0, 1e32, -2.0, 2.0));
+        let e = cam.validate().unwrap_err().to_string();
+        assert!(e.starts_with("ScreenWindow: expected finite left < right and bottom < top within [-1e6, 1e6], got -2.0 1e32 -2.0 2.0"), "{e}");
+        cam.screen_window = Some(ScreenWindow::new(-1e6, 1e6, -2.0, 2.0));
+        assert_eq!(cam.validate(), Ok(()));
     }
 }

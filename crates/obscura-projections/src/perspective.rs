@@ -36,13 +36,40 @@ use crate::simd;
 /// The name scenes use.
 pub const NAME: &str = "PxrPerspective";
 
+/// The narrowest field of view of the perspective projections, in degrees (10⁻³°: 3.6 arcseconds,
+/// beyond any lens). Narrower, the screen plane `1/tan(fov/2)` is so far that its square overflows
+/// `f32` and every ray would be NaN.
+pub const MIN_FOV: f64 = 1e-3;
+
+/// `fov`'s range, `[MIN_FOV, 180)`, shared by PxrPerspective and PxrCamera.
+pub const FOV_RANGE: ValueRange = ValueRange {
+    min: MIN_FOV,
+    max: 180.0,
+    min_inclusive: true,
+    max_inclusive: false,
+};
+
+/// Checks `fovEnd`: 0 (no zoom) or in [`FOV_RANGE`].
+///
+/// # Errors
+/// [`PluginError::Invalid`] naming `plugin`.
+pub fn check_fov_end(plugin: &str, fov_end: f32) -> Result<(), PluginError> {
+    if fov_end == 0.0 || f64::from(fov_end) >= MIN_FOV {
+        return Ok(());
+    }
+    Err(PluginError::Invalid {
+        plugin: plugin.to_string(),
+        message: format!(
+            "parameter \"fovEnd\" = {fov_end:?}: expected 0 (no zoom) or a field of view of at least {MIN_FOV} degrees"
+        ),
+    })
+}
+
 static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
     let mut table = vec![
-        ParamDecl::float("fov", 90.0)
-            .range(ValueRange::open(0.0, 180.0))
-            .doc(
-                "field of view in degrees across the screen window's [-1, 1] square (the smaller image side)",
-            ),
+        ParamDecl::float("fov", 90.0).range(FOV_RANGE).doc(
+            "field of view in degrees across the screen window's [-1, 1] square (the smaller image side)",
+        ),
         ParamDecl::float("fovEnd", 0.0)
             .range(ValueRange {
                 min: 0.0,
@@ -81,6 +108,7 @@ impl ProjectionFactory for PerspectiveFactory {
         let p = Params::resolve(NAME, &TABLE, params)?;
         env.set_deep_metric(DeepMetric::CameraZ);
         let (fov, fov_end) = (p.float("fov")?, p.float("fovEnd")?);
+        check_fov_end(NAME, fov_end)?;
         Ok(Box::new(Perspective::new(
             env,
             fov,
@@ -265,6 +293,33 @@ mod tests {
         testing::try_create(&PerspectiveFactory, &testing::param_list(params), format)
             .0
             .unwrap()
+    }
+
+    /// Issue 16: `fov=1e-38` was inside the stated range (0, 180) and made every ray NaN.
+    #[test]
+    fn fields_of_view_too_narrow_for_f32_are_outside_the_range() {
+        let format = Format::new(8, 6);
+        assert_refused(
+            &PerspectiveFactory,
+            NAME,
+            format,
+            &[
+                ("float fov", "1e-38", "out of range"),
+                ("float fov", "0.0009", "out of range"),
+                (
+                    "float fovEnd",
+                    "1e-38",
+                    "expected 0 (no zoom) or a field of view of at least 0.001 degrees",
+                ),
+            ],
+        );
+        let narrowest = make(&[("float fov", &["0.001"]), ("float fovEnd", &["0.001"])], format);
+        for r in pixel_centre_rays(narrowest.as_ref(), format) {
+            assert!(
+                r.direction.is_finite() && r.ray_spread.is_finite() && r.ray_spread > 0.0,
+                "{r:?}"
+            );
+        }
     }
 
     proptest! {
@@ -456,7 +511,7 @@ mod tests {
     fn bad_parameters_name_the_plugin_and_parameter() {
         let cases = [
             ("float fov", "0", "\"fov\" = 0 is out of range"),
-            ("float fov", "180", "expected a value in (0, 180)"),
+            ("float fov", "180", "expected a value in [0.001, 180)"),
             ("float focalDistance", "-1", "\"focalDistance\""),
             ("float fovv", "40", "did you mean \"fov\""),
         ];

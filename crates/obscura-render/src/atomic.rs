@@ -15,6 +15,10 @@
 //! 4. on every failure — creating, the callback's error, flushing, syncing, renaming, and a panic in
 //!    the callback — the temporary file is removed (a guard deletes it on drop unless the rename
 //!    committed it), and the target is left as it was.
+//!
+//! A process killed outright (SIGKILL, power loss) cannot remove its temporary file. The next write
+//! of the same target removes those of dead processes ([`remove_stale_temporaries`]): the name holds
+//! the writer's process id, and a file whose process no longer runs is garbage.
 
 use std::collections::hash_map::RandomState;
 use std::fs::{File, OpenOptions};
@@ -93,6 +97,50 @@ pub fn write_atomically(
     Ok(())
 }
 
+/// Checks before any work that `path` could be written: creates its temporary file exactly as
+/// [`write_atomically`] will, and removes it.
+///
+/// # Errors
+/// The I/O error of creating the temporary file (a missing directory, no permission, a read-only
+/// filesystem).
+pub fn check_writable(path: &Path) -> io::Result<()> {
+    create_temporary(path).map(drop)
+}
+
+/// Removes the temporary files of `path` left by processes that no longer run (killed while writing
+/// it) and returns how many. Only files named as [`write_atomically`] names them are considered, and
+/// only where the process table can be asked (`/proc` on Linux); elsewhere nothing is removed.
+pub fn remove_stale_temporaries(path: &Path) -> usize {
+    let prefix = temporary_prefix(path);
+    let Ok(entries) = std::fs::read_dir(directory_of(path)) else {
+        return 0;
+    };
+    let mut removed = 0;
+    for entry in entries.filter_map(Result::ok) {
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = name
+            .strip_prefix(&prefix)
+            .and_then(|rest| rest.split('-').next())
+            .and_then(|pid| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if process_is_gone(pid) && std::fs::remove_file(entry.path()).is_ok() {
+            removed += 1;
+        }
+    }
+    removed
+}
+
+/// True when process `pid` is known not to run (Linux: no `/proc/PID`). Unknown counts as running.
+fn process_is_gone(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return false;
+    }
+    let proc_root = Path::new("/proc/self");
+    proc_root.exists() && !Path::new(&format!("/proc/{pid}")).exists()
+}
+
 /// The temporary file of one write: removed when dropped, unless the rename committed it.
 struct Temporary {
     path: PathBuf,
@@ -129,6 +177,7 @@ fn directory_of(path: &Path) -> PathBuf {
 
 /// Creates a new, empty temporary file beside `path` that no other writer has.
 fn create_temporary(path: &Path) -> io::Result<(File, Temporary)> {
+    remove_stale_temporaries(path);
     let prefix = temporary_prefix(path);
     let directory = directory_of(path);
     // A name is only taken again if another process with our id left it behind; then try anew.
@@ -334,5 +383,25 @@ mod tests {
         drop((ga, gb));
         assert!(temporaries(&path).is_empty());
         assert_eq!(directory_of(Path::new("bare.exr")), PathBuf::from("."));
+    }
+
+    #[test]
+    fn temporaries_of_dead_processes_are_removed_by_the_next_write() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.exr");
+        // A process id above Linux's pid_max (4194304) never runs; ours does.
+        let dead = dir.path().join(".t.exr.tmp-4194305-0-00000000deadbeef");
+        let ours = dir
+            .path()
+            .join(format!(".t.exr.tmp-{}-999999-0", std::process::id()));
+        let other_target = dir.path().join(".u.exr.tmp-4194305-0-0");
+        for p in [&dead, &ours, &other_target] {
+            std::fs::write(p, [0u8; 1000]).unwrap();
+        }
+        check_writable(&path).unwrap();
+        assert!(!dead.exists(), "a dead writer's temporary is removed");
+        assert!(ours.exists() && other_target.exists());
+        assert!(!path.exists());
+        assert_eq!(remove_stale_temporaries(&path), 0);
     }
 }

@@ -189,6 +189,9 @@ pub struct Film {
 }
 
 impl Film {
+    /// The bytes the film stores per pixel of its crop (for the memory estimate of a job).
+    pub const BYTES_PER_PIXEL: usize = std::mem::size_of::<Accum>();
+
     /// An empty film of format `width`×`height` that stores the pixels of `crop`.
     ///
     /// A crop reaching past the format is clipped to it; an inverted one is empty.

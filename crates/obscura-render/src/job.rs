@@ -15,6 +15,7 @@ use obscura_scene::{Aov, Display, DisplayDriver, LoadError, Scene};
 use obscura_sdk::{DeclarationError, Format, ParamList};
 
 use crate::deep::{DeepCompression, write_deep_exr};
+use crate::limits::{self, LimitError, OutputKind};
 use crate::output::{OutputError, write_exr, write_png, write_tiff};
 use crate::render::RenderOutput;
 
@@ -211,10 +212,10 @@ pub fn displays(scene: &Scene, output: Option<&Path>) -> Vec<Display> {
     let mut list = match output {
         Some(path) => vec![Display {
             path: path.to_path_buf(),
-            driver: if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) {
-                DisplayDriver::Png
-            } else {
-                DisplayDriver::OpenExr
+            driver: match OutputKind::of_path(path) {
+                Some(OutputKind::Png) => DisplayDriver::Png,
+                Some(OutputKind::Tiff) => DisplayDriver::Tiff,
+                _ => DisplayDriver::OpenExr,
             },
             aovs: vec![Aov::Ci, Aov::Alpha, Aov::Z, Aov::N, Aov::P, Aov::CameraDirection],
             half: false,
@@ -275,6 +276,78 @@ pub fn write_displays(
         written.push(d.path.clone());
     }
     Ok(written)
+}
+
+/// Checks a render job before any work ([`crate::limits`]): the image size (`size_source` names
+/// what set it: `--format`, the scene file's `Format`, a calibration file), the samples per pixel
+/// (`spp`, else the scene's), every object's transform being finite, the memory the film, the outputs and any deep samples need, and every
+/// display's file (extension, directory).
+///
+/// # Errors
+/// The first [`LimitError`] found.
+pub fn check_render(
+    scene: &Scene,
+    displays: &[Display],
+    spp: Option<u32>,
+    size_source: &str,
+) -> Result<(), LimitError> {
+    let f = scene.camera.format;
+    limits::check_image_size(f.width, f.height, size_source)?;
+    for o in &scene.objects {
+        if let Some((time, _)) = o.transform.samples.iter().find(|(_, m)| !m.is_finite()) {
+            return Err(LimitError::Transform {
+                object: o.source.clone(),
+                time: *time,
+            });
+        }
+    }
+    let samples = match spp {
+        Some(n) => {
+            limits::check_samples(n, "--spp")?;
+            n
+        }
+        None => {
+            limits::check_samples(scene.samples_per_pixel, "the scene's Hider \"int maxsamples\"")?;
+            scene.samples_per_pixel
+        }
+    };
+    for d in displays {
+        match d.driver {
+            DisplayDriver::OpenExr | DisplayDriver::DeepExr => limits::check_output(&d.path, OutputKind::Exr)?,
+            DisplayDriver::Png => limits::check_output(&d.path, OutputKind::Png)?,
+            // RenderMan's `file` driver writes TIFF under whatever name the scene gives.
+            DisplayDriver::Tiff => limits::check_output_location(&d.path)?,
+        }
+    }
+    let channels = displays
+        .iter()
+        .map(|d| {
+            d.aovs
+                .iter()
+                .map(|&a| crate::output::channel_names(a).len() as u64)
+                .sum::<u64>()
+        })
+        .max()
+        .unwrap_or(0);
+    let pixels = scene.camera.pixels().len() as u64;
+    let need = limits::render_bytes(pixels, channels, wants_deep(displays).then_some(samples));
+    let crop = scene.camera.pixels();
+    let what = format!(
+        "a {}x{} render{} with {channels} channels{}",
+        f.width,
+        f.height,
+        if crop.len() as u64 == u64::from(f.width) * u64::from(f.height) {
+            String::new()
+        } else {
+            format!(" (crop {}x{})", crop.width(), crop.height())
+        },
+        if wants_deep(displays) {
+            format!(" and {samples} deep samples per pixel")
+        } else {
+            String::new()
+        }
+    );
+    limits::check_memory(need, &what)
 }
 
 /// A flag set by the first Ctrl-C: the render stops after the tiles in flight and writes what it has.

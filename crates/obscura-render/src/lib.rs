@@ -16,6 +16,7 @@
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
 //! | [`truth`], [`flow`], [`metadata`], [`frame`] | ground truth: both depths, camera-space P and N, IDs; optical flow through `unproject`; per-frame camera JSON and ID sidecar; complete frames |
+//! | [`limits`] | image size, memory, threads, samples and output files, checked before any work |
 //! | [`sequence`] | frame selections (`--frames 1-24`) and each frame's output path |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
@@ -30,6 +31,7 @@ pub mod frame;
 pub mod integrator;
 pub mod job;
 pub mod light;
+pub mod limits;
 pub mod material;
 pub mod metadata;
 pub mod motion;

@@ -75,12 +75,73 @@ pub fn add_text_attributes(layer: &mut LayerAttributes, attributes: &[(&str, Str
 /// # Errors
 /// An [`AtomicWriteError`] naming `path`; the `exr` crate's own errors become its message.
 pub fn write_exr_image(image: FloatExrImage, path: &Path) -> Result<(), AtomicWriteError> {
-    write_atomically(path, |out| {
-        image.write().to_buffered(out).map_err(|e| match e {
+    let mut bytes = Vec::new();
+    let encoded = image
+        .write()
+        .to_buffered(std::io::Cursor::new(&mut bytes))
+        .map_err(|e| match e {
             exr::error::Error::Io(e) => e,
             other => std::io::Error::other(other),
-        })
+        });
+    write_atomically(path, |out| {
+        encoded?;
+        sort_header_attributes(&mut bytes);
+        std::io::Write::write_all(out, &bytes)
     })
+}
+
+/// Puts the header attributes of a single-part OpenEXR file in `bytes` in name order, in place.
+///
+/// The `exr` crate writes a layer's custom attributes in the order of a `HashMap`, which differs
+/// from run to run; sorted, the same image is the same bytes every time. The header keeps its length,
+/// so the offset table after it stays right. Multi-part files and anything that does not parse as
+/// a header are left alone.
+pub fn sort_header_attributes(bytes: &mut [u8]) {
+    const MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+    const MULTIPART: u8 = 0x10;
+    if bytes.len() < 8 || bytes[..4] != MAGIC || bytes[5] & MULTIPART != 0 {
+        return;
+    }
+    let mut spans: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+    let mut at = 8;
+    loop {
+        let Some(name_end) = bytes[at..].iter().position(|&b| b == 0).map(|i| at + i) else {
+            return;
+        };
+        if name_end == at {
+            break;
+        }
+        let Some(type_end) = bytes[name_end + 1..]
+            .iter()
+            .position(|&b| b == 0)
+            .map(|i| name_end + 1 + i)
+        else {
+            return;
+        };
+        let Some(size) = bytes.get(type_end + 1..type_end + 5) else {
+            return;
+        };
+        let size = i32::from_le_bytes([size[0], size[1], size[2], size[3]]);
+        let Ok(size) = usize::try_from(size) else {
+            return;
+        };
+        let end = type_end + 5 + size;
+        if end > bytes.len() {
+            return;
+        }
+        spans.push((bytes[at..name_end].to_vec(), at..end));
+        at = end;
+    }
+    let Some(first) = spans.first().map(|s| s.1.start) else {
+        return;
+    };
+    let mut sorted: Vec<u8> = Vec::with_capacity(at - first);
+    let mut order: Vec<&(Vec<u8>, std::ops::Range<usize>)> = spans.iter().collect();
+    order.sort_by(|a, b| a.0.cmp(&b.0));
+    for (_, range) in order {
+        sorted.extend_from_slice(&bytes[range.clone()]);
+    }
+    bytes[first..at].copy_from_slice(&sorted);
 }
 
 /// Attribute names the writer sets itself (or that OpenEXR reserves); callers may not override them.
@@ -104,7 +165,7 @@ const RESERVED: [&str; 16] = [
 ];
 
 /// The EXR channel names of an AOV, in RenderMan's and Nuke's spelling.
-fn channel_names(aov: Aov) -> &'static [&'static str] {
+pub(crate) fn channel_names(aov: Aov) -> &'static [&'static str] {
     match aov {
         Aov::Ci => &["R", "G", "B"],
         Aov::Alpha => &["A"],

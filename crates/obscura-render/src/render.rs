@@ -132,6 +132,30 @@ pub struct RenderStats {
     pub tiles: (usize, usize),
     /// True when the render was cancelled before finishing.
     pub cancelled: bool,
+    /// The tiles a cancelled render did not render, in tile order (empty when it finished).
+    pub missing_tiles: Vec<PixelRect>,
+}
+
+impl RenderStats {
+    /// The text of a partial image's `obscura:partial` header attribute: which tiles are missing,
+    /// as `x0-x1,y0-y1` pixel ranges (end exclusive); `None` when the render finished.
+    #[must_use]
+    pub fn partial_note(&self) -> Option<String> {
+        if self.missing_tiles.is_empty() {
+            return None;
+        }
+        let list: Vec<String> = self
+            .missing_tiles
+            .iter()
+            .map(|r| format!("{}-{},{}-{}", r.x0, r.x1, r.y0, r.y1))
+            .collect();
+        Some(format!(
+            "interrupted: {} of {} tiles rendered; missing tiles (x0-x1,y0-y1, end exclusive): {}",
+            self.tiles.0,
+            self.tiles.1,
+            list.join(" ")
+        ))
+    }
 }
 
 /// A render ready to go: the projection, geometry and lights prepared.
@@ -272,22 +296,27 @@ pub(crate) fn camera_motion(
     world_to_camera: &[obscura_sdk::MotionSample],
     shutter: (f32, f32),
 ) -> Result<Motion, RenderError> {
-    let camera_to_world: Vec<(f32, Affine3A)> = world_to_camera
-        .iter()
-        .map(|s| {
-            (
-                normalise_time(s.time, shutter),
-                Affine3A::from_mat4(glam_from_sdk(&s.world_to_camera).inverse()),
-            )
-        })
-        .collect();
-    if let Some((t, m)) = camera_to_world
-        .iter()
-        .find(|(_, m)| !m.is_finite() || m.matrix3.determinant() == 0.0)
-    {
-        return Err(RenderError::Camera(format!(
-            "the camera transform at time {t} is singular or not finite ({m:?}): check the transforms before WorldBegin"
-        )));
+    let mut camera_to_world = Vec::new();
+    for s in world_to_camera {
+        let world_to_camera = glam_from_sdk(&s.world_to_camera);
+        let det = world_to_camera.determinant();
+        let inverse = world_to_camera.inverse();
+        if !world_to_camera.is_finite() || det == 0.0 || !det.is_finite() || !inverse.is_finite() {
+            let rows: Vec<String> = (0..4)
+                .map(|r| {
+                    let row = world_to_camera.row(r);
+                    format!("{} {} {} {}", row.x, row.y, row.z, row.w)
+                })
+                .collect();
+            return Err(RenderError::Camera(format!(
+                "the camera transform (world to camera) at shutter time {} cannot be inverted: determinant {det}, \
+                 rows [{}]; a Scale with a zero factor or a degenerate Transform/ConcatTransform before WorldBegin \
+                 collapses the camera",
+                s.time,
+                rows.join(" | ")
+            )));
+        }
+        camera_to_world.push((normalise_time(s.time, shutter), Affine3A::from_mat4(inverse)));
     }
     Ok(Motion::new(&camera_to_world))
 }
@@ -408,15 +437,24 @@ impl Prepared {
         let tiles = tile_grid(cam.pixels(), opts.tile_size);
         let integrator = TileIntegrator::new(self, opts);
         let accumulator = Accumulator::new(cam, self.filter, opts.deep);
-        tiles.par_iter().for_each(|rect| {
+        let skipped = Mutex::new(Vec::new());
+        tiles.par_iter().enumerate().for_each(|(index, rect)| {
             if cancel.load(Ordering::Relaxed) {
+                skipped
+                    .lock()
+                    .expect("no panics while holding the list")
+                    .push(index);
                 return;
             }
             let tile = integrator.render_tile(*rect, &accumulator);
             let done = accumulator.merge(tile);
             progress(done, tiles.len());
         });
-        accumulator.finish(self, start, tiles.len())
+        let mut skipped = skipped.into_inner().expect("no panics while holding the list");
+        skipped.sort_unstable();
+        let mut out = accumulator.finish(self, start, tiles.len());
+        out.stats.missing_tiles = skipped.into_iter().map(|i| tiles[i]).collect();
+        out
     }
 }
 
@@ -547,6 +585,7 @@ impl Accumulator {
                     .expect("no panics while holding the report"),
                 tiles: (finished, total),
                 cancelled: finished < total,
+                missing_tiles: Vec::new(),
             },
         }
     }

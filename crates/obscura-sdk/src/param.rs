@@ -165,6 +165,9 @@ impl fmt::Display for ParamValue {
 fn fmt_float(x: f32) -> String {
     if x.is_infinite() {
         if x > 0.0 { "inf".into() } else { "-inf".into() }
+    } else if x != 0.0 && !(1e-4..1e16).contains(&x.abs()) {
+        // 1e-38, not 0.00000000000000000000000000000000000001.
+        format!("{x:e}")
     } else {
         format!("{x}")
     }

@@ -171,10 +171,18 @@ impl Calibration {
             f64::from(self.width),
             f64::from(self.height),
         )
-        .map_err(|message| CalibrationFileError {
-            file: self.file.clone(),
-            line: Some(entry_line),
-            message,
+        .map_err(|message| {
+            // A complaint about the direct polynomial is about its line (OCamCalib's `pol` line),
+            // not the camera's first parameter.
+            let line = match self.polynomial.first() {
+                Some(first) if message.contains("pol's") => first.line,
+                _ => entry_line,
+            };
+            CalibrationFileError {
+                file: self.file.clone(),
+                line: Some(line),
+                message,
+            }
         })?;
         Ok(list)
     }

@@ -123,7 +123,7 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
     f_stop.doc = "aperture f-number (RenderMan's PxrCamera default 16); depth of field needs focalLength > 0 too; inf or 0 = pinhole".into();
     let mut table = vec![
         ParamDecl::float("fov", 90.0)
-            .range(ValueRange::open(0.0, 180.0))
+            .range(crate::perspective::FOV_RANGE)
             .doc("field of view in degrees across the screen window's [-1, 1] square (the smaller image side)"),
         ParamDecl::float("fovEnd", 0.0)
             .range(ValueRange {
@@ -269,6 +269,7 @@ impl PxrCamera {
             message,
         };
         let (fov, fov_end) = (p.float("fov")?, p.float("fovEnd")?);
+        crate::perspective::check_fov_end(NAME, fov_end)?;
         let dof = DepthOfField::from_params(p)?;
         let dof_mult = p.float("dofMult")?;
         let lens_radius = dof.lens_radius() * dof_mult;

@@ -7,9 +7,44 @@ use super::GltfError;
 
 /// Checks what the `gltf` crate assumes without checking: its validation indexes the accessor a
 /// `POSITION` attribute names, and `Camera::projection` unwraps the object its `type` names.
+/// glTF 2.0's `asset.version` rule: a major version other than 2 is another format (glTF 1.0's JSON
+/// differs throughout), and `minVersion` above 2.0 asks for features this reader does not have.
+fn check_version(path: &Path, asset: &gltf::json::Asset) -> Result<(), GltfError> {
+    let invalid = |what: String| GltfError::Invalid {
+        path: path.to_path_buf(),
+        what,
+    };
+    let major = |v: &str| v.split('.').next().and_then(|m| m.trim().parse::<u32>().ok());
+    match major(&asset.version) {
+        Some(2) => {}
+        Some(_) => {
+            return Err(invalid(format!(
+                "asset.version is \"{}\": expected a glTF 2.x file (glTF 1.0 and others are not read; convert with a glTF 2.0 exporter)",
+                asset.version
+            )));
+        }
+        None => {
+            return Err(invalid(format!(
+                "asset.version is \"{}\": expected \"2.0\"",
+                asset.version
+            )));
+        }
+    }
+    if let Some(min) = &asset.min_version {
+        let minor = min.split('.').nth(1).and_then(|m| m.trim().parse::<u32>().ok());
+        if major(min) != Some(2) || minor != Some(0) {
+            return Err(invalid(format!(
+                "asset.minVersion is \"{min}\": this reader reads glTF 2.0"
+            )));
+        }
+    }
+    Ok(())
+}
+
 pub(super) fn check_before_validation(path: &Path, root: &gltf::json::Root) -> Result<(), GltfError> {
     use gltf::json::camera::Type;
     use gltf::json::validation::Checked;
+    check_version(path, &root.asset)?;
     for (i, camera) in root.cameras.iter().enumerate() {
         let missing = match camera.type_ {
             Checked::Valid(Type::Perspective) => camera.perspective.is_none().then_some("perspective"),

@@ -642,3 +642,41 @@ proptest! {
         prop_assert!((Vec3::new(q.x, q.y, q.z) - g).abs().max_element() < 1e-4);
     }
 }
+
+/// Issue 16: a glTF whose asset version was "1.0" was read as if it were 2.0.
+#[test]
+fn gltf_of_another_version_is_an_error_naming_the_version() {
+    let with = |asset: &str| {
+        Fixture::new([0, 1, 2])
+            .json()
+            .replace(r#""asset": {"version": "2.0"}"#, asset)
+    };
+    for (asset, want) in [
+        (
+            r#""asset": {"version": "1.0"}"#,
+            "asset.version is \"1.0\": expected a glTF 2.x file",
+        ),
+        (
+            r#""asset": {"version": "3.0"}"#,
+            "asset.version is \"3.0\": expected a glTF 2.x file",
+        ),
+        (
+            r#""asset": {"version": "two"}"#,
+            "asset.version is \"two\": expected \"2.0\"",
+        ),
+        (
+            r#""asset": {"version": "2.0", "minVersion": "2.1"}"#,
+            "asset.minVersion is \"2.1\": this reader reads glTF 2.0",
+        ),
+    ] {
+        let json = with(asset);
+        assert!(json.contains(asset));
+        let e = error_of(json.as_bytes(), "v.gltf");
+        assert!(e.contains(want) && e.contains("v.gltf"), "{asset}: {e}");
+    }
+    let json = with(r#""asset": {"version": "2.0", "minVersion": "2.0"}"#);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("ok.gltf");
+    std::fs::write(&path, json).unwrap();
+    assert!(load_gltf(&path, camera_desc(8, 8)).is_ok());
+}

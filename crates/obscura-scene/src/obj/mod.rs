@@ -90,6 +90,7 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
     } = parse(path, text)?;
 
     let mut scene = Scene::new(camera);
+    scene.warnings.extend(unknown_statements(&file, text));
     read_materials(&mut scene, &file, &libraries, &materials, usemtl);
     let mut bounds = None;
     for model in models {
@@ -325,6 +326,81 @@ impl BufRead for LineReader<'_> {
 /// index of 0, or on one far out of range): an index must not be 0, a negative (relative) one must not
 /// reach before the first element declared so far, a positive one must not exceed those the file
 /// declares. Returns the `usemtl` statements `(line, name)`.
+/// Every statement keyword of the OBJ and its free-form-geometry extensions (Wavefront's appendix B1).
+const OBJ_STATEMENTS: [&str; 42] = [
+    "v",
+    "vt",
+    "vn",
+    "vp",
+    "f",
+    "fo",
+    "l",
+    "p",
+    "o",
+    "g",
+    "s",
+    "mg",
+    "usemtl",
+    "mtllib",
+    "usemap",
+    "maplib",
+    "cstype",
+    "deg",
+    "bmat",
+    "step",
+    "curv",
+    "curv2",
+    "surf",
+    "parm",
+    "trim",
+    "hole",
+    "scrv",
+    "sp",
+    "end",
+    "con",
+    "bevel",
+    "c_interp",
+    "d_interp",
+    "lod",
+    "shadow_obj",
+    "trace_obj",
+    "ctech",
+    "stech",
+    "call",
+    "csh",
+    "res",
+    "bsp",
+];
+
+/// One warning per statement keyword OBJ does not have (`zz 1 2`), naming its first line and how
+/// often it occurs; such lines are ignored, as tobj ignores them.
+fn unknown_statements(file: &str, text: &str) -> Vec<String> {
+    let mut seen: Vec<(String, usize, usize)> = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let Some(word) = line.split_whitespace().next() else {
+            continue;
+        };
+        if word.starts_with('#') || OBJ_STATEMENTS.contains(&word) {
+            continue;
+        }
+        match seen.iter_mut().find(|(w, _, _)| w == word) {
+            Some(entry) => entry.2 += 1,
+            None => seen.push((word.to_string(), n + 1, 1)),
+        }
+    }
+    seen.into_iter()
+        .map(|(word, line, count)| {
+            let more = if count > 1 {
+                format!(" ({count} lines)")
+            } else {
+                String::new()
+            };
+            let shown: String = word.chars().take(40).collect();
+            format!("{file}:{line}: unknown OBJ statement \"{shown}\"{more}, ignored")
+        })
+        .collect()
+}
+
 fn check_faces(path: &Path, text: &str) -> Result<Vec<(usize, String)>, ObjError> {
     const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
     let keyword = |line: &str| line.split_whitespace().next().map(str::to_owned);

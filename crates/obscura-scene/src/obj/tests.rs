@@ -363,3 +363,29 @@ proptest::proptest! {
         }
     }
 }
+
+/// Issue 16: an OBJ statement `zz 1 2` was ignored without a word.
+#[test]
+fn obj_unknown_statements_are_warned_about_once_each_with_their_first_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        &dir,
+        "zz.obj",
+        "# a comment\nv 0 0 0\nzz 1 2\nv 1 0 0\nv 0 1 0\nzz 3\nvv 1 1 1\ncstype bspline\nf 1 2 3\n",
+    );
+    let scene = load_obj(&path, camera()).unwrap();
+    let file = path.display().to_string();
+    let unknown: Vec<&String> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("unknown OBJ statement"))
+        .collect();
+    assert_eq!(
+        unknown,
+        [
+            &format!("{file}:3: unknown OBJ statement \"zz\" (2 lines), ignored"),
+            &format!("{file}:7: unknown OBJ statement \"vv\", ignored"),
+        ]
+    );
+    assert_eq!(meshes(&scene).len(), 1);
+}

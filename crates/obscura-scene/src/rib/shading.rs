@@ -124,6 +124,27 @@ impl Reader {
         let color = get_color(&list, "lightColor").unwrap_or(Rgb::WHITE);
         let intensity = get_float(&list, "intensity").unwrap_or(1.0);
         let exposure = get_float(&list, "exposure").unwrap_or(0.0);
+        if ![color.r, color.g, color.b]
+            .iter()
+            .all(|c| c.is_finite() && *c >= 0.0)
+        {
+            return Err(r.err(format!(
+                "{} \"{kind}\": \"color lightColor\" [{} {} {}]: expected finite components >= 0 (lights do not subtract light)",
+                r.name, color.r, color.g, color.b
+            )));
+        }
+        if !(intensity.is_finite() && intensity >= 0.0) {
+            return Err(r.err(format!(
+                "{} \"{kind}\": \"float intensity\" [{intensity}]: expected a finite value >= 0 (lights do not subtract light)",
+                r.name
+            )));
+        }
+        if !(exposure.is_finite() && exposure.abs() <= 64.0) {
+            return Err(r.err(format!(
+                "{} \"{kind}\": \"float exposure\" [{exposure}]: expected stops in [-64, 64]",
+                r.name
+            )));
+        }
         let transform = self.ctm.first();
         let light = match kind.as_str() {
             "PxrDomeLight" => Light::Dome {

@@ -156,3 +156,26 @@ fn identifier_names_the_objects_of_its_attribute_block() {
     assert_eq!(scene.objects[1].identity.instance, "hat");
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
 }
+
+/// Issue 16: a light of intensity −5 or colour −5 rendered without a word.
+#[test]
+fn negative_or_non_finite_lights_are_errors_naming_the_line_and_parameter() {
+    assert_eq!(
+        fail("WorldBegin\nLight \"PxrDomeLight\" \"d\" \"float intensity\" [-5]"),
+        "t.rib:2: Light \"PxrDomeLight\": \"float intensity\" [-5]: expected a finite value >= 0 (lights do not subtract light)"
+    );
+    assert_eq!(
+        fail("WorldBegin\n\nLight \"PxrRectLight\" \"r\" \"color lightColor\" [-5 1 1]"),
+        "t.rib:3: Light \"PxrRectLight\": \"color lightColor\" [-5 1 1]: expected finite components >= 0 (lights do not subtract light)"
+    );
+    let e = fail("WorldBegin\nLight \"PxrSphereLight\" \"s\" \"float exposure\" [1e9]");
+    assert!(
+        e.starts_with("t.rib:2: Light \"PxrSphereLight\": \"float exposure\" [1000000000]: expected stops"),
+        "{e}"
+    );
+    // Zero is a light switched off, not a mistake.
+    let scene = ok(
+        "WorldBegin\nLight \"PxrDistantLight\" \"k\" \"float intensity\" [0] \"color lightColor\" [0 0 0]",
+    );
+    assert_eq!(scene.lights.len(), 1);
+}
