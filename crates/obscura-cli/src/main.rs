@@ -328,6 +328,9 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     for w in prepared.stage().setup_warnings() {
         eprintln!("{w}");
     }
+    for w in prepared.texture_warnings() {
+        eprintln!("warning: {w}");
+    }
     let _ = ctrlc::set_handler(|| {
         if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
             std::process::exit(130);

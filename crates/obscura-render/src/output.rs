@@ -108,6 +108,8 @@ fn channel_names(aov: Aov) -> &'static [&'static str] {
         Aov::N => &["N.X", "N.Y", "N.Z"],
         Aov::P => &["P.X", "P.Y", "P.Z"],
         Aov::CameraDirection => &["cameraDirection.X", "cameraDirection.Y", "cameraDirection.Z"],
+        Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
+        Aov::Uv => &["uv.X", "uv.Y"],
     }
 }
 
@@ -120,6 +122,8 @@ fn component(v: &SampleValues, aov: Aov, k: usize) -> f32 {
         Aov::N => v.n[k],
         Aov::P => v.p[k],
         Aov::CameraDirection => v.camera_direction[k],
+        Aov::Albedo => [v.albedo.r, v.albedo.g, v.albedo.b][k],
+        Aov::Uv => v.uv[k],
     }
 }
 
@@ -134,7 +138,8 @@ fn resolve(film: &Film) -> Vec<SampleValues> {
 /// Writes the film's crop as an OpenEXR with the requested AOVs, atomically.
 ///
 /// Channels: Ci → `R`, `G`, `B`; Alpha → `A`; Z → `Z`; N → `N.X`, `N.Y`, `N.Z`; P → `P.X`, `P.Y`,
-/// `P.Z`; CameraDirection → `cameraDirection.X`, `.Y`, `.Z`. ZIP compression (16 scanlines per
+/// `P.Z`; CameraDirection → `cameraDirection.X`, `.Y`, `.Z`; Albedo → `albedo.R`, `.G`, `.B`; Uv →
+/// `uv.X`, `uv.Y`. ZIP compression (16 scanlines per
 /// block); data window = the crop, display window = the full format; `pixelAspectRatio` =
 /// `pixel_aspect`. An AOV named twice is written once; OpenEXR itself stores channels sorted by name. `half`
 /// applies to every channel (Z and P included: ask for float when depth precision matters). A pixel

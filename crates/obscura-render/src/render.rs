@@ -24,7 +24,7 @@
 //! `trace_path`, `aovs`, splat, deep).
 
 use std::path::Path;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::time::{Duration, Instant};
 
@@ -41,7 +41,8 @@ use crate::deep::{DeepImage, DeepSample};
 use crate::dice::{DiceError, DicingContext, dice};
 use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
-use crate::integrator::{PathOptions, PathResult, ShadingScene, trace_path};
+use crate::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
+use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
 use crate::light::{Lights, ShadeError};
 use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
@@ -88,6 +89,8 @@ pub struct RenderOptions {
     pub deep: bool,
     /// Tile edge in pixels.
     pub tile_size: u32,
+    /// How textures are filtered (by the camera ray's footprint unless a comparison asks otherwise).
+    pub texture_lookup: TextureLookup,
 }
 
 impl Default for RenderOptions {
@@ -98,6 +101,7 @@ impl Default for RenderOptions {
             path: PathOptions::default(),
             deep: false,
             tile_size: 16,
+            texture_lookup: TextureLookup::Footprint,
         }
     }
 }
@@ -138,6 +142,8 @@ pub struct Prepared {
     /// Camera-to-world over the shutter (shutter-normalised time).
     camera_to_world: Motion,
     deep_metric: DeepMetric,
+    /// Textures that could not be used, one message each.
+    texture_warnings: Vec<String>,
     setup_seconds: f64,
 }
 
@@ -233,10 +239,25 @@ pub fn prepare(
         })
         .collect();
     let accel = SceneAccel::build(meshes, instances);
+    let (mut texturing, texture_warnings) = Texturing::new(
+        &scene.textures,
+        scene.material_maps.clone(),
+        scene
+            .objects
+            .iter()
+            .map(|o| match &o.shape {
+                obscura_scene::Shape::Mesh(m) => SurfaceAttributes::of_mesh(m).map(Arc::new),
+                _ => None,
+            })
+            .collect(),
+        base_dir,
+    );
+    texturing.lookup = opts.texture_lookup;
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),
         lights: Lights::new(&scene.lights, base_dir)?,
+        texturing,
     };
     let spp = opts.samples_per_pixel.unwrap_or(scene.samples_per_pixel).max(1);
     if spp > obscura_host::sampler::MAX_SAMPLES {
@@ -250,6 +271,7 @@ pub fn prepare(
         shading,
         samples_per_pixel: spp,
         camera_to_world,
+        texture_warnings: texture_warnings.into_iter().map(|w| w.0).collect(),
         setup_seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -336,6 +358,18 @@ impl Prepared {
     #[must_use]
     pub fn accel(&self) -> &SceneAccel {
         &self.accel
+    }
+
+    /// One warning per texture that could not be read or decoded (its material uses the factor).
+    #[must_use]
+    pub fn texture_warnings(&self) -> &[String] {
+        &self.texture_warnings
+    }
+
+    /// Bytes held by the loaded textures' mip pyramids.
+    #[must_use]
+    pub fn texture_memory_bytes(&self) -> usize {
+        self.shading.texturing.memory_bytes()
     }
 
     /// Renders every tile of the crop. `progress(done, total)` is called after each tile; `cancel` is
@@ -685,10 +719,16 @@ impl<'a> TileIntegrator<'a> {
             ((px as u64) << 32 | py as u64) ^ self.path_seed,
             sample.index as u64,
         );
-        let path = trace_path(
+        // The cone in world units: distances scale by `stretch`, angles do not.
+        let cone = RayCone {
+            width: sample.ray.origin_radius * world.stretch,
+            spread: sample.ray.ray_spread,
+        };
+        let path = trace_path_cone(
             &self.prepared.shading,
             &tile.tracer,
             &world.ray,
+            cone,
             &mut rng,
             &self.opts.path,
         );
@@ -760,6 +800,8 @@ impl<'a> TileIntegrator<'a> {
             n,
             p,
             camera_direction: Vec3::from(world.ray.direction),
+            albedo: Rgb::new(path.albedo.x, path.albedo.y, path.albedo.z),
+            uv: path.uv,
         }
     }
 }

@@ -15,6 +15,7 @@ mod framing;
 pub mod gltf_scene;
 pub mod obj;
 pub mod rib;
+pub mod texture;
 pub mod types;
 
 #[cfg(test)]

@@ -2,9 +2,13 @@
 
 use std::path::PathBuf;
 
-use glam::{Mat4, Vec3};
+use std::collections::BTreeMap;
+
+use glam::{Mat4, Vec2, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::{ParamList, Rgb};
+
+use crate::texture::{SurfaceMaps, TextureDesc};
 
 /// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
 /// least one. Matrices act on column vectors (`p' = M·p`).
@@ -45,6 +49,12 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Triangles, as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinate sets (`TEXCOORD_0`, `TEXCOORD_1`, … or RIB `st`), each one per position,
+    /// as stored in the file (glTF: origin top-left, t down; OBJ and RIB: t up, flipped to glTF's
+    /// convention when read so every texture lookup is the same).
+    pub uvs: Vec<Vec<Vec2>>,
+    /// Linear RGBA vertex colours (`COLOR_0`, OBJ's `v x y z r g b`), one per position.
+    pub colors: Option<Vec<[f32; 4]>>,
 }
 
 /// A Catmull–Clark subdivision control mesh (`SubdivisionMesh "catmull-clark"`).
@@ -290,6 +300,10 @@ pub enum Aov {
     P,
     /// The camera ray's direction, world space (`cameraDirection`).
     CameraDirection,
+    /// The textured base colour at the first hit, linear RGB (`albedo`).
+    Albedo,
+    /// The first texture coordinate set at the first hit, as stored in the file (`uv`).
+    Uv,
 }
 
 /// `Display "file" "driver" "channels"`.
@@ -326,6 +340,11 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Lights.
     pub lights: Vec<Light>,
+    /// Textures, indexed by [`crate::texture::TextureSlot::texture`].
+    pub textures: Vec<TextureDesc>,
+    /// Materials whose parameters come from textures, by index into [`Scene::materials`]; such a
+    /// material's entry there is its untextured fallback.
+    pub material_maps: BTreeMap<u32, SurfaceMaps>,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
     pub warnings: Vec<String>,
 }
@@ -344,6 +363,8 @@ impl Scene {
             objects: Vec::new(),
             materials: vec![Material::default()],
             lights: Vec::new(),
+            textures: Vec::new(),
+            material_maps: BTreeMap::new(),
             warnings: Vec::new(),
         }
     }

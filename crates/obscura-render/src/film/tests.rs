@@ -45,6 +45,7 @@ fn hit(c: f32, z: f32) -> SampleValues {
         n: Vec3::new(0.0, 0.0, -1.0),
         p: Vec3::new(c, z, 1.0),
         camera_direction: Vec3::Z,
+        ..SampleValues::EMPTY
     }
 }
 

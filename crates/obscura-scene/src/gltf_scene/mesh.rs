@@ -114,6 +114,7 @@ impl Loader<'_> {
             positions,
             normals,
             triangles,
+            ..Mesh::default()
         }))
     }
 

@@ -262,6 +262,7 @@ fn model_object(
             positions,
             normals,
             triangles: m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+            ..Mesh::default()
         }),
         transform: MotionTransform::default(),
         material,

@@ -182,6 +182,7 @@ impl Reader {
                     positions,
                     normals,
                     triangles,
+                    ..Mesh::default()
                 }),
             );
         }

@@ -24,7 +24,7 @@ pub(super) const FILTERS: [(&str, FilterKind); 6] = [
 ];
 
 /// The names a `Display` channel list may use.
-const CHANNELS: [(&str, &[Aov]); 10] = [
+const CHANNELS: [(&str, &[Aov]); 12] = [
     ("rgb", &[Aov::Ci]),
     ("rgba", &[Aov::Ci, Aov::Alpha]),
     ("rgbz", &[Aov::Ci, Aov::Z]),
@@ -35,6 +35,8 @@ const CHANNELS: [(&str, &[Aov]); 10] = [
     ("N", &[Aov::N]),
     ("P", &[Aov::P]),
     ("cameraDirection", &[Aov::CameraDirection]),
+    ("albedo", &[Aov::Albedo]),
+    ("uv", &[Aov::Uv]),
 ];
 
 /// Parameters a projection may be given by bare name (`Projection "perspective" "fov" [40]`).
