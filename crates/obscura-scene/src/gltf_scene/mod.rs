@@ -40,6 +40,7 @@ mod container;
 mod lights;
 mod materials;
 mod mesh;
+mod textures;
 
 #[cfg(test)]
 mod tests;
@@ -52,7 +53,9 @@ use obscura_host::CameraDesc;
 pub use crate::framing::frame_bounds;
 use crate::framing::{add_default_dome_if_unlit, frame_scene};
 use crate::types::Scene;
-use container::{check_before_validation, check_glb_header, json_chunk, load_buffers};
+use container::{
+    check_before_validation, check_glb_header, check_required_extensions, json_chunk, load_buffers,
+};
 use lights::PunctualLights;
 
 /// A glTF file could not be loaded. Every message starts with the file's path.
@@ -169,7 +172,8 @@ pub fn load_gltf(path: &Path, camera: CameraDesc) -> Result<Scene, GltfError> {
         source,
     };
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes).map_err(parse)?;
-    let root = document.into_json();
+    let mut root = document.into_json();
+    check_required_extensions(path, &mut root)?;
     check_before_validation(path, &root)?;
     let document = gltf::Document::from_json(root).map_err(parse)?;
     let base = match path.parent() {
@@ -183,6 +187,7 @@ pub fn load_gltf(path: &Path, camera: CameraDesc) -> Result<Scene, GltfError> {
         path,
         file: path.display().to_string(),
         buffers: &buffers,
+        base,
         scene: Scene::new(camera),
         bounds: None,
     };
@@ -216,6 +221,8 @@ struct Loader<'a> {
     file: String,
     /// The document's buffers, by index.
     buffers: &'a [Vec<u8>],
+    /// The folder relative URIs are taken from.
+    base: &'a Path,
     /// The scene so far.
     scene: Scene,
     /// World-space bounds of every vertex read so far.

@@ -423,7 +423,32 @@ fn gltf_non_triangle_primitives_are_skipped_with_a_warning() {
     f.mode = 1;
     let scene = load(&f, 640, 480);
     assert!(scene.objects.is_empty());
-    assert!(scene.warnings.iter().any(|w| w.contains("not TRIANGLES")));
+    assert!(scene.warnings.iter().any(|w| w.contains("points or lines")));
+}
+
+#[test]
+fn gltf_triangle_strips_and_fans_are_read() {
+    for mode in [5, 6] {
+        let mut f = Fixture::new([0, 1, 2]);
+        f.mode = mode;
+        let scene = load(&f, 640, 480);
+        let Shape::Mesh(m) = &scene.objects[0].shape else {
+            panic!("not a mesh")
+        };
+        assert_eq!(m.triangles.len(), 1, "mode {mode}");
+    }
+}
+
+#[test]
+fn gltf_a_required_extension_we_do_not_read_is_named() {
+    let mut f = Fixture::new([0, 1, 2]);
+    f.extensions = r#""extensionsUsed": ["KHR_draco_mesh_compression"], "extensionsRequired": ["KHR_draco_mesh_compression"],"#.into();
+    let dir = tempfile::tempdir().unwrap();
+    let e = load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64)).unwrap_err().to_string();
+    assert!(e.contains("KHR_draco_mesh_compression") && e.contains("Draco"), "{e}");
+    // A required extension we honour is accepted.
+    f.extensions = r#""extensionsUsed": ["KHR_texture_transform"], "extensionsRequired": ["KHR_texture_transform"],"#.into();
+    assert!(load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64)).is_ok());
 }
 
 fn error_of(contents: &[u8], name: &str) -> String {
