@@ -331,6 +331,9 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     for w in prepared.texture_warnings() {
         eprintln!("warning: {w}");
     }
+    if !prepared.info().is_empty() {
+        eprintln!("info: {}", prepared.info());
+    }
     let _ = ctrlc::set_handler(|| {
         if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
             std::process::exit(130);

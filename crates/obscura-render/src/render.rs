@@ -139,11 +139,42 @@ pub struct Prepared {
     shading: ShadingScene,
     filter: Filter,
     samples_per_pixel: u32,
-    /// Camera-to-world over the shutter (shutter-normalised time).
+    /// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
+/// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
+/// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
+fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<String>) -> CameraDesc {
+    use obscura_scene::framing::{AutoView, auto_camera};
+    use obscura_sdk::DicingHint;
+    let props = stage.properties();
+    let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
+    let view = match (props.dicing_hint, fov) {
+        (DicingHint::Orthographic, _) => AutoView::Orthographic,
+        (DicingHint::Spherical, f) => AutoView::Wide { fov: f.unwrap_or(360.0).min(360.0) },
+        (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
+        (_, f) => AutoView::Perspective { fov: f.unwrap_or(45.0) },
+    };
+    let mut camera = stage.camera().clone();
+    let w = camera.screen_window();
+    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
+    let auto = auto_camera(min, max, view, if aspect.is_finite() { aspect } else { 1.0 });
+    camera.world_to_camera = vec![obscura_sdk::MotionSample {
+        time: camera.shutter.0,
+        world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),
+    }];
+    if auto.screen_window.is_some() {
+        camera.screen_window = auto.screen_window;
+    }
+    info.push(auto.description);
+    camera
+}
+
+/// Camera-to-world over the shutter (shutter-normalised time).
     camera_to_world: Motion,
     deep_metric: DeepMetric,
     /// Textures that could not be used, one message each.
     texture_warnings: Vec<String>,
+    /// What was chosen for the scene (automatic camera, default lights); empty when nothing was.
+    info: String,
     setup_seconds: f64,
 }
 
@@ -213,12 +244,25 @@ pub fn prepare(
     opts: &RenderOptions,
 ) -> Result<Prepared, RenderError> {
     let start = Instant::now();
-    let stage = CameraStage::new(
+    let mut stage = CameraStage::new(
         registry,
         &scene.projection,
         &scene.projection_params,
         &scene.camera,
     )?;
+    let mut info = Vec::new();
+    if let Some((min, max)) = scene.auto_camera {
+        let camera = auto_camera_for(&stage, min, max, &mut info);
+        stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, &camera)?;
+    }
+    if scene.auto_light {
+        info.push(format!(
+            "no light in the scene: a soft sky (dome of colour {:.2} {:.2} {:.2}) and a distant key light from above, front left",
+            obscura_scene::framing::DEFAULT_SKY.r,
+            obscura_scene::framing::DEFAULT_SKY.g,
+            obscura_scene::framing::DEFAULT_SKY.b
+        ));
+    }
     let props = *stage.properties();
     let shutter = scene.camera.shutter;
     let camera_to_world = camera_motion(&stage, shutter)?;
@@ -272,6 +316,7 @@ pub fn prepare(
         samples_per_pixel: spp,
         camera_to_world,
         texture_warnings: texture_warnings.into_iter().map(|w| w.0).collect(),
+        info: info.join("; "),
         setup_seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -358,6 +403,13 @@ impl Prepared {
     #[must_use]
     pub fn accel(&self) -> &SceneAccel {
         &self.accel
+    }
+
+    /// One line saying what the renderer chose for the scene (the automatic camera for this
+    /// projection, the default lights); empty when the scene chose everything itself.
+    #[must_use]
+    pub fn info(&self) -> &str {
+        &self.info
     }
 
     /// One warning per texture that could not be read or decoded (its material uses the factor).

@@ -11,7 +11,7 @@
 
 #![forbid(unsafe_code)]
 
-mod framing;
+pub mod framing;
 pub mod gltf_scene;
 pub mod obj;
 pub mod rib;

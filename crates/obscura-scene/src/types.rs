@@ -345,6 +345,11 @@ pub struct Scene {
     /// Materials whose parameters come from textures, by index into [`Scene::materials`]; such a
     /// material's entry there is its untextured fallback.
     pub material_maps: BTreeMap<u32, SurfaceMaps>,
+    /// The world bounds `(min, max)` the scene's camera was framed on when the file has no camera of
+    /// its own: the renderer frames them again for the projection it renders through.
+    pub auto_camera: Option<(Vec3, Vec3)>,
+    /// True when the file has no light and the default sky and key light were added.
+    pub auto_light: bool,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
     pub warnings: Vec<String>,
 }
@@ -365,6 +370,8 @@ impl Scene {
             lights: Vec::new(),
             textures: Vec::new(),
             material_maps: BTreeMap::new(),
+            auto_camera: None,
+            auto_light: false,
             warnings: Vec::new(),
         }
     }

@@ -309,24 +309,16 @@ fn gltf_materials_map_metallic_roughness() {
 }
 
 #[test]
-fn gltf_without_lights_gets_a_dome_and_a_warning() {
+fn gltf_without_lights_gets_a_sky_that_is_not_white_and_a_key_light() {
     let scene = load(&Fixture::new([0, 1, 2]), 640, 480);
-    assert_eq!(
-        scene.lights,
-        vec![Light::Dome {
-            color: Rgb::WHITE,
-            intensity: 1.0,
-            exposure: 0.0,
-            map: None,
-            transform: Mat4::IDENTITY
-        }]
-    );
-    assert!(
-        scene
-            .warnings
-            .iter()
-            .any(|w| w.contains("no light") && w.contains("scene.gltf"))
-    );
+    let [Light::Dome { color, map: None, .. }, Light::Distant { transform, .. }] = scene.lights.as_slice() else {
+        panic!("{:?}", scene.lights)
+    };
+    assert!(color.r < 0.9 && color.b > color.r, "a backdrop unlike a white asset: {color:?}");
+    // The key light comes from above: it travels downward.
+    assert!(transform.transform_vector3(Vec3::Z).y < -0.5);
+    assert!(scene.auto_light);
+    assert!(!scene.warnings.iter().any(|w| w.contains("no light")));
 }
 
 #[test]

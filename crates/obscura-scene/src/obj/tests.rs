@@ -200,17 +200,20 @@ fn obj_camera_frames_every_corner_of_the_bounds() {
 }
 
 #[test]
-fn obj_gets_a_default_dome_light() {
+fn obj_gets_the_default_sky_and_key_light() {
     let scene = load_cube(Some(MTL));
     assert!(matches!(
         scene.lights.as_slice(),
-        [Light::Dome {
-            intensity: 1.0,
-            map: None,
-            ..
-        }]
+        [
+            Light::Dome {
+                intensity: 1.0,
+                map: None,
+                ..
+            },
+            Light::Distant { .. }
+        ]
     ));
-    assert!(scene.warnings.iter().any(|w| w.contains("dome")));
+    assert!(scene.auto_light && scene.auto_camera.is_some());
 }
 
 fn error_of(obj: &str, mtl: Option<&str>) -> String {
