@@ -139,36 +139,7 @@ pub struct Prepared {
     shading: ShadingScene,
     filter: Filter,
     samples_per_pixel: u32,
-    /// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
-/// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
-/// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
-fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<String>) -> CameraDesc {
-    use obscura_scene::framing::{AutoView, auto_camera};
-    use obscura_sdk::DicingHint;
-    let props = stage.properties();
-    let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
-    let view = match (props.dicing_hint, fov) {
-        (DicingHint::Orthographic, _) => AutoView::Orthographic,
-        (DicingHint::Spherical, f) => AutoView::Wide { fov: f.unwrap_or(360.0).min(360.0) },
-        (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
-        (_, f) => AutoView::Perspective { fov: f.unwrap_or(45.0) },
-    };
-    let mut camera = stage.camera().clone();
-    let w = camera.screen_window();
-    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
-    let auto = auto_camera(min, max, view, if aspect.is_finite() { aspect } else { 1.0 });
-    camera.world_to_camera = vec![obscura_sdk::MotionSample {
-        time: camera.shutter.0,
-        world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),
-    }];
-    if auto.screen_window.is_some() {
-        camera.screen_window = auto.screen_window;
-    }
-    info.push(auto.description);
-    camera
-}
-
-/// Camera-to-world over the shutter (shutter-normalised time).
+    /// Camera-to-world over the shutter (shutter-normalised time).
     camera_to_world: Motion,
     deep_metric: DeepMetric,
     /// Textures that could not be used, one message each.
@@ -319,6 +290,35 @@ pub fn prepare(
         info: info.join("; "),
         setup_seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
+/// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
+/// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
+fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<String>) -> CameraDesc {
+    use obscura_scene::framing::{AutoView, auto_camera};
+    use obscura_sdk::DicingHint;
+    let props = stage.properties();
+    let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
+    let view = match (props.dicing_hint, fov) {
+        (DicingHint::Orthographic, _) => AutoView::Orthographic,
+        (DicingHint::Spherical, f) => AutoView::Wide { fov: f.unwrap_or(360.0).min(360.0) },
+        (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
+        (_, f) => AutoView::Perspective { fov: f.unwrap_or(45.0) },
+    };
+    let mut camera = stage.camera().clone();
+    let w = camera.screen_window();
+    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
+    let auto = auto_camera(min, max, view, if aspect.is_finite() { aspect } else { 1.0 });
+    camera.world_to_camera = vec![obscura_sdk::MotionSample {
+        time: camera.shutter.0,
+        world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),
+    }];
+    if auto.screen_window.is_some() {
+        camera.screen_window = auto.screen_window;
+    }
+    info.push(auto.description);
+    camera
 }
 
 /// Camera-to-world over the shutter (shutter-normalised time), from the camera stage's world-to-camera

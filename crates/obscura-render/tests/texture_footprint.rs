@@ -1,12 +1,11 @@
 //! Textures are filtered by the camera's own footprint: a checkerboard plane receding to the horizon,
 //! rendered at one sample per pixel through a perspective, a fisheye and a calibrated camera, is
-//! compared with a 16×16-supersampled box filter of the analytic checker over each pixel (the rays
+//! compared with a 12×12-supersampled box filter of the analytic checker over each pixel (the rays
 //! for the reference come from the same projection through the camera stage, and hit the plane
 //! analytically). The footprint-filtered `albedo` must be close to it, an unfiltered lookup must be
 //! clearly worse, and the same projection reporting a footprint four times too small must be clearly
 //! worse too — so the footprint is what the filter uses.
 
-use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
@@ -27,9 +26,10 @@ use obscura_sdk::{
 const HALF_WIDTH: f32 = 400.0;
 const NEAR: f32 = 0.01;
 const FAR: f32 = 800.0;
-/// The checker: 8×8 texels, texture coordinates `(x, z)/2`, so each square is 0.25 units wide.
-const TEXELS: u32 = 8;
-const UV_PER_UNIT: f32 = 0.5;
+/// The checker: 64×64 texels, texture coordinates `(x, z)`, so each square is 1/64 unit wide: the
+/// checker is minified over nearly the whole plane, where the footprint matters.
+const TEXELS: u32 = 64;
+const UV_PER_UNIT: f32 = 1.0;
 
 fn checker(x: f32, z: f32) -> f32 {
     let i = (x * UV_PER_UNIT * TEXELS as f32).floor() as i64;
@@ -197,10 +197,10 @@ fn albedo(scene: &Scene, lookup: TextureLookup) -> Vec<f32> {
         .collect()
 }
 
-/// Per pixel, the box-filtered analytic checker from 16×16 rays of the same projection, or `None`
+/// Per pixel, the box-filtered analytic checker from 12×12 rays of the same projection, or `None`
 /// where some of those rays miss the plane.
 fn reference(case: &Case) -> Vec<Option<f32>> {
-    const N: u32 = 16;
+    const N: u32 = 12;
     let cam = CameraDesc::new(format());
     let stage = CameraStage::new(&mut registry(), case.projection, &case.params, &cam).expect("stage");
     let f = format();
@@ -260,8 +260,10 @@ fn a_checker_plane_at_one_sample_per_pixel_is_filtered_by_each_projections_footp
             case.projection
         );
         assert!(n > 1000, "{}: the plane covers {n} pixels", case.projection);
-        assert!(e_filtered < 0.09, "{}: footprint-filtered error {e_filtered}", case.projection);
-        assert!(e_point > 1.5 * e_filtered, "{}: unfiltered {e_point} vs {e_filtered}", case.projection);
-        assert!(e_shrunk > 1.3 * e_filtered, "{}: footprint/4 {e_shrunk} vs {e_filtered}", case.projection);
+        // Measured: footprint 0.018–0.019, unfiltered 0.50, footprint/4 0.21–0.24 (mean absolute
+        // error of albedo.R in [0, 1]).
+        assert!(e_filtered < 0.04, "{}: footprint-filtered error {e_filtered}", case.projection);
+        assert!(e_point > 5.0 * e_filtered, "{}: unfiltered {e_point} vs {e_filtered}", case.projection);
+        assert!(e_shrunk > 5.0 * e_filtered, "{}: footprint/4 {e_shrunk} vs {e_filtered}", case.projection);
     }
 }

@@ -20,8 +20,8 @@
 //!   `Q < 1` is weighted by `exp(−2 Q)` and the weights normalised.
 //!
 //! Wrap modes apply per texel index (repeat, clamp to edge, mirror). A sampler asking for `NEAREST`
-//! magnification returns the nearest level-0 texel when the footprint is smaller than a texel
-//! (`ℓ ≤ 0`) and filters like any other texture when minifying.
+//! magnification returns the nearest level-0 texel when the whole footprint (its major axis) is
+//! smaller than a texel, and filters like any other texture when minifying in any direction.
 
 pub mod footprint;
 pub mod image;
@@ -235,10 +235,11 @@ impl Texture {
             };
             minor = widened;
         }
-        let lod = (self.levels.len() - 1) as f32 + minor.log2();
-        if lod <= 0.0 && self.nearest {
+        let top = (self.levels.len() - 1) as f32;
+        if self.nearest && top + major.log2() <= 0.0 {
             return self.nearest(c);
         }
+        let lod = top + minor.log2();
         let lod = lod.clamp(0.0, (self.levels.len() - 1) as f32);
         let l0 = lod.floor() as usize;
         let f = lod - l0 as f32;
