@@ -115,7 +115,9 @@ pub enum AlphaMode {
 /// the factors times the blue and green channels of `metallic_roughness`; the BSDF is PxrSurface with
 /// `diffuse = base·(1 − m)`, `specular = lerp(0.04, base, m)` and roughness `r`; the emitted radiance is
 /// `emissive_factor · texture`; `normal` perturbs the shading normal in the tangent frame of the
-/// texture coordinates; `occlusion` darkens the diffuse albedo by `1 + strength·(texel − 1)`.
+/// texture coordinates; `occlusion` darkens the diffuse albedo by `1 + strength·(texel − 1)`. MTL
+/// materials give a specular colour (`Ks` times `map_Ks`) that replaces the F0 above, and an
+/// opacity map (`map_d`) that multiplies alpha.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SurfaceMaps {
     /// Linear RGBA factor of the base colour.
@@ -142,6 +144,12 @@ pub struct SurfaceMaps {
     pub vertex_colors: bool,
     /// True when the surface is a pure Lambertian (no specular lobe): MTL without `Ks`.
     pub diffuse_only: bool,
+    /// A specular colour used as F0 instead of `lerp(0.04, base, metallic)` (MTL's `Ks`).
+    pub specular: Option<Rgb>,
+    /// A texture multiplying [`SurfaceMaps::specular`] (MTL's `map_Ks`, sRGB).
+    pub specular_map: Option<TextureSlot>,
+    /// A texture whose red channel multiplies the alpha (MTL's `map_d`).
+    pub opacity: Option<TextureSlot>,
 }
 
 impl Default for SurfaceMaps {
@@ -159,6 +167,9 @@ impl Default for SurfaceMaps {
             alpha: AlphaMode::Opaque,
             vertex_colors: true,
             diffuse_only: false,
+            specular: None,
+            specular_map: None,
+            opacity: None,
         }
     }
 }
@@ -172,6 +183,8 @@ impl SurfaceMaps {
             ("normalTexture", self.normal),
             ("emissiveTexture", self.emissive),
             ("occlusionTexture", self.occlusion),
+            ("map_Ks", self.specular_map),
+            ("map_d", self.opacity),
         ]
         .into_iter()
         .filter_map(|(n, s)| s.map(|s| (n, s)))

@@ -251,12 +251,22 @@ impl Texturing {
             diffuse *= 1.0 + slot.scale * (t.x - 1.0);
         }
         let to_rgb = |v: Vec3| Rgb::new(v.x, v.y, v.z);
+        let specular = match maps.specular {
+            Some(ks) => {
+                let mut ks = Vec3::new(ks.r, ks.g, ks.b);
+                if let Some(t) = lookup(maps.specular_map) {
+                    ks *= Vec3::new(t.x, t.y, t.z);
+                }
+                ks
+            }
+            None => Vec3::splat(0.04).lerp(rgb, metallic),
+        };
         let material = if maps.diffuse_only {
             Material::Diffuse { color: to_rgb(diffuse) }
         } else {
             Material::Surface {
                 diffuse: to_rgb(diffuse),
-                specular: to_rgb(Vec3::splat(0.04).lerp(rgb, metallic)),
+                specular: to_rgb(specular),
                 roughness,
             }
         };
@@ -277,6 +287,9 @@ impl Texturing {
                 .unwrap_or(n_s),
             _ => n_s,
         };
+        if let Some(t) = lookup(maps.opacity) {
+            base.w *= t.x;
+        }
         let opacity = match maps.alpha {
             AlphaMode::Opaque => 1.0,
             AlphaMode::Mask(cutoff) => {
