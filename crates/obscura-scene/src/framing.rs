@@ -165,13 +165,13 @@ pub struct AutoCamera {
     pub description: String,
 }
 
-/// How far the asset's bounding sphere should span for each view: the whole view minus a margin for
-/// a perspective camera; 100° (or 85 % of a narrower field of view) for a wide one, so a fisheye or
+/// How wide the asset's bounding box should appear for each view: the whole view minus a margin for
+/// a perspective camera; 140° (or 80 % of a narrower field of view) for a wide one, so a fisheye or
 /// panorama stands close and the asset fills a useful part of the picture.
 fn target_angle(view: AutoView) -> f32 {
     match view {
         AutoView::Perspective { fov } => 0.9 * fov,
-        AutoView::Wide { fov } => (0.85 * fov).min(100.0),
+        AutoView::Wide { fov } => (0.8 * fov).min(140.0),
         AutoView::Orthographic => 0.0,
     }
 }
@@ -181,9 +181,11 @@ fn target_angle(view: AutoView) -> f32 {
 /// - **Direction.** When the bounds' thinnest side is less than half the middle one (a flat asset),
 ///   the camera looks straight at its broad face: from +Y down (image up = −Z) for an asset lying
 ///   flat, from +X or +Z for one standing; otherwise from the front, raised and turned a little,
-///   along `normalize(0.5, 0.4, 1)`, so three faces show.
-/// - **Distance.** The bounding sphere (radius `R`, the half diagonal) spans the view's target angle
-///   `θ` ([`target_angle`]): `d = R / sin(θ/2)` from the centre.
+///   along `normalize(0.35, 0.3, 1)`, so three faces show.
+/// - **Distance.** The nearest distance at which every corner of the box lies within the target
+///   angle `θ` ([`target_angle`]: 90 % of a perspective field of view, 140° for a wide view) across
+///   both image axes: `d = max over corners (max(|x|, |y|)/tan(θ/2) − z)`, with `(x, y, z)` the
+///   corner's offset from the centre along the camera's right, up and forward axes.
 /// - **Orthographic.** The camera stands `2R` away and the screen window is `±R` in y and `±R·a`
 ///   in x (`a` the frame aspect ≥ 1, else the other way round).
 #[must_use]
@@ -203,8 +205,11 @@ pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCam
         (true, 1) => (Vec3::Y, Vec3::NEG_Z, "top"),
         (true, 0) => (Vec3::X, Vec3::Y, "side (+X)"),
         (true, _) => (Vec3::Z, Vec3::Y, "front"),
-        (false, _) => (Vec3::new(0.5, 0.4, 1.0).normalize(), Vec3::Y, "front, raised and turned"),
+        (false, _) => (Vec3::new(0.35, 0.3, 1.0).normalize(), Vec3::Y, "front, raised and turned"),
     };
+    let forward = -toward_eye;
+    let right = forward.cross(up).normalize();
+    let cam_up = right.cross(forward);
     let (distance, window) = match view {
         AutoView::Orthographic => {
             let (wx, wy) = if aspect >= 1.0 {
@@ -222,16 +227,25 @@ pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCam
                 }),
             )
         }
-        _ => {
-            let half = (0.5 * target_angle(view)).clamp(1.0, 89.0).to_radians();
-            (radius / half.sin(), None)
+        AutoView::Perspective { .. } | AutoView::Wide { .. } => {
+            // The nearest distance at which every corner of the box is inside the target angle.
+            let t = (0.5 * target_angle(view)).clamp(1.0, 89.0).to_radians().tan();
+            let d = (0..8)
+                .map(|i| {
+                    let corner = Vec3::new(
+                        if i & 1 == 0 { min.x } else { max.x },
+                        if i & 2 == 0 { min.y } else { max.y },
+                        if i & 4 == 0 { min.z } else { max.z },
+                    ) - centre;
+                    let (x, y, z) = (corner.dot(right), corner.dot(cam_up), corner.dot(forward));
+                    x.abs().max(y.abs()) / t - z
+                })
+                .fold(0.0f32, f32::max);
+            (d.max(1e-3 * radius), None)
         }
     };
     let eye = centre + toward_eye * distance;
     // RenderMan camera space: +Z forward, +Y up, +X right (`right = forward × up` in world).
-    let forward = -toward_eye;
-    let right = forward.cross(up).normalize();
-    let cam_up = right.cross(forward);
     let world_to_camera = Mat4::from_cols(
         right.extend(0.0),
         cam_up.extend(0.0),
@@ -308,9 +322,17 @@ mod tests {
         };
         let persp = dist(AutoView::Perspective { fov: 45.0 });
         let fisheye = dist(AutoView::Wide { fov: 180.0 });
-        assert!(fisheye < 0.5 * persp, "{fisheye} vs {persp}");
-        // The bounding sphere spans 100° of a fisheye: d = R / sin 50°.
-        assert!((fisheye - 3f32.sqrt() / 50f32.to_radians().sin()).abs() < 1e-4);
+        assert!(fisheye < 0.6 * persp, "{fisheye} vs {persp}");
+        // The cube's corners fit 140° of a fisheye: the nearest corner offsets give
+        // d = max(max(|x|, |y|)/tan 70° − z) over the corners.
+        assert!(fisheye > 1.0 && fisheye < 2.0, "{fisheye}");
+        let wide = auto_camera(min, max, AutoView::Wide { fov: 180.0 }, 1.0);
+        let t = 70f32.to_radians().tan();
+        let worst = corners(wide.world_to_camera, min, max)
+            .iter()
+            .map(|c| (c.x / c.z).abs().max((c.y / c.z).abs()))
+            .fold(0.0f32, f32::max);
+        assert!(worst <= t * (1.0 + 1e-5) && worst > 0.99 * t, "{worst} vs {t}");
         let ortho = auto_camera(min, max, AutoView::Orthographic, 2.0);
         let w = ortho.screen_window.unwrap();
         assert!((w.top - 3f32.sqrt()).abs() < 1e-5 && (w.right - 2.0 * 3f32.sqrt()).abs() < 1e-5);
