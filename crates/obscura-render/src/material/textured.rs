@@ -134,7 +134,7 @@ impl Texturing {
                     s => s.clone(),
                 };
                 image::decode(&source, d.color_space)
-                    .map(|img| Texture::new(img, d.wrap, d.nearest))
+                    .map(|(w, h, texels)| Texture::from_texels(w, h, texels, d.wrap, d.nearest))
                     .map_err(|e| {
                         format!(
                             "{}: cannot use texture {}: {e}; the factor alone is used",

@@ -8,6 +8,8 @@ use std::sync::OnceLock;
 use image::DynamicImage;
 use obscura_scene::texture::{ColorSpace, ImageSource};
 
+use super::Texels;
+
 /// A decoded image: `width × height` linear RGBA texels, row by row from the top.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinearImage {
@@ -35,18 +37,39 @@ fn srgb8_table() -> &'static [f32; 256] {
     TABLE.get_or_init(|| std::array::from_fn(|i| srgb_to_linear(i as f32 / 255.0)))
 }
 
-/// Reads and decodes `source`.
+/// Reads and decodes `source` into the storage its texture keeps: 8-bit images as their codes
+/// (sRGB-encoded when `color_space` is sRGB), deeper ones as linear floats.
 ///
 /// # Errors
 /// A message saying why (the file cannot be read, the format is not one we read, the data is
 /// corrupt), without the image's name: the caller names it.
-pub fn decode(source: &ImageSource, color_space: ColorSpace) -> Result<LinearImage, String> {
+pub(crate) fn decode(source: &ImageSource, color_space: ColorSpace) -> Result<(u32, u32, Texels), String> {
     let bytes: std::borrow::Cow<'_, [u8]> = match source {
         ImageSource::File(path) => std::fs::read(path).map_err(|e| e.to_string())?.into(),
         ImageSource::Embedded { bytes, .. } => (&bytes[..]).into(),
     };
     let image = image::load_from_memory(&bytes).map_err(|e| e.to_string())?;
-    Ok(to_linear(image, color_space))
+    let (w, h) = (image.width(), image.height());
+    let texels = match image {
+        DynamicImage::ImageLuma8(_)
+        | DynamicImage::ImageLumaA8(_)
+        | DynamicImage::ImageRgb8(_)
+        | DynamicImage::ImageRgba8(_) => {
+            let codes = image.into_rgba8().pixels().map(|p| p.0).collect();
+            match color_space {
+                ColorSpace::Srgb => Texels::Srgb8(codes),
+                ColorSpace::Linear => Texels::Unorm8(codes),
+            }
+        }
+        other => Texels::Float(
+            to_linear(other, color_space)
+                .texels
+                .into_iter()
+                .map(glam::Vec4::from)
+                .collect(),
+        ),
+    };
+    Ok((w, h, texels))
 }
 
 /// Converts any decoded image to linear RGBA (grey replicated to RGB; missing alpha is 1).

@@ -1,10 +1,11 @@
 //! Textures filtered by the camera ray's footprint.
 //!
-//! A [`Texture`] is a mip pyramid of linear RGBA texels: level 0 is the image as decoded
-//! ([`image::decode`]: sRGB or linear as the format and the texture's colour space say), and each
-//! further level halves each side (rounding down, at least 1) with an exact box average of the level
-//! above **in linear space** (a texel straddling two target texels is split by area), so a level's
-//! mean equals the image's mean.
+//! A [`Texture`] is a mip pyramid of RGBA texels read as linear values: level 0 is the image as
+//! decoded ([`image::decode`]: sRGB or linear as the format and the texture's colour space say), and
+//! each further level halves each side (rounding down, at least 1) with an exact box average of the
+//! level above **in linear space** (a texel straddling two target texels is split by area), so a
+//! level's mean equals the image's mean. 8-bit images stay 8-bit in memory (sRGB-encoded when they are
+//! colour, each level encoded again after averaging), deeper ones are kept as `f32`.
 //!
 //! A lookup takes a [`Footprint`]: the ellipse of texture space that the ray's cone covers at the hit
 //! ([`footprint`]), centre `c` and two conjugate semi-axes `a`, `b` in texture coordinates. The filter
@@ -25,11 +26,13 @@
 
 pub mod footprint;
 pub mod image;
+mod storage;
 
 use glam::{Vec2, Vec4};
 use obscura_scene::texture::Wrap;
 
 pub use footprint::Footprint;
+pub(crate) use storage::Texels;
 
 /// The longest ratio of the footprint ellipse's axes the filter honours; longer ellipses are widened
 /// (pbrt's choice: beyond this, EWA's cost grows without a visible difference).
@@ -40,7 +43,7 @@ pub const MAX_ANISOTROPY: f32 = 16.0;
 struct Level {
     width: u32,
     height: u32,
-    texels: Vec<Vec4>,
+    texels: Texels,
 }
 
 impl Level {
@@ -49,7 +52,7 @@ impl Level {
     fn texel(&self, x: i64, y: i64, wrap: (Wrap, Wrap)) -> Vec4 {
         let x = wrap_index(x, self.width, wrap.0);
         let y = wrap_index(y, self.height, wrap.1);
-        self.texels[y * self.width as usize + x]
+        self.texels.get(y * self.width as usize + x)
     }
 
     /// Bilinear interpolation at texture coordinates `uv` (texel centres at `(i + ½)/W`).
@@ -70,9 +73,10 @@ impl Level {
         let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
         let wx = box_weights(self.width, w);
         let wy = box_weights(self.height, h);
+        let linear = self.texels.decode();
         let mut rows = vec![Vec4::ZERO; (w * self.height) as usize];
         for y in 0..self.height as usize {
-            let src = &self.texels[y * self.width as usize..(y + 1) * self.width as usize];
+            let src = &linear[y * self.width as usize..(y + 1) * self.width as usize];
             for (x, taps) in wx.iter().enumerate() {
                 rows[y * w as usize + x] = taps.iter().map(|&(i, k)| src[i] * k).sum();
             }
@@ -86,7 +90,7 @@ impl Level {
         Level {
             width: w,
             height: h,
-            texels,
+            texels: self.texels.encode_like(texels),
         }
     }
 }
@@ -140,18 +144,21 @@ impl Texture {
     /// texel.
     #[must_use]
     pub fn new(image: image::LinearImage, wrap: (Wrap, Wrap), nearest: bool) -> Texture {
-        let mut level = if image.width == 0 || image.height == 0 || image.texels.len() != (image.width * image.height) as usize {
+        let texels = Texels::Float(image.texels.into_iter().map(Vec4::from).collect());
+        Self::from_texels(image.width, image.height, texels, wrap, nearest)
+    }
+
+    /// The pyramid of a decoded image kept as `texels` (level 0 as given, each further level in the
+    /// same storage).
+    pub(crate) fn from_texels(width: u32, height: u32, texels: Texels, wrap: (Wrap, Wrap), nearest: bool) -> Texture {
+        let mut level = if width == 0 || height == 0 || texels.len() != width as usize * height as usize {
             Level {
                 width: 1,
                 height: 1,
-                texels: vec![Vec4::new(0.0, 0.0, 0.0, 1.0)],
+                texels: Texels::Float(vec![Vec4::new(0.0, 0.0, 0.0, 1.0)]),
             }
         } else {
-            Level {
-                width: image.width,
-                height: image.height,
-                texels: image.texels.into_iter().map(Vec4::from).collect(),
-            }
+            Level { width, height, texels }
         };
         let mut levels = Vec::new();
         while level.width > 1 || level.height > 1 {
@@ -189,7 +196,7 @@ impl Texture {
     /// Bytes held by the texels of every level.
     #[must_use]
     pub fn memory_bytes(&self) -> usize {
-        self.levels.iter().map(|l| l.texels.len() * size_of::<Vec4>()).sum()
+        self.levels.iter().map(|l| l.texels.bytes()).sum()
     }
 
     /// The unfiltered texel of level 0 under `uv`: what a lookup without a footprint sees.
