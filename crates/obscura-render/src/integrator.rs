@@ -410,7 +410,13 @@ fn pass_cutouts(
 
 /// True when a shadow ray is blocked: by anything when the scene has no cut-outs, else by a surface
 /// that is there ([`pass_cutouts`]'s rule, with its own budget).
-fn shadow_blocked(scene: &ShadingScene, tracer: &dyn Tracer, ray: &Ray, cutouts: bool, rng: &mut Rng) -> bool {
+fn shadow_blocked(
+    scene: &ShadingScene,
+    tracer: &dyn Tracer,
+    ray: &Ray,
+    cutouts: bool,
+    rng: &mut Rng,
+) -> bool {
     if !cutouts {
         return tracer.occluded(ray);
     }

@@ -24,8 +24,8 @@
 //! `trace_path`, `aovs`, splat, deep).
 
 use std::path::Path;
-use std::sync::{Arc, Mutex};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
@@ -42,8 +42,8 @@ use crate::dice::{DiceError, DicingContext, dice};
 use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
 use crate::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
-use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
 use crate::light::{Lights, ShadeError};
+use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
 use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
 use crate::rng::Rng;
@@ -302,9 +302,13 @@ fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<Str
     let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
     let view = match (props.dicing_hint, fov) {
         (DicingHint::Orthographic, _) => AutoView::Orthographic,
-        (DicingHint::Spherical, f) => AutoView::Wide { fov: f.unwrap_or(360.0).min(360.0) },
+        (DicingHint::Spherical, f) => AutoView::Wide {
+            fov: f.unwrap_or(360.0).min(360.0),
+        },
         (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
-        (_, f) => AutoView::Perspective { fov: f.unwrap_or(45.0) },
+        (_, f) => AutoView::Perspective {
+            fov: f.unwrap_or(45.0),
+        },
     };
     let mut camera = stage.camera().clone();
     let w = camera.screen_window();

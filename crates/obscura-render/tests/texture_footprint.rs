@@ -81,7 +81,8 @@ fn registry() -> Registry {
         ("ShrunkFisheye", "Fisheye"),
         ("ShrunkCalibrated", "CalibratedCamera"),
     ] {
-        r.register(Box::new(ShrunkFactory(shrunk, inner)), "").expect("unique");
+        r.register(Box::new(ShrunkFactory(shrunk, inner)), "")
+            .expect("unique");
     }
     r
 }
@@ -96,7 +97,9 @@ fn cases() -> Vec<Case> {
     let mut perspective = ParamList::new();
     perspective.push_text("float fov", &["90"], None).unwrap();
     let mut fisheye = ParamList::new();
-    fisheye.push_text("string mapping", &["equidistant"], None).unwrap();
+    fisheye
+        .push_text("string mapping", &["equidistant"], None)
+        .unwrap();
     fisheye.push_text("float fov", &["180"], None).unwrap();
     let mut calibrated = ParamList::new();
     calibrated.push_text("string model", &["OPENCV"], None).unwrap();
@@ -107,7 +110,9 @@ fn cases() -> Vec<Case> {
             None,
         )
         .unwrap();
-    calibrated.push_text("int[2] resolution", &["96", "64"], None).unwrap();
+    calibrated
+        .push_text("int[2] resolution", &["96", "64"], None)
+        .unwrap();
     vec![
         Case {
             projection: "PxrPerspective",
@@ -134,7 +139,9 @@ fn format() -> Format {
 /// The plane with the checker texture (written as a PNG into `dir`).
 fn scene(dir: &Path, projection: &str, params: &ParamList) -> Scene {
     let png = dir.join("checker.png");
-    let img = image::GrayImage::from_fn(TEXELS, TEXELS, |x, y| image::Luma([if (x + y) % 2 == 1 { 255 } else { 0 }]));
+    let img = image::GrayImage::from_fn(TEXELS, TEXELS, |x, y| {
+        image::Luma([if (x + y) % 2 == 1 { 255 } else { 0 }])
+    });
     img.save(&png).unwrap();
     let mut scene = Scene::new(CameraDesc::new(format()));
     scene.projection = projection.into();
@@ -166,7 +173,12 @@ fn scene(dir: &Path, projection: &str, params: &ParamList) -> Scene {
         shape: Shape::Mesh(Mesh {
             positions: corners.to_vec(),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
-            uvs: vec![corners.iter().map(|p| Vec2::new(p.x, p.z) * UV_PER_UNIT).collect()],
+            uvs: vec![
+                corners
+                    .iter()
+                    .map(|p| Vec2::new(p.x, p.z) * UV_PER_UNIT)
+                    .collect(),
+            ],
             ..Mesh::default()
         }),
         transform: MotionTransform::fixed(Mat4::IDENTITY),
@@ -188,7 +200,11 @@ fn albedo(scene: &Scene, lookup: TextureLookup) -> Vec<f32> {
         ..RenderOptions::default()
     };
     let prepared = prepare(scene, &mut registry(), Path::new("."), &opts).expect("prepares");
-    assert!(prepared.texture_warnings().is_empty(), "{:?}", prepared.texture_warnings());
+    assert!(
+        prepared.texture_warnings().is_empty(),
+        "{:?}",
+        prepared.texture_warnings()
+    );
     let out = prepared.render(&opts, &|_, _| {}, &AtomicBool::new(false));
     let f = format();
     (0..f.height)
@@ -222,7 +238,13 @@ fn reference(case: &Case) -> Vec<Option<f32>> {
                 let (o, d) = (r.origin, r.direction);
                 let t = (-1.0 - o.y) / d.y;
                 let (px, pz) = (o.x + t * d.x, o.z + t * d.z);
-                if r.is_culled() || d.y >= 0.0 || !(t > 0.0) || px.abs() > HALF_WIDTH || !(NEAR..FAR).contains(&pz) {
+                if r.is_culled()
+                    || d.y >= 0.0
+                    || t.is_nan()
+                    || t <= 0.0
+                    || px.abs() > HALF_WIDTH
+                    || !(NEAR..FAR).contains(&pz)
+                {
                     all = false;
                     break;
                 }
@@ -249,9 +271,18 @@ fn a_checker_plane_at_one_sample_per_pixel_is_filtered_by_each_projections_footp
     let dir = tempfile::tempdir().unwrap();
     for case in cases() {
         let reference = reference(&case);
-        let filtered = albedo(&scene(dir.path(), case.projection, &case.params), TextureLookup::Footprint);
-        let point = albedo(&scene(dir.path(), case.projection, &case.params), TextureLookup::Point);
-        let shrunk = albedo(&scene(dir.path(), case.shrunk, &case.params), TextureLookup::Footprint);
+        let filtered = albedo(
+            &scene(dir.path(), case.projection, &case.params),
+            TextureLookup::Footprint,
+        );
+        let point = albedo(
+            &scene(dir.path(), case.projection, &case.params),
+            TextureLookup::Point,
+        );
+        let shrunk = albedo(
+            &scene(dir.path(), case.shrunk, &case.params),
+            TextureLookup::Footprint,
+        );
         let (e_filtered, n) = error(&filtered, &reference);
         let (e_point, _) = error(&point, &reference);
         let (e_shrunk, _) = error(&shrunk, &reference);
@@ -262,8 +293,20 @@ fn a_checker_plane_at_one_sample_per_pixel_is_filtered_by_each_projections_footp
         assert!(n > 1000, "{}: the plane covers {n} pixels", case.projection);
         // Measured: footprint 0.018–0.019, unfiltered 0.50, footprint/4 0.21–0.24 (mean absolute
         // error of albedo.R in [0, 1]).
-        assert!(e_filtered < 0.04, "{}: footprint-filtered error {e_filtered}", case.projection);
-        assert!(e_point > 5.0 * e_filtered, "{}: unfiltered {e_point} vs {e_filtered}", case.projection);
-        assert!(e_shrunk > 5.0 * e_filtered, "{}: footprint/4 {e_shrunk} vs {e_filtered}", case.projection);
+        assert!(
+            e_filtered < 0.04,
+            "{}: footprint-filtered error {e_filtered}",
+            case.projection
+        );
+        assert!(
+            e_point > 5.0 * e_filtered,
+            "{}: unfiltered {e_point} vs {e_filtered}",
+            case.projection
+        );
+        assert!(
+            e_shrunk > 5.0 * e_filtered,
+            "{}: footprint/4 {e_shrunk} vs {e_filtered}",
+            case.projection
+        );
     }
 }

@@ -21,7 +21,11 @@ const TEXELS: [[[u8; 3]; 4]; 2] = [
 
 fn srgb(code: u8) -> f32 {
     let c = f32::from(code) / 255.0;
-    if c <= 0.040_45 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+    if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
 }
 
 /// Writes the PNG and a glTF quad (x ∈ [−2, 2], y ∈ [−1, 1], facing +Z, (0, 0) at the top-left
@@ -30,13 +34,25 @@ fn srgb(code: u8) -> f32 {
 fn write_scene(dir: &Path, texture_info: &str) -> std::path::PathBuf {
     let img = image::RgbImage::from_fn(4, 2, |x, y| image::Rgb(TEXELS[y as usize][x as usize]));
     img.save(dir.join("texels.png")).unwrap();
-    let positions: [[f32; 3]; 4] = [[-2.0, 1.0, 0.0], [2.0, 1.0, 0.0], [2.0, -1.0, 0.0], [-2.0, -1.0, 0.0]];
+    let positions: [[f32; 3]; 4] = [
+        [-2.0, 1.0, 0.0],
+        [2.0, 1.0, 0.0],
+        [2.0, -1.0, 0.0],
+        [-2.0, -1.0, 0.0],
+    ];
     let uvs: [[f32; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
     let indices: [u16; 6] = [0, 3, 2, 0, 2, 1];
     let mut bin = Vec::new();
-    positions.iter().flatten().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
-    uvs.iter().flatten().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
-    indices.iter().for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    positions
+        .iter()
+        .flatten()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    uvs.iter()
+        .flatten()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
+    indices
+        .iter()
+        .for_each(|v| bin.extend_from_slice(&v.to_le_bytes()));
     std::fs::write(dir.join("quad.bin"), &bin).unwrap();
     let json = format!(
         r#"{{
@@ -83,7 +99,11 @@ fn render_albedo(path: &Path) -> Vec<[f32; 3]> {
         ..RenderOptions::default()
     };
     let prepared = prepare(&scene, &mut builtin_registry(), Path::new("."), &opts).expect("prepares");
-    assert!(prepared.texture_warnings().is_empty(), "{:?}", prepared.texture_warnings());
+    assert!(
+        prepared.texture_warnings().is_empty(),
+        "{:?}",
+        prepared.texture_warnings()
+    );
     let out = prepared.render(&opts, &|_, _| {}, &AtomicBool::new(false));
     (0..8)
         .flat_map(|y| (0..16).map(move |x| (x, y)))
@@ -128,10 +148,20 @@ fn a_head_on_quad_shows_its_texels_decoded_from_srgb_in_gltf_orientation() {
 fn khr_texture_transform_offsets_scales_and_rotates_as_the_extension_says() {
     let dir = tempfile::tempdir().unwrap();
     // Offset and scale: s' = 0.5 s + 0.5 (the right half of the image), t' = t.
-    let info = r#"{"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [0.5, 1]}}}"#;
-    check(&render_albedo(&write_scene(dir.path(), info)), |s, t| (0.5 * s + 0.5, t), "offset+scale");
+    let info =
+        r#"{"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0], "scale": [0.5, 1]}}}"#;
+    check(
+        &render_albedo(&write_scene(dir.path(), info)),
+        |s, t| (0.5 * s + 0.5, t),
+        "offset+scale",
+    );
     // Rotation by 90°: the extension's matrix has columns (cos r, sin r) and (−sin r, cos r), so
     // s' = −t + 1 (with the offset) and t' = s.
-    let info = r#"{"index": 0, "extensions": {"KHR_texture_transform": {"offset": [1, 0], "rotation": 1.5707964}}}"#;
-    check(&render_albedo(&write_scene(dir.path(), info)), |s, t| (1.0 - t, s), "rotation");
+    let info =
+        r#"{"index": 0, "extensions": {"KHR_texture_transform": {"offset": [1, 0], "rotation": 1.5707964}}}"#;
+    check(
+        &render_albedo(&write_scene(dir.path(), info)),
+        |s, t| (1.0 - t, s),
+        "rotation",
+    );
 }

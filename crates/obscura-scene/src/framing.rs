@@ -205,7 +205,11 @@ pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCam
         (true, 1) => (Vec3::Y, Vec3::NEG_Z, "top"),
         (true, 0) => (Vec3::X, Vec3::Y, "side (+X)"),
         (true, _) => (Vec3::Z, Vec3::Y, "front"),
-        (false, _) => (Vec3::new(0.35, 0.3, 1.0).normalize(), Vec3::Y, "front, raised and turned"),
+        (false, _) => (
+            Vec3::new(0.35, 0.3, 1.0).normalize(),
+            Vec3::Y,
+            "front, raised and turned",
+        ),
     };
     let forward = -toward_eye;
     let right = forward.cross(up).normalize();

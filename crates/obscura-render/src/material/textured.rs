@@ -191,7 +191,10 @@ impl Texturing {
         n_s: Vec3A,
         cone_radius: f32,
     ) -> SurfacePoint {
-        let attrs = self.attributes.get(hit.instance as usize).and_then(Option::as_ref);
+        let attrs = self
+            .attributes
+            .get(hit.instance as usize)
+            .and_then(Option::as_ref);
         let tri = attrs.and_then(|a| a.triangles.get(hit.primitive as usize).copied());
         let uv0 = attrs
             .zip(tri)
@@ -262,7 +265,9 @@ impl Texturing {
             None => Vec3::splat(0.04).lerp(rgb, metallic),
         };
         let material = if maps.diffuse_only {
-            Material::Diffuse { color: to_rgb(diffuse) }
+            Material::Diffuse {
+                color: to_rgb(diffuse),
+            }
         } else {
             Material::Surface {
                 diffuse: to_rgb(diffuse),

@@ -93,7 +93,13 @@ pub fn to_linear(image: DynamicImage, color_space: ColorSpace) -> LinearImage {
                 .pixels()
                 .map(|p| {
                     let [r, g, b, a] = p.0;
-                    let c = |v: u8| if srgb { table[v as usize] } else { f32::from(v) / 255.0 };
+                    let c = |v: u8| {
+                        if srgb {
+                            table[v as usize]
+                        } else {
+                            f32::from(v) / 255.0
+                        }
+                    };
                     [c(r), c(g), c(b), f32::from(a) / 255.0]
                 })
                 .collect()

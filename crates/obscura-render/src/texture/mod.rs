@@ -150,7 +150,13 @@ impl Texture {
 
     /// The pyramid of a decoded image kept as `texels` (level 0 as given, each further level in the
     /// same storage).
-    pub(crate) fn from_texels(width: u32, height: u32, texels: Texels, wrap: (Wrap, Wrap), nearest: bool) -> Texture {
+    pub(crate) fn from_texels(
+        width: u32,
+        height: u32,
+        texels: Texels,
+        wrap: (Wrap, Wrap),
+        nearest: bool,
+    ) -> Texture {
         let mut level = if width == 0 || height == 0 || texels.len() != width as usize * height as usize {
             Level {
                 width: 1,
@@ -158,7 +164,11 @@ impl Texture {
                 texels: Texels::Float(vec![Vec4::new(0.0, 0.0, 0.0, 1.0)]),
             }
         } else {
-            Level { width, height, texels }
+            Level {
+                width,
+                height,
+                texels,
+            }
         };
         let mut levels = Vec::new();
         while level.width > 1 || level.height > 1 {

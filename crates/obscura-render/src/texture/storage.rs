@@ -83,7 +83,14 @@ impl Texels {
             Texels::Srgb8(_) => Texels::Srgb8(
                 linear
                     .iter()
-                    .map(|v| [linear_to_srgb8(v.x), linear_to_srgb8(v.y), linear_to_srgb8(v.z), unorm8(v.w)])
+                    .map(|v| {
+                        [
+                            linear_to_srgb8(v.x),
+                            linear_to_srgb8(v.y),
+                            linear_to_srgb8(v.z),
+                            unorm8(v.w),
+                        ]
+                    })
                     .collect(),
             ),
             Texels::Unorm8(_) => Texels::Unorm8(linear.iter().map(|v| v.to_array().map(unorm8)).collect()),

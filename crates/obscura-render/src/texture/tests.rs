@@ -9,7 +9,10 @@ fn image(w: u32, h: u32, f: impl Fn(u32, u32) -> [f32; 4]) -> LinearImage {
     LinearImage {
         width: w,
         height: h,
-        texels: (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| f(x, y)).collect(),
+        texels: (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .map(|(x, y)| f(x, y))
+            .collect(),
     }
 }
 

@@ -311,10 +311,17 @@ fn gltf_materials_map_metallic_roughness() {
 #[test]
 fn gltf_without_lights_gets_a_sky_that_is_not_white_and_a_key_light() {
     let scene = load(&Fixture::new([0, 1, 2]), 640, 480);
-    let [Light::Dome { color, map: None, .. }, Light::Distant { transform, .. }] = scene.lights.as_slice() else {
+    let [
+        Light::Dome { color, map: None, .. },
+        Light::Distant { transform, .. },
+    ] = scene.lights.as_slice()
+    else {
         panic!("{:?}", scene.lights)
     };
-    assert!(color.r < 0.9 && color.b > color.r, "a backdrop unlike a white asset: {color:?}");
+    assert!(
+        color.r < 0.9 && color.b > color.r,
+        "a backdrop unlike a white asset: {color:?}"
+    );
     // The key light comes from above: it travels downward.
     assert!(transform.transform_vector3(Vec3::Z).y < -0.5);
     assert!(scene.auto_light);
@@ -436,10 +443,17 @@ fn gltf_a_required_extension_we_do_not_read_is_named() {
     let mut f = Fixture::new([0, 1, 2]);
     f.extensions = r#""extensionsUsed": ["KHR_draco_mesh_compression"], "extensionsRequired": ["KHR_draco_mesh_compression"],"#.into();
     let dir = tempfile::tempdir().unwrap();
-    let e = load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64)).unwrap_err().to_string();
-    assert!(e.contains("KHR_draco_mesh_compression") && e.contains("Draco"), "{e}");
+    let e = load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("KHR_draco_mesh_compression") && e.contains("Draco"),
+        "{e}"
+    );
     // A required extension we honour is accepted.
-    f.extensions = r#""extensionsUsed": ["KHR_texture_transform"], "extensionsRequired": ["KHR_texture_transform"],"#.into();
+    f.extensions =
+        r#""extensionsUsed": ["KHR_texture_transform"], "extensionsRequired": ["KHR_texture_transform"],"#
+            .into();
     assert!(load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64)).is_ok());
 }
 

@@ -55,7 +55,9 @@ fn parse_statement(value: &str) -> Option<MapStatement> {
         let mut values = Vec::new();
         while values.len() < most {
             match words.peek() {
-                Some(v) if (name == "-clamp" || name == "-imfchan" || name == "-type") && values.is_empty() => {
+                Some(v)
+                    if (name == "-clamp" || name == "-imfchan" || name == "-type") && values.is_empty() =>
+                {
                     values.push(v.to_string());
                     words.next();
                 }
@@ -79,9 +81,17 @@ fn parse_statement(value: &str) -> Option<MapStatement> {
 }
 
 /// The slot for one texture statement, its texture added to `scene`.
-fn slot(scene: &mut Scene, base: &Path, value: &str, color_space: ColorSpace, used_by: String) -> Option<TextureSlot> {
+fn slot(
+    scene: &mut Scene,
+    base: &Path,
+    value: &str,
+    color_space: ColorSpace,
+    used_by: String,
+) -> Option<TextureSlot> {
     let Some(m) = parse_statement(value) else {
-        scene.warnings.push(format!("{used_by}: no file named in \"{value}\"; ignored"));
+        scene
+            .warnings
+            .push(format!("{used_by}: no file named in \"{value}\"; ignored"));
         return None;
     };
     let wrap = if m.clamp { Wrap::Clamp } else { Wrap::Repeat };
@@ -130,7 +140,11 @@ pub(super) fn material_maps(
     let kd = m.diffuse.map(colour).unwrap_or([0.18; 3]);
     let ks = m.specular.map(colour).unwrap_or([0.0; 3]);
     let ke = m.emissive.map(colour);
-    let d = m.dissolve.filter(|d| d.is_finite()).unwrap_or(1.0).clamp(0.0, 1.0);
+    let d = m
+        .dissolve
+        .filter(|d| d.is_finite())
+        .unwrap_or(1.0)
+        .clamp(0.0, 1.0);
     let mut maps = SurfaceMaps {
         base_color_factor: [kd[0], kd[1], kd[2], d],
         metallic: 0.0,

@@ -269,12 +269,21 @@ fn model_object(
     };
     let n = positions.len();
     let uvs = if m.texcoords.len() == 2 * n {
-        vec![m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], 1.0 - t[1])).collect()]
+        vec![
+            m.texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect(),
+        ]
     } else {
         Vec::new()
     };
-    let colors = (m.vertex_color.len() == 3 * n)
-        .then(|| m.vertex_color.chunks_exact(3).map(|c| [c[0], c[1], c[2], 1.0]).collect());
+    let colors = (m.vertex_color.len() == 3 * n).then(|| {
+        m.vertex_color
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2], 1.0])
+            .collect()
+    });
     let material = match m.material_id {
         Some(i) if i < materials => u32::try_from(i + 1).unwrap_or(0),
         _ => 0,
