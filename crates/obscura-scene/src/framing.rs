@@ -1,6 +1,8 @@
 //! What the glTF and OBJ readers share about cameras and lighting: the framing camera for a scene
-//! without one ([`frame_bounds`]), storing a world-to-camera transform and a field of view, the default
-//! dome light, and glam ↔ SDK matrix conventions (the RIB reader uses [`to_row_vector`] too).
+//! without one ([`frame_bounds`] when reading; [`auto_camera`], which the renderer calls again for the
+//! projection it renders through), storing a world-to-camera transform and a field of view, the
+//! default lights (a soft sky and a key light), and glam ↔ SDK matrix conventions (the RIB reader
+//! uses `to_row_vector` too).
 
 use glam::{Mat4, Vec3, Vec4};
 use obscura_sdk::{Matrix4, MotionSample, ParamValue, Rgb, ScreenWindow};
@@ -183,7 +185,7 @@ fn target_angle(view: AutoView) -> f32 {
 ///   flat, from +X or +Z for one standing; otherwise from the front, raised and turned a little,
 ///   along `normalize(0.35, 0.3, 1)`, so three faces show.
 /// - **Distance.** The nearest distance at which every corner of the box lies within the target
-///   angle `θ` ([`target_angle`]: 90 % of a perspective field of view, 140° for a wide view) across
+///   angle `θ` (`target_angle`: 90 % of a perspective field of view, 140° for a wide view) across
 ///   both image axes: `d = max over corners (max(|x|, |y|)/tan(θ/2) − z)`, with `(x, y, z)` the
 ///   corner's offset from the centre along the camera's right, up and forward axes.
 /// - **Orthographic.** The camera stands `2R` away and the screen window is `±R` in y and `±R·a`

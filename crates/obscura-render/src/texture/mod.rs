@@ -1,7 +1,7 @@
 //! Textures filtered by the camera ray's footprint.
 //!
 //! A [`Texture`] is a mip pyramid of RGBA texels read as linear values: level 0 is the image as
-//! decoded ([`image::decode`]: sRGB or linear as the format and the texture's colour space say), and
+//! decoded (`image::decode`: sRGB or linear as the format and the texture's colour space say), and
 //! each further level halves each side (rounding down, at least 1) with an exact box average of the
 //! level above **in linear space** (a texel straddling two target texels is split by area), so a
 //! level's mean equals the image's mean. 8-bit images stay 8-bit in memory (sRGB-encoded when they are
