@@ -321,6 +321,12 @@ fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<Str
     if auto.screen_window.is_some() {
         camera.screen_window = auto.screen_window;
     }
+    // A wide view stands close: keep the near plane in front of the asset (RenderMan's default of
+    // 0.1 would cut a small asset open).
+    let near = camera.clipping.0.min(1e-3 * auto.distance);
+    if near > 0.0 {
+        camera.clipping.0 = near;
+    }
     info.push(auto.description);
     camera
 }

@@ -163,6 +163,9 @@ pub struct AutoCamera {
     pub world_to_camera: Mat4,
     /// The screen window an orthographic view needs; `None` keeps the default.
     pub screen_window: Option<ScreenWindow>,
+    /// Distance from the camera to the bounds' centre: a near clipping plane should stay well in
+    /// front of it.
+    pub distance: f32,
     /// One line saying what was chosen.
     pub description: String,
 }
@@ -267,6 +270,7 @@ pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCam
     AutoCamera {
         world_to_camera,
         screen_window: window,
+        distance,
         description: format!(
             "automatic camera for a {what} view: {side} view of the bounds ({:.3} × {:.3} × {:.3}) from {:.3} away",
             ext.x, ext.y, ext.z, distance
