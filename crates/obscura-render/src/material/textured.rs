@@ -211,16 +211,28 @@ impl Texturing {
                 opacity: 1.0,
             };
         };
+        // The footprint on a coordinate set, before any slot's transform.
+        let footprint_on = |set: u32| -> Option<Footprint> {
+            let (a, t) = (attrs?, tri?);
+            let (uv, corners) = a.uv(set as usize, t, hit.uv)?;
+            Some(
+                match (self.lookup, UvMap::new(hit.edges[0], hit.edges[1], corners)) {
+                    (TextureLookup::Footprint, Some(map)) => {
+                        cone_footprint(uv, cone_radius, direction, hit.geometric_normal, &map)
+                    }
+                    _ => Footprint::point(uv),
+                },
+            )
+        };
+        // Most materials read every map through set 0: its footprint is computed once.
+        let set0 = footprint_on(0);
         let lookup = |slot: Option<TextureSlot>| -> Option<Vec4> {
             let slot = slot?;
             let texture = self.textures.get(slot.texture as usize)?.as_ref()?;
-            let (a, t) = (attrs?, tri?);
-            let (uv, corners) = a.uv(slot.uv_set as usize, t, hit.uv)?;
-            let footprint = match (self.lookup, UvMap::new(hit.edges[0], hit.edges[1], corners)) {
-                (TextureLookup::Footprint, Some(map)) => {
-                    cone_footprint(uv, cone_radius, direction, hit.geometric_normal, &map)
-                }
-                _ => Footprint::point(uv),
+            let footprint = if slot.uv_set == 0 {
+                set0?
+            } else {
+                footprint_on(slot.uv_set)?
             };
             let footprint = footprint.transformed(&slot.transform);
             Some(match self.lookup {

@@ -18,7 +18,7 @@
 //!   quadratic form `Q(x, y) = A x² + B x y + C y²` with `A = a_y² + b_y² + 1`,
 //!   `B = −2(a_x a_y + b_x b_y)`, `C = a_x² + b_x² + 1`, divided by `F = AC − B²/4`, is below 1
 //!   inside the ellipse widened by one texel (the reconstruction term); every texel centre with
-//!   `Q < 1` is weighted by `exp(−2 Q)` and the weights normalised.
+//!   `Q < 1` is weighted by `exp(−2 Q)` (tabulated in 128 steps) and the weights normalised.
 //!
 //! Wrap modes apply per texel index (repeat, clamp to edge, mirror). A sampler asking for `NEAREST`
 //! magnification returns the nearest level-0 texel when the whole footprint (its major axis) is
@@ -116,10 +116,26 @@ fn box_weights(from: u32, to: u32) -> Vec<Vec<(usize, f32)>> {
         .collect()
 }
 
+/// Entries of the Gaussian weight table over `Q ∈ [0, 1)`.
+const WEIGHTS: usize = 128;
+
+/// `exp(−2Q)` for `Q ∈ [0, 1)` from a table of [`WEIGHTS`] entries (pbrt's choice: the filter's
+/// shape needs no more precision, and `exp` per texel is most of EWA's cost).
+#[inline]
+fn gaussian(q: f32) -> f32 {
+    static TABLE: std::sync::OnceLock<[f32; WEIGHTS]> = std::sync::OnceLock::new();
+    let table =
+        TABLE.get_or_init(|| std::array::from_fn(|i| (-2.0 * (i as f32 + 0.5) / WEIGHTS as f32).exp()));
+    table[((q * WEIGHTS as f32) as usize).min(WEIGHTS - 1)]
+}
+
 /// Texel index `i` of a row of `n` wrapped by `wrap`.
 #[inline]
 fn wrap_index(i: i64, n: u32, wrap: Wrap) -> usize {
     let n = i64::from(n);
+    if (0..n).contains(&i) {
+        return i as usize;
+    }
     let r = match wrap {
         Wrap::Clamp => i.clamp(0, n - 1),
         Wrap::Repeat => i.rem_euclid(n),
@@ -297,7 +313,7 @@ impl Texture {
                 let dx = x as f32 - s.x;
                 let q = qa * dx * dx + qb * dx * dy + qc * dy * dy;
                 if q < 1.0 {
-                    let w = (-2.0 * q).exp();
+                    let w = gaussian(q);
                     sum += l.texel(x, y, self.wrap) * w;
                     weight += w;
                 }

@@ -6,7 +6,7 @@ use obscura_sdk::Rgb;
 
 use super::Loader;
 use super::textures::TextureCache;
-use crate::texture::{AlphaMode, ColorSpace, SurfaceMaps};
+use crate::texture::{AlphaMode, ColorSpace, SurfaceMaps, TextureSlot};
 use crate::types::Material;
 
 impl Loader<'_> {
@@ -20,6 +20,26 @@ impl Loader<'_> {
             let maps = self.surface_maps(&material, &mut cache);
             self.scene.material_maps.insert(index, maps);
         }
+    }
+
+    /// The slot of a `textureInfo` (with its coordinate set and transform), if there is one.
+    fn info_slot(
+        &mut self,
+        cache: &mut TextureCache,
+        info: Option<gltf::texture::Info<'_>>,
+        color_space: ColorSpace,
+        who: &str,
+        name: &str,
+    ) -> Option<TextureSlot> {
+        let info = info?;
+        self.texture_slot(
+            cache,
+            info.texture(),
+            info.tex_coord(),
+            info.texture_transform(),
+            color_space,
+            format!("{who} {name}"),
+        )
     }
 
     /// The maps of one material.
@@ -41,36 +61,27 @@ impl Loader<'_> {
         let strength = finite(m.emissive_strength().unwrap_or(1.0), 1.0).max(0.0);
         let [er, eg, eb] = m.emissive_factor().map(|e| finite(e, 0.0).max(0.0) * strength);
         maps.emissive_factor = Rgb::new(er, eg, eb);
-        if let Some(info) = pbr.base_color_texture() {
-            maps.base_color = self.texture_slot(
-                cache,
-                info.texture(),
-                info.tex_coord(),
-                info.texture_transform(),
-                ColorSpace::Srgb,
-                format!("{who} baseColorTexture"),
-            );
-        }
-        if let Some(info) = pbr.metallic_roughness_texture() {
-            maps.metallic_roughness = self.texture_slot(
-                cache,
-                info.texture(),
-                info.tex_coord(),
-                info.texture_transform(),
-                ColorSpace::Linear,
-                format!("{who} metallicRoughnessTexture"),
-            );
-        }
-        if let Some(info) = m.emissive_texture() {
-            maps.emissive = self.texture_slot(
-                cache,
-                info.texture(),
-                info.tex_coord(),
-                info.texture_transform(),
-                ColorSpace::Srgb,
-                format!("{who} emissiveTexture"),
-            );
-        }
+        maps.base_color = self.info_slot(
+            cache,
+            pbr.base_color_texture(),
+            ColorSpace::Srgb,
+            &who,
+            "baseColorTexture",
+        );
+        maps.metallic_roughness = self.info_slot(
+            cache,
+            pbr.metallic_roughness_texture(),
+            ColorSpace::Linear,
+            &who,
+            "metallicRoughnessTexture",
+        );
+        maps.emissive = self.info_slot(
+            cache,
+            m.emissive_texture(),
+            ColorSpace::Srgb,
+            &who,
+            "emissiveTexture",
+        );
         if let Some(n) = m.normal_texture() {
             maps.normal = self
                 .texture_slot(
