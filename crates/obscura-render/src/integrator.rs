@@ -277,6 +277,7 @@ pub fn trace_path_cone(
             d,
             n_s,
             cone.radius_at(hit.t * dir_len),
+            depth == 0,
         );
         if depth == 0 {
             albedo = surface.albedo;
@@ -379,6 +380,7 @@ fn opacity(scene: &ShadingScene, ray: &Ray, hit: &Hit) -> f32 {
             d,
             hit.geometric_normal,
             0.0,
+            false,
         )
         .opacity
 }

@@ -37,7 +37,7 @@ impl ImageSource {
 pub enum ColorSpace {
     /// The sRGB transfer function (IEC 61966-2-1): colour maps in glTF, `map_Kd` in MTL.
     Srgb,
-    /// Values are linear already: data maps (normal, metallic–roughness, occlusion, opacity).
+    /// Values are linear already: data maps (normal, metallic–roughness, opacity).
     Linear,
 }
 
@@ -77,7 +77,7 @@ pub struct TextureSlot {
     pub uv_set: u32,
     /// `[a, b, c, d, e, f]`: `s' = a·s + b·t + c`, `t' = d·s + e·t + f` (identity `[1, 0, 0, 0, 1, 0]`).
     pub transform: [f32; 6],
-    /// `normalTexture.scale` or `occlusionTexture.strength`; 1 elsewhere.
+    /// `normalTexture.scale`; 1 elsewhere.
     pub scale: f32,
 }
 
@@ -115,7 +115,7 @@ pub enum AlphaMode {
 /// the factors times the blue and green channels of `metallic_roughness`; the BSDF is PxrSurface with
 /// `diffuse = base·(1 − m)`, `specular = lerp(0.04, base, m)` and roughness `r`; the emitted radiance is
 /// `emissive_factor · texture`; `normal` perturbs the shading normal in the tangent frame of the
-/// texture coordinates; `occlusion` darkens the diffuse albedo by `1 + strength·(texel − 1)`. MTL
+/// texture coordinates. MTL
 /// materials give a specular colour (`Ks` times `map_Ks`) that replaces the F0 above, and an
 /// opacity map (`map_d`) that multiplies alpha.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,8 +136,6 @@ pub struct SurfaceMaps {
     pub emissive_factor: Rgb,
     /// Emission texture (sRGB).
     pub emissive: Option<TextureSlot>,
-    /// Ambient occlusion in red (`scale` is the strength).
-    pub occlusion: Option<TextureSlot>,
     /// Alpha use.
     pub alpha: AlphaMode,
     /// True when the mesh's vertex colours (`COLOR_0`) multiply the base colour.
@@ -163,7 +161,6 @@ impl Default for SurfaceMaps {
             normal: None,
             emissive_factor: Rgb::BLACK,
             emissive: None,
-            occlusion: None,
             alpha: AlphaMode::Opaque,
             vertex_colors: true,
             diffuse_only: false,
@@ -182,7 +179,6 @@ impl SurfaceMaps {
             ("metallicRoughnessTexture", self.metallic_roughness),
             ("normalTexture", self.normal),
             ("emissiveTexture", self.emissive),
-            ("occlusionTexture", self.occlusion),
             ("map_Ks", self.specular_map),
             ("map_d", self.opacity),
         ]

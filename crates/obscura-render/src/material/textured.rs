@@ -10,7 +10,7 @@
 //!
 //! The metallic–roughness model is glTF's, mapped onto PxrSurface as the factor-only glTF reader
 //! does: `diffuse = base·(1 − m)`, `specular = lerp(0.04, base, m)`, roughness `r` (see
-//! [`SurfaceMaps`]). Occlusion multiplies the diffuse albedo by `1 + strength·(ao − 1)`.
+//! [`SurfaceMaps`]).
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -33,6 +33,9 @@ pub enum TextureLookup {
     Footprint,
     /// The nearest level-0 texel, unfiltered: aliases; for comparisons.
     Point,
+    /// Each texture's mean (its last mip level), everywhere: the same colours on average without
+    /// the cost of filtering; for measuring that cost.
+    Mean,
 }
 
 /// Per-vertex attributes of one mesh for texturing, with its triangles.
@@ -180,8 +183,11 @@ impl Texturing {
 
     /// The surface at `hit` for a material `material` (index `index`), seen along unit `direction`
     /// with shading normal `n_s` (facing the viewer) by a cone of radius `cone_radius` (world units)
-    /// at the hit.
+    /// at the hit. `primary` is true for the camera ray's hit: its lookups are filtered over the
+    /// footprint's ellipse (EWA); later hits, whose cones have widened, over a circle of the same
+    /// area (trilinear), as renderers do for indirect rays.
     #[must_use]
+    #[allow(clippy::too_many_arguments)]
     pub fn surface(
         &self,
         hit: &Hit,
@@ -190,6 +196,7 @@ impl Texturing {
         direction: Vec3A,
         n_s: Vec3A,
         cone_radius: f32,
+        primary: bool,
     ) -> SurfacePoint {
         let attrs = self
             .attributes
@@ -236,8 +243,13 @@ impl Texturing {
             };
             let footprint = footprint.transformed(&slot.transform);
             Some(match self.lookup {
-                TextureLookup::Footprint => texture.filter(&footprint),
+                TextureLookup::Footprint if primary => texture.filter(&footprint),
+                TextureLookup::Footprint => {
+                    let r = (footprint.a.length() * footprint.b.length()).sqrt();
+                    texture.trilinear(footprint.center, r)
+                }
                 TextureLookup::Point => texture.nearest(footprint.center),
+                TextureLookup::Mean => texture.texel(usize::MAX, 0, 0),
             })
         };
         let mut base = Vec4::from(maps.base_color_factor);
@@ -259,12 +271,7 @@ impl Texturing {
         let unit = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
         let (metallic, roughness) = (unit(metallic), unit(roughness));
         let rgb = Vec3::new(base.x, base.y, base.z);
-        let mut diffuse = rgb * (1.0 - metallic);
-        if let Some(slot) = maps.occlusion
-            && let Some(t) = lookup(Some(slot))
-        {
-            diffuse *= 1.0 + slot.scale * (t.x - 1.0);
-        }
+        let diffuse = rgb * (1.0 - metallic);
         let to_rgb = |v: Vec3| Rgb::new(v.x, v.y, v.z);
         let specular = match maps.specular {
             Some(ks) => {

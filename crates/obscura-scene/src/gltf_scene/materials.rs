@@ -97,21 +97,8 @@ impl Loader<'_> {
                     s
                 });
         }
-        if let Some(o) = m.occlusion_texture() {
-            maps.occlusion = self
-                .texture_slot(
-                    cache,
-                    o.texture(),
-                    o.tex_coord(),
-                    None,
-                    ColorSpace::Linear,
-                    format!("{who} occlusionTexture"),
-                )
-                .map(|mut s| {
-                    s.scale = unit(o.strength());
-                    s
-                });
-        }
+        // occlusionTexture is not read: it bakes the ambient occlusion a path tracer computes, and
+        // glTF applies it to ambient light only (Blender's importer leaves it unconnected too).
         maps.alpha = match m.alpha_mode() {
             gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
             gltf::material::AlphaMode::Mask => AlphaMode::Mask(finite(m.alpha_cutoff().unwrap_or(0.5), 0.5)),
