@@ -86,6 +86,7 @@ TILES: dict[str, list[Tile]] = {
         Tile("light probe: centre -Z, rim +Z", ["orientation=lightprobe"], 1.0),
     ],
     "EquiangularCubemapFace": [Tile("front face", [], 1.0)],
+    "LensSystem": [Tile("double Gauss 50 mm f/2 at 4, d line: vignetting, distortion", ["focusDistance=4", "dispersion=0"])],
     "Octahedral": [Tile("equal-area sphere", [], 1.0)],
     "CalibratedCamera": [
         Tile(

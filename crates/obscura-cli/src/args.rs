@@ -42,6 +42,19 @@ pub fn parse_checked_format(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// Reads `--plugin-timeout SECONDS`: a positive number of seconds, at most a day.
+///
+/// # Errors
+/// A message quoting `s` and giving the range.
+pub fn parse_timeout(s: &str) -> Result<std::time::Duration, String> {
+    match s.trim().parse::<f64>() {
+        Ok(t) if t > 0.0 && t <= 86_400.0 => Ok(std::time::Duration::from_secs_f64(t)),
+        _ => Err(format!(
+            "'{s}': expected a number of seconds in (0, 86400], e.g. 10 or 0.5"
+        )),
+    }
+}
+
 /// The crop window of `--crop XMIN XMAX YMIN YMAX` (clap has checked there are four).
 pub fn crop_window(v: &[f32]) -> CropWindow {
     CropWindow {
@@ -90,6 +103,19 @@ mod tests {
         assert_eq!(parse_checked_format("0x5"), parse_format("0x5"));
         let e = parse_checked_format("4097x4096").unwrap_err();
         assert!(e.contains("at most 16777216 pixels"), "{e}");
+    }
+
+    #[test]
+    fn a_plugin_timeout_is_positive_seconds() {
+        assert_eq!(parse_timeout("0.5"), Ok(std::time::Duration::from_millis(500)));
+        assert_eq!(parse_timeout("10"), Ok(std::time::Duration::from_secs(10)));
+        for bad in ["0", "-1", "nan", "inf", "1e9", "ten", ""] {
+            let e = parse_timeout(bad).unwrap_err();
+            assert!(
+                e.contains(&format!("'{bad}': expected a number of seconds")),
+                "{e}"
+            );
+        }
     }
 
     #[test]

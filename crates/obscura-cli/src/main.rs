@@ -15,17 +15,20 @@ use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::shutter::ShutterDesc;
 use obscura_host::{CameraDesc, CameraStage};
-use obscura_plugins::builtin_registry;
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all};
+use obscura_plugins::{builtin_registry, isolate};
 use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
+use obscura_render::sequence::{FrameSpec, frame_displays};
 use obscura_sdk::{Format, ParamList, ScreenWindow};
 
+mod animation;
 mod args;
 mod check;
+mod lens;
 mod params;
 mod stmap;
 
@@ -39,6 +42,14 @@ struct Cli {
     /// Repeatable.
     #[arg(long = "plugin-path", value_name = "DIR", global = true)]
     plugin_path: Vec<PathBuf>,
+    /// Run every plugin library in worker processes: a crash, abort or hang in a plugin costs the
+    /// batch it was projecting (counted and reported), never the run. OBSCURA_ISOLATE_PLUGINS=Name,…
+    /// isolates only the plugins named (`*`: all).
+    #[arg(long, global = true)]
+    isolate_plugins: bool,
+    /// Seconds an isolated plugin's call may take before its worker is killed and the batch lost.
+    #[arg(long, value_name = "SECONDS", global = true, default_value = "10", value_parser = args::parse_timeout)]
+    plugin_timeout: std::time::Duration,
 }
 
 #[derive(Subcommand, Debug)]
@@ -61,6 +72,9 @@ enum Command {
     /// Check a projection against the contract (directions, times, spread, field of view, deep metric,
     /// dicing hint, unproject, determinism, thread safety, property types); exit 0 when clean, 1 when a check failed, 2 when it could not run.
     Check(Box<check::CheckArgs>),
+    /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
+    /// drawing with traced ray fans (--diagram out.svg|png).
+    Lens(Box<lens::LensArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -74,6 +88,11 @@ struct RenderArgs {
     /// Use this projection instead of the scene's.
     #[arg(short, long, conflicts_with = "calibration")]
     projection: Option<String>,
+    /// The frames to render: N, A-B, or a list such as 1-10,20. A run of # in an output's file name
+    /// becomes the zero-padded frame number (out.####.exr); without one, several frames write
+    /// out.0001.exr, out.0002.exr, … by frame number.
+    #[arg(long = "frames", visible_alias = "frame", value_name = "SPEC")]
+    frames: Option<FrameSpec>,
     /// Render through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
     /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. The image size defaults to
     /// the calibration's; --format resamples the same camera. --param adds to or replaces its parameters.
@@ -106,6 +125,15 @@ struct RenderArgs {
     /// No progress bar or summary.
     #[arg(short, long)]
     quiet: bool,
+    /// AOVs to add to every EXR: cameraZ, distance, Pcamera, Ncamera, objectId, instanceId,
+    /// materialId, flowForward, flowBackward, flowValid (ground truth), albedo, uv (textures), or all
+    /// of them with 'all'.
+    /// Repeatable or comma-separated. IDs and flow also write <image>.ids.json and <image>.camera.json.
+    #[arg(long = "aov", value_name = "NAME", value_delimiter = ',', value_parser = animation::parse_aovs)]
+    aovs: Vec<Vec<obscura_scene::Aov>>,
+    /// Frames per second of an animated scene (glTF): frame N is posed at (N − 1)/fps seconds.
+    #[arg(long, default_value_t = 24.0, value_parser = animation::parse_fps)]
+    fps: f32,
 }
 
 #[derive(Args, Debug)]
@@ -256,7 +284,7 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     }
     write_exr(&map, cam.format, cam.screen_window(), &attributes, &a.output).map_err(|e| e.to_string())?;
     println!(
-        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} culled for breaking the contract",
+        "wrote {}: {} rays of {} ({}x{} pixels, {} layer{}), {} culled by the projection, {} lost to failed project calls, {} culled for breaking the contract",
         a.output.display(),
         report.samples,
         projection,
@@ -265,7 +293,8 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
         map.layers.len(),
         if map.layers.len() == 1 { "" } else { "s" },
         report.culled,
-        report.violations()
+        report.lost(),
+        report.breaches()
     );
     Ok(())
 }
@@ -306,7 +335,13 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             eprintln!("warning: {w}");
         }
     }
-    let displays = job::displays(&scene, a.output.as_deref());
+    let mut displays = job::displays(&scene, a.output.as_deref());
+    let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
+    obscura_render::frame::add_aovs(&mut displays, &aovs);
+    if scene.animation_seconds.is_none() {
+        // A still scene has no previous frame.
+        displays = obscura_render::frame::without_backward_flow(&displays, false);
+    }
     let opts = RenderOptions {
         samples_per_pixel: a.spp,
         seed: a.seed,
@@ -323,6 +358,32 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             .build_global()
             .map_err(|e| e.to_string())?;
     }
+    let _ = ctrlc::set_handler(|| {
+        if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        eprintln!(
+            "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
+        );
+    });
+    // An animated scene is posed per frame (frame 1 without --frames), so its flow reaches the next.
+    if scene.animation_seconds.is_some()
+        && let Some(path) = a.scene.as_deref()
+    {
+        let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+        let job = animation::Animation {
+            path,
+            fps: a.fps,
+            format: Format::new(width, height),
+            overrides: &overrides,
+            projection: &scene.projection,
+            base_dir: &base_dir,
+            displays: &displays,
+            opts: &opts,
+            quiet: a.quiet,
+        };
+        return job.render(&frames, &mut registry);
+    }
     let prepared = prepare(&scene, &mut registry, &base_dir, &opts).map_err(|e| e.to_string())?;
     // Warnings are printed even with --quiet, which only silences progress and summaries.
     for w in prepared.stage().setup_warnings() {
@@ -334,14 +395,6 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     if !prepared.info().is_empty() {
         eprintln!("info: {}", prepared.info());
     }
-    let _ = ctrlc::set_handler(|| {
-        if job::CANCEL.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-        eprintln!(
-            "\ninterrupted: finishing the tiles in flight, then writing what is rendered (Ctrl-C again to quit)"
-        );
-    });
     let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
         let b = indicatif::ProgressBar::new(0);
         b.set_style(
@@ -358,13 +411,52 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             b.set_position(done as u64);
         }
     };
-    let out = prepared.render(&opts, &progress, &job::CANCEL);
+    let mut out = prepared.render(&opts, &progress, &job::CANCEL);
     if let Some(b) = &bar {
         b.finish_and_clear();
     }
-    let attributes = [("obscura:projection", scene.projection.clone())];
-    let written = job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
-        .map_err(|e| e.to_string())?;
+    let flow_warnings = obscura_render::frame::run_flow(
+        &scene,
+        &prepared,
+        &mut out,
+        &displays,
+        obscura_render::frame::Neighbours::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    for w in flow_warnings {
+        eprintln!("{w}");
+    }
+    let mut attributes = vec![("obscura:projection", scene.projection.clone())];
+    attributes.extend(
+        obscura_render::frame::header_attributes(&scene, &prepared, None).map_err(|e| e.to_string())?,
+    );
+    // Sidecars go with ground truth: a display with a ground-truth AOV.
+    let sidecars = (displays.iter()).any(|d| {
+        d.aovs
+            .iter()
+            .any(|x| obscura_scene::Aov::GROUND_TRUTH.contains(x))
+    });
+    // A scene without frames of its own is the same at every frame: rendered once, written as each
+    // selected frame.
+    let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+    let mut written = Vec::new();
+    for &frame in &frames {
+        let displays = frame_displays(&displays, frame, frames.len() > 1);
+        written.extend(
+            job::write_displays(&displays, &out, scene.camera.format.pixel_aspect, &attributes)
+                .map_err(|e| e.to_string())?,
+        );
+        if sidecars {
+            let number = a.frames.is_some().then_some(frame);
+            written.extend(obscura_render::frame::write_sidecars(
+                &scene,
+                &prepared,
+                &displays,
+                number,
+                out.stats.cancelled,
+            )?);
+        }
+    }
     let s = &out.stats;
     if let Some(w) = s.contract.warning(&scene.projection) {
         eprintln!("{w}");
@@ -372,7 +464,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     if !a.quiet {
         let frame = s.render_seconds.max(1e-9);
         println!(
-            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, \
+            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, {} lost to failed project calls, \
              {:.1} Mrays/s traced (camera, bounce and shadow rays); \
              camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
             scene.camera.pixels().width(),
@@ -383,6 +475,7 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             s.triangles,
             s.contract.samples,
             s.contract.culled,
+            s.contract.lost(),
             s.rays_traced as f64 / frame * 1e-6,
             100.0 * s.camera_stage_seconds
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
@@ -390,6 +483,8 @@ fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
             if s.cancelled {
                 format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
+            } else if s.flow_seconds > 0.0 {
+                format!("; flow pass {:.3} s", s.flow_seconds)
             } else {
                 String::new()
             }
@@ -432,12 +527,27 @@ fn plugins(name: Option<&str>, names_only: bool, search: &PluginSearch) -> Resul
 }
 
 fn main() -> ExitCode {
+    if std::env::args_os()
+        .nth(1)
+        .is_some_and(|a| a == isolate::WORKER_ARG)
+    {
+        // A host started this process to run a plugin for it (`--isolate-plugins`).
+        return ExitCode::from(u8::try_from(isolate::worker_main()).unwrap_or(2));
+    }
     let cli = Cli::parse();
-    let search = PluginSearch::from_env(&cli.plugin_path);
+    let isolation = match isolate::Isolation::from_env(cli.isolate_plugins, cli.plugin_timeout) {
+        Ok(i) => i,
+        Err(e) => {
+            eprintln!("error: --isolate-plugins: cannot find this executable to run plugin workers: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let search = PluginSearch::from_env(&cli.plugin_path).with_isolation(isolation);
     let result = match &cli.command {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
+        Command::Lens(a) => lens::run(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

@@ -139,6 +139,20 @@ impl ContractReport {
         self.counts.iter().sum()
     }
 
+    /// Samples of batches whose `project` failed — a panic, an error it returned, or (for an isolated
+    /// plugin) its worker's crash or hang: lost whole, neither rendered nor counted as culled.
+    #[must_use]
+    pub fn lost(&self) -> u64 {
+        self.count(Violation::Panicked) + self.count(Violation::Failed)
+    }
+
+    /// Samples whose ray broke a per-ray rule (and were culled by the host): [`Self::violations`]
+    /// without the [lost](Self::lost) ones.
+    #[must_use]
+    pub fn breaches(&self) -> u64 {
+        self.violations() - self.lost()
+    }
+
     /// True when no sample broke the contract.
     #[must_use]
     pub fn is_clean(&self) -> bool {
@@ -640,5 +654,19 @@ mod tests {
         assert_eq!((a.samples, a.culled, a.violations()), (15, 1, 3));
         assert_eq!(a.example(Violation::TimeOutOfRange).unwrap().detail, "time 1");
         assert_eq!(a.example(Violation::BadRaySpread).unwrap().detail, "spread");
+    }
+
+    /// Regression (issue 16): samples of failed batches are counted as lost, apart from per-ray breaches.
+    #[test]
+    fn lost_batches_and_per_ray_breaches_are_told_apart() {
+        let mut r = ContractReport::default();
+        for _ in 0..4 {
+            r.record(Violation::Panicked, Point2::ZERO, String::new);
+        }
+        for _ in 0..2 {
+            r.record(Violation::Failed, Point2::ZERO, String::new);
+        }
+        r.record(Violation::NonFiniteTint, Point2::ZERO, String::new);
+        assert_eq!((r.lost(), r.breaches(), r.violations()), (6, 1, 7));
     }
 }

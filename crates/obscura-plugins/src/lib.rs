@@ -11,6 +11,8 @@
 //!   parameter table, its property values) and building what the host sends it (parameter lists,
 //!   environments, an error sink). The plugin's side is in [`obscura_sdk::abi`], which a Rust plugin
 //!   compiles in;
+//! - [`isolate`]: plugins run in worker processes (`--isolate-plugins`), so a crash or hang in one
+//!   costs a batch, never the host;
 //! - [`listing`]: the text of `obscura plugins`.
 //!
 //! A host asks for a projection by name ([`loader::ensure`]): a registered name is used as is, an
@@ -20,6 +22,7 @@
 pub mod builtins;
 pub mod decode;
 pub mod encode;
+pub mod isolate;
 pub mod listing;
 pub mod loader;
 

@@ -64,11 +64,9 @@ fn loading_and_listing_a_plugin_runs_nothing_but_its_entry_point() {
     assert_eq!(calls(&p), ["entry"]);
 }
 
-#[test]
-fn two_creates_end_render_and_drop_make_the_documented_sequence() {
-    let (_d, p) = recorder();
-    let mut reg = Registry::new();
-    load_file(&mut reg, &p).unwrap();
+/// Two projections created, `end_render`, both dropped, the registry dropped: the calls `p` must
+/// have received, in order.
+fn two_creates_end_render_and_drop(mut reg: Registry, p: &Path) -> Vec<String> {
     let mut env = env();
     let a = reg.create("Recorder", &mut env, &ParamList::new()).unwrap();
     let b = reg.create("Recorder", &mut env, &ParamList::new()).unwrap();
@@ -76,20 +74,51 @@ fn two_creates_end_render_and_drop_make_the_documented_sequence() {
     drop((a, b));
     drop(reg);
     let path = p.canonicalize().unwrap();
-    assert_eq!(
-        calls(&p),
-        [
-            "entry".to_string(),
-            format!("init {}", path.display()),
-            "synchronize RenderBegin params".into(),
-            "create".into(),
-            "create".into(),
-            "synchronize RenderEnd null".into(),
-            "destroy".into(),
-            "destroy".into(),
-            "finalize".into(),
-        ]
-    );
+    vec![
+        "entry".to_string(),
+        format!("init {}", path.display()),
+        "synchronize RenderBegin params".into(),
+        "create".into(),
+        "create".into(),
+        "synchronize RenderEnd null".into(),
+        "destroy".into(),
+        "destroy".into(),
+        "finalize".into(),
+    ]
+}
+
+#[test]
+fn two_creates_end_render_and_drop_make_the_documented_sequence() {
+    let (_d, p) = recorder();
+    let mut reg = Registry::new();
+    load_file(&mut reg, &p).unwrap();
+    let expected = two_creates_end_render_and_drop(reg, &p);
+    assert_eq!(calls(&p), expected);
+}
+
+/// The same sequence reaches a plugin run in a worker process (`--isolate-plugins`): read from the
+/// file the recorder writes beside itself once `init` names its path.
+#[cfg(target_os = "linux")]
+#[test]
+fn the_lifecycle_reaches_an_isolated_plugin_in_the_documented_order() {
+    use obscura_plugins::isolate::{Isolation, WorkerCommand};
+    let (dir, p) = recorder();
+    let worker = WorkerCommand {
+        program: env!("CARGO_BIN_EXE_obscura-plugin-worker").into(),
+        args: Vec::new(),
+    };
+    let search = PluginSearch::new(vec![dir.path().into()])
+        .with_isolation(Some(Isolation::all(worker, std::time::Duration::from_secs(10))));
+    let mut reg = Registry::new();
+    obscura_plugins::loader::ensure(&mut reg, "Recorder", &search).unwrap();
+    let expected = two_creates_end_render_and_drop(reg, &p);
+    let log = PathBuf::from(format!("{}.calls", p.canonicalize().unwrap().display()));
+    let record: Vec<String> = std::fs::read_to_string(log)
+        .unwrap_or_default()
+        .lines()
+        .map(str::to_string)
+        .collect();
+    assert_eq!(record, expected);
 }
 
 /// `finalize` comes after every projection is destroyed, even one that outlives its registry; and a

@@ -17,6 +17,7 @@
 //! | `MirrorBall` | [`mirrorball`] | Spherical | RayLength |
 //! | `EquiangularCubemapFace` | [`cubemap`] | Spherical | RayLength |
 //! | `Octahedral` | [`octahedral`] | Spherical | RayLength |
+//! | `LensSystem` | [`lens_system`] | Spherical | CameraZ (RayLength past 60°) |
 //!
 //! The table of every built-in projection (these and the calibrated cameras of `obscura-calibration`)
 //! is assembled above both crates, in `obscura-plugins`.
@@ -28,6 +29,7 @@ pub mod cubemap;
 pub mod cylinder;
 pub mod dof;
 pub mod fisheye;
+pub mod lens_system;
 pub mod mirrorball;
 pub mod octahedral;
 pub mod omnistereo;
@@ -47,6 +49,7 @@ use obscura_sdk::ProjectionFactory;
 pub use cubemap::{CubemapFace, CubemapFaceFactory, Face as CubemapFaceName};
 pub use cylinder::{CylinderCamera, CylinderCameraFactory};
 pub use fisheye::{Fisheye, FisheyeFactory, Mapping as FisheyeMapping};
+pub use lens_system::{LensSystem, LensSystemFactory};
 pub use mirrorball::{MirrorBall, MirrorBallFactory};
 pub use octahedral::{Octahedral, OctahedralFactory};
 pub use omnistereo::{Eye, OdsSettings, OmnidirectionalStereo, OmnidirectionalStereoFactory};
@@ -74,5 +77,6 @@ pub fn factories() -> Vec<Box<dyn ProjectionFactory>> {
         Box::new(CylinderCameraFactory),
         Box::new(PaniniFactory),
         Box::new(OmnidirectionalStereoFactory),
+        Box::new(LensSystemFactory),
     ]
 }

@@ -19,6 +19,8 @@ use obscura_host::PixelRect;
 use obscura_sdk::Rgb;
 
 use crate::filter::Filter;
+use crate::flow::FlowPixel;
+use crate::truth::Truth;
 
 /// What one camera sample contributes. Ci already multiplied by the projection's tint (the renderer
 /// does that); everything else untinted.
@@ -42,6 +44,11 @@ pub struct SampleValues {
     /// The first texture coordinate set at the hit, as stored in the file; 0 for a miss or a surface
     /// without coordinates.
     pub uv: Vec2,
+    /// Depths, camera-space position and normal, IDs: unfiltered, like `z`.
+    pub truth: Truth,
+    /// The pixel's optical flow: not a per-sample value; [`Film::pixel`] fills it from the flow pass
+    /// ([`Film::set_flow`]).
+    pub flow: FlowPixel,
 }
 
 impl SampleValues {
@@ -56,6 +63,8 @@ impl SampleValues {
         camera_direction: Vec3::ZERO,
         albedo: Rgb::BLACK,
         uv: Vec2::ZERO,
+        truth: Truth::EMPTY,
+        flow: FlowPixel::NONE,
     };
 }
 
@@ -75,6 +84,7 @@ struct Accum {
     camera_direction: Vec3,
     albedo: Rgb,
     uv: Vec2,
+    truth: Truth,
 }
 
 impl Accum {
@@ -90,6 +100,7 @@ impl Accum {
         camera_direction: Vec3::ZERO,
         albedo: Rgb::BLACK,
         uv: Vec2::ZERO,
+        truth: Truth::EMPTY,
     };
 
     fn splat(&mut self, w: f32, v: &SampleValues) {
@@ -117,6 +128,7 @@ impl Accum {
             self.camera_direction = v.camera_direction;
             self.albedo = v.albedo;
             self.uv = v.uv;
+            self.truth = v.truth;
         }
     }
 
@@ -135,6 +147,7 @@ impl Accum {
             self.camera_direction = o.camera_direction;
             self.albedo = o.albedo;
             self.uv = o.uv;
+            self.truth = o.truth;
         }
     }
 
@@ -156,6 +169,7 @@ impl Accum {
             v.camera_direction = self.camera_direction;
             v.albedo = self.albedo;
             v.uv = self.uv;
+            v.truth = self.truth;
         }
         v
     }
@@ -188,6 +202,8 @@ pub struct Film {
     crop: PixelRect,
     filter: Filter,
     pixels: Vec<Accum>,
+    /// The flow pass's result over the crop, row by row, once set.
+    flow: Option<Vec<FlowPixel>>,
 }
 
 impl Film {
@@ -209,7 +225,17 @@ impl Film {
             crop,
             filter,
             pixels: vec![Accum::ZERO; crop.len()],
+            flow: None,
         }
+    }
+
+    /// Stores the flow pass's pixels (the crop's, row by row), reported by [`Film::pixel`].
+    ///
+    /// # Panics
+    /// When `flow` does not hold one entry per crop pixel (a bug of the caller).
+    pub fn set_flow(&mut self, flow: Vec<FlowPixel>) {
+        assert_eq!(flow.len(), self.pixels.len(), "one flow pixel per crop pixel");
+        self.flow = Some(flow);
     }
 
     /// The format size `(W, H)`: the display window.
@@ -283,7 +309,13 @@ impl Film {
     /// [`SampleValues::EMPTY`] outside the crop and where nothing was recorded.
     #[must_use]
     pub fn pixel(&self, x: u32, y: u32) -> SampleValues {
-        index_in(self.crop, x as i64, y as i64).map_or(SampleValues::EMPTY, |i| self.pixels[i].resolve())
+        index_in(self.crop, x as i64, y as i64).map_or(SampleValues::EMPTY, |i| {
+            let mut v = self.pixels[i].resolve();
+            if let Some(flow) = &self.flow {
+                v.flow = flow[i];
+            }
+            v
+        })
     }
 
     /// Fraction of the crop's pixels in which at least one sample landed (0 for an empty crop): how

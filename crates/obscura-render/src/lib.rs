@@ -16,6 +16,8 @@
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
 //! | [`job`] | one `obscura render` from files to files |
+//! | [`truth`], [`flow`], [`metadata`], [`frame`] | ground truth: both depths, camera-space P and N, IDs; optical flow through `unproject`; per-frame camera JSON and ID sidecar; complete frames |
+//! | [`sequence`] | frame selections (`--frames 1-24`) and each frame's output path |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 
 pub mod atomic;
@@ -24,15 +26,20 @@ pub mod deep;
 pub mod dice;
 pub mod film;
 pub mod filter;
+pub mod flow;
+pub mod frame;
 pub mod integrator;
 pub mod job;
 pub mod light;
 pub mod material;
+pub mod metadata;
 pub mod motion;
 pub mod output;
 pub mod ray;
 pub mod raymap;
 pub mod render;
 pub mod rng;
+pub mod sequence;
 pub mod stmap;
 pub mod texture;
+pub mod truth;

@@ -110,6 +110,26 @@ fn channel_names(aov: Aov) -> &'static [&'static str] {
         Aov::CameraDirection => &["cameraDirection.X", "cameraDirection.Y", "cameraDirection.Z"],
         Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
         Aov::Uv => &["uv.X", "uv.Y"],
+        Aov::CameraZ => &["cameraZ"],
+        Aov::Distance => &["distance"],
+        Aov::PCamera => &["Pcamera.X", "Pcamera.Y", "Pcamera.Z"],
+        Aov::NCamera => &["Ncamera.X", "Ncamera.Y", "Ncamera.Z"],
+        Aov::ObjectId => &["objectId"],
+        Aov::InstanceId => &["instanceId"],
+        Aov::MaterialId => &["materialId"],
+        Aov::FlowForward => &["flowForward.X", "flowForward.Y"],
+        Aov::FlowBackward => &["flowBackward.X", "flowBackward.Y"],
+        Aov::FlowValid => &["flowValid.forward", "flowValid.backward"],
+    }
+}
+
+/// The integer value of an ID AOV in a resolved pixel; `None` for the other AOVs.
+fn id_component(v: &SampleValues, aov: Aov) -> Option<u32> {
+    match aov {
+        Aov::ObjectId => Some(v.truth.object_id),
+        Aov::InstanceId => Some(v.truth.instance_id),
+        Aov::MaterialId => Some(v.truth.material_id),
+        _ => None,
     }
 }
 
@@ -124,6 +144,14 @@ fn component(v: &SampleValues, aov: Aov, k: usize) -> f32 {
         Aov::CameraDirection => v.camera_direction[k],
         Aov::Albedo => [v.albedo.r, v.albedo.g, v.albedo.b][k],
         Aov::Uv => v.uv[k],
+        Aov::CameraZ => v.truth.camera_z,
+        Aov::Distance => v.truth.distance,
+        Aov::PCamera => v.truth.p_camera[k],
+        Aov::NCamera => v.truth.n_camera[k],
+        Aov::ObjectId | Aov::InstanceId | Aov::MaterialId => id_component(v, aov).unwrap_or(0) as f32,
+        Aov::FlowForward => v.flow.forward[k],
+        Aov::FlowBackward => v.flow.backward[k],
+        Aov::FlowValid => [v.flow.forward_valid, v.flow.backward_valid][k],
     }
 }
 
@@ -139,7 +167,10 @@ fn resolve(film: &Film) -> Vec<SampleValues> {
 ///
 /// Channels: Ci → `R`, `G`, `B`; Alpha → `A`; Z → `Z`; N → `N.X`, `N.Y`, `N.Z`; P → `P.X`, `P.Y`,
 /// `P.Z`; CameraDirection → `cameraDirection.X`, `.Y`, `.Z`; Albedo → `albedo.R`, `.G`, `.B`; Uv →
-/// `uv.X`, `uv.Y`. ZIP compression (16 scanlines per
+/// `uv.X`, `uv.Y`; the ground truth as `cameraZ`,
+/// `distance`, `Pcamera.{X,Y,Z}`, `Ncamera.{X,Y,Z}`, `flowForward.{X,Y}`, `flowBackward.{X,Y}`,
+/// `flowValid.{forward,backward}` and the IDs `objectId`, `instanceId`, `materialId` as 32-bit
+/// unsigned integers (whatever `half` says). ZIP compression (16 scanlines per
 /// block); data window = the crop, display window = the full format; `pixelAspectRatio` =
 /// `pixel_aspect`. An AOV named twice is written once; OpenEXR itself stores channels sorted by name. `half`
 /// applies to every channel (Z and P included: ask for float when depth precision matters). A pixel
@@ -205,7 +236,9 @@ pub fn write_exr(
     for aov in unique {
         for (k, name) in channel_names(aov).iter().enumerate() {
             let values = pixels.iter().map(|v| component(v, aov, k));
-            let samples = if half {
+            let samples = if id_component(&SampleValues::EMPTY, aov).is_some() {
+                FlatSamples::U32(pixels.iter().filter_map(|v| id_component(v, aov)).collect())
+            } else if half {
                 FlatSamples::F16(values.map(f16::from_f32).collect())
             } else {
                 FlatSamples::F32(values.collect())

@@ -47,6 +47,7 @@ use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
 use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
 use crate::rng::Rng;
+use crate::truth::{IdTable, Truth};
 
 /// Why a render could not start.
 #[derive(Debug, thiserror::Error)]
@@ -124,6 +125,8 @@ pub struct RenderStats {
     pub rays_traced: u64,
     /// Seconds spent tracing and shading (summed over threads).
     pub shading_seconds: f64,
+    /// Wall-clock seconds of the flow pass (0 when no flow was asked for).
+    pub flow_seconds: f64,
     /// Camera samples handed to the projection, culled ones and contract breaches.
     pub contract: ContractReport,
     /// Tiles finished / all tiles.
@@ -146,6 +149,8 @@ pub struct Prepared {
     texture_warnings: Vec<String>,
     /// What was chosen for the scene (automatic camera, default lights); empty when nothing was.
     info: String,
+    /// Object, instance and material IDs of the scene's objects.
+    ids: IdTable,
     setup_seconds: f64,
 }
 
@@ -195,7 +200,7 @@ impl Tracer for CountingTracer<'_> {
 /// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, not clamped, so motion
 /// keys outside the shutter keep their place (a shutter shorter than the motion blurs less). For an
 /// instantaneous shutter, `t − open`: rays at time 0 then see the transform at the shutter time.
-fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
+pub(crate) fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
     let span = shutter.1 - shutter.0;
     if span > 0.0 {
         (t - shutter.0) / span
@@ -236,7 +241,7 @@ pub fn prepare(
     }
     let props = *stage.properties();
     let shutter = scene.camera.shutter;
-    let camera_to_world = camera_motion(&stage, shutter)?;
+    let camera_to_world = camera_motion(stage.environment().world_to_camera(), shutter)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
     let meshes = dice_objects(scene, &props, world_to_camera_open)?;
     let instances: Vec<Instance> = scene
@@ -288,6 +293,7 @@ pub fn prepare(
         camera_to_world,
         texture_warnings: texture_warnings.into_iter().map(|w| w.0).collect(),
         info: info.join("; "),
+        ids: IdTable::new(scene),
         setup_seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -331,15 +337,16 @@ fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<Str
     camera
 }
 
-/// Camera-to-world over the shutter (shutter-normalised time), from the camera stage's world-to-camera
-/// motion samples.
+/// Camera-to-world over the shutter (shutter-normalised time), from world-to-camera motion samples
+/// (the camera stage's, or another frame's).
 ///
 /// # Errors
 /// [`RenderError::Camera`] when a sample's transform is singular or not finite.
-fn camera_motion(stage: &CameraStage, shutter: (f32, f32)) -> Result<Motion, RenderError> {
-    let camera_to_world: Vec<(f32, Affine3A)> = stage
-        .environment()
-        .world_to_camera()
+pub(crate) fn camera_motion(
+    world_to_camera: &[obscura_sdk::MotionSample],
+    shutter: (f32, f32),
+) -> Result<Motion, RenderError> {
+    let camera_to_world: Vec<(f32, Affine3A)> = world_to_camera
         .iter()
         .map(|s| {
             (
@@ -432,6 +439,41 @@ impl Prepared {
     #[must_use]
     pub fn texture_memory_bytes(&self) -> usize {
         self.shading.texturing.memory_bytes()
+    }
+
+    /// The scene's object, instance and material IDs.
+    #[must_use]
+    pub fn ids(&self) -> &IdTable {
+        &self.ids
+    }
+
+    /// The camera-space ray taken to world space with the camera's motion at `time`; its `min_dist` and
+    /// `max_dist` become world-space bounds. `None` when the transform collapses or blows up the
+    /// direction.
+    pub(crate) fn world_ray(&self, r: &RayGeometry, time: f32) -> Option<WorldRay> {
+        let c2w = self.camera_to_world.object_to_world(time);
+        let origin_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
+        // Normalised here so that a ray length is exact even for a projection whose directions are unit
+        // only to the contract's tolerance.
+        let direction_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
+        let d_world = c2w.transform_vector3a(direction_cam);
+        let stretch = d_world.length();
+        if !(stretch > 0.0 && stretch.is_finite()) {
+            return None;
+        }
+        Some(WorldRay {
+            ray: Ray {
+                origin: c2w.transform_point3a(origin_cam),
+                direction: d_world / stretch,
+                t_min: r.min_dist * stretch,
+                t_max: r.max_dist * stretch,
+                time,
+            },
+            origin_cam,
+            direction_cam,
+            stretch,
+            camera_to_world: c2w,
+        })
     }
 
     /// Renders every tile of the crop. `progress(done, total)` is called after each tile; `cancel` is
@@ -582,6 +624,7 @@ impl Accumulator {
                 sampling_seconds: seconds(self.sampling_ns),
                 rays_traced: self.rays_traced.into_inner(),
                 shading_seconds: seconds(self.shading_ns),
+                flow_seconds: 0.0,
                 contract: self
                     .report
                     .into_inner()
@@ -654,14 +697,16 @@ struct ProjectedSample {
 }
 
 /// A camera ray taken to world space at its own time.
-struct WorldRay {
-    ray: Ray,
+pub(crate) struct WorldRay {
+    pub(crate) ray: Ray,
     /// The camera-space origin and (normalised) direction the ray came from.
-    origin_cam: Vec3A,
-    direction_cam: Vec3A,
+    pub(crate) origin_cam: Vec3A,
+    pub(crate) direction_cam: Vec3A,
     /// The length the camera-to-world transform gives a unit camera-space direction: camera-space
     /// distances times `stretch` are world-space distances.
-    stretch: f32,
+    pub(crate) stretch: f32,
+    /// Camera-to-world at the ray's time.
+    pub(crate) camera_to_world: Affine3A,
 }
 
 impl<'a> TileIntegrator<'a> {
@@ -773,7 +818,7 @@ impl<'a> TileIntegrator<'a> {
     /// One camera sample: its ray to world space at its own time, the path traced, its AOVs splatted
     /// (and its deep value kept, when asked for).
     fn render_sample(&self, tile: &mut TileState<'_>, sample: &ProjectedSample) {
-        let Some(world) = self.world_ray(&sample.ray, sample.time) else {
+        let Some(world) = self.prepared.world_ray(&sample.ray, sample.time) else {
             return;
         };
         let (px, py) = sample.pixel;
@@ -811,49 +856,40 @@ impl<'a> TileIntegrator<'a> {
         }
     }
 
-    /// The camera-space ray taken to world space with the camera's motion at `time`; its `min_dist` and
-    /// `max_dist` become world-space bounds. `None` when the transform collapses or blows up the
-    /// direction.
-    fn world_ray(&self, r: &RayGeometry, time: f32) -> Option<WorldRay> {
-        let c2w = self.prepared.camera_to_world.object_to_world(time);
-        let origin_cam = Vec3A::new(r.origin.x, r.origin.y, r.origin.z);
-        // Normalised here so that a ray length is exact even for a projection whose directions are unit
-        // only to the contract's tolerance.
-        let direction_cam = Vec3A::new(r.direction.x, r.direction.y, r.direction.z).normalize();
-        let d_world = c2w.transform_vector3a(direction_cam);
-        let stretch = d_world.length();
-        if !(stretch > 0.0 && stretch.is_finite()) {
-            return None;
-        }
-        Some(WorldRay {
-            ray: Ray {
-                origin: c2w.transform_point3a(origin_cam),
-                direction: d_world / stretch,
-                t_min: r.min_dist * stretch,
-                t_max: r.max_dist * stretch,
-                time,
-            },
-            origin_cam,
-            direction_cam,
-            stretch,
-        })
-    }
-
     /// The sample's AOVs: `Ci` is the radiance times the projection's tint; alpha, z (camera units, in
     /// the projection's deep metric), N, P and cameraDirection are untinted.
     fn aovs(&self, path: &PathResult, world: &WorldRay, tint: Rgb) -> SampleValues {
         let radiance = path.radiance;
         let ci = Rgb::new(radiance.x * tint.r, radiance.y * tint.g, radiance.z * tint.b);
-        let (z, n, p) = match path.first_hit {
+        let (z, n, p, truth) = match path.first_hit {
             Some(h) => {
                 let t_cam = h.t / world.stretch;
+                let p_camera = world.origin_cam + world.direction_cam * t_cam;
                 let z = match self.prepared.deep_metric {
-                    DeepMetric::CameraZ => world.origin_cam.z + world.direction_cam.z * t_cam,
+                    DeepMetric::CameraZ => p_camera.z,
                     DeepMetric::RayLength => t_cam,
                 };
-                (z, Vec3::from(h.shading_normal), Vec3::from(h.position))
+                // Normals go to camera space by the inverse transpose of world-to-camera, which is the
+                // transpose of camera-to-world's linear part.
+                let n_camera = world
+                    .camera_to_world
+                    .matrix3
+                    .transpose()
+                    .mul_vec3a(h.shading_normal)
+                    .normalize_or_zero();
+                let (object_id, instance_id, material_id) = self.prepared.ids.ids(h.instance);
+                let truth = Truth {
+                    camera_z: p_camera.z,
+                    distance: t_cam,
+                    p_camera: p_camera.into(),
+                    n_camera: n_camera.into(),
+                    object_id,
+                    instance_id,
+                    material_id,
+                };
+                (z, Vec3::from(h.shading_normal), Vec3::from(h.position), truth)
             }
-            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO),
+            None => (f32::INFINITY, Vec3::ZERO, Vec3::ZERO, Truth::EMPTY),
         };
         SampleValues {
             ci,
@@ -864,6 +900,8 @@ impl<'a> TileIntegrator<'a> {
             camera_direction: Vec3::from(world.ray.direction),
             albedo: Rgb::new(path.albedo.x, path.albedo.y, path.albedo.z),
             uv: path.uv,
+            truth,
+            flow: crate::flow::FlowPixel::NONE,
         }
     }
 }

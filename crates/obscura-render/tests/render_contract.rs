@@ -9,7 +9,7 @@ use glam::{Mat4, Vec3};
 use obscura_host::CameraDesc;
 use obscura_plugins::builtin_registry;
 use obscura_render::render::{Prepared, RenderOptions, prepare};
-use obscura_scene::{Light, Material, Mesh, MotionTransform, Object, Scene, Shape};
+use obscura_scene::{Identity, Light, Material, Mesh, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamDecl, ParamList, PluginError, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, Registry, Rgb,
@@ -127,6 +127,7 @@ fn wall_scene(projection: &str, format: Format) -> Scene {
         material: 1,
         micropolygon_length: 1.0,
         source: "test".into(),
+        identity: Identity::default(),
     });
     scene.samples_per_pixel = 16;
     scene
@@ -227,6 +228,7 @@ fn a_crop_equals_the_same_region_of_the_full_render() {
         material: 0,
         micropolygon_length: 1.0,
         source: "test".into(),
+        identity: Identity::default(),
     });
     let full = render(&scene);
     scene.camera.crop_window = obscura_host::CropWindow {
@@ -276,6 +278,7 @@ fn a_moving_sphere_is_centred_on_its_mid_shutter_position() {
         material: 1,
         micropolygon_length: 1.0,
         source: "test".into(),
+        identity: Identity::default(),
     });
     let out = render(&scene);
     let (mut sum, mut wx) = (0.0f64, 0.0f64);
@@ -315,6 +318,7 @@ fn a_wrong_dicing_hint_changes_the_dicing() {
         material: 0,
         micropolygon_length: 1.0,
         source: "test".into(),
+        identity: Identity::default(),
     });
     let right = prepared(&scene).accel().triangle_count();
     scene.projection = "WrongHint".into();
@@ -351,6 +355,7 @@ fn white_furnace_gives_a_uniform_image() {
         material: 1,
         micropolygon_length: 1.0,
         source: "test".into(),
+        identity: Identity::default(),
     });
     let mut opts = RenderOptions::default();
     opts.path.max_depth = 64;

@@ -234,6 +234,20 @@ pub struct Object {
     pub micropolygon_length: f32,
     /// Where it was declared (`scene.rib:42`), for messages.
     pub source: String,
+    /// Its names for ground truth (ID AOVs, the `.ids.json` sidecar).
+    pub identity: Identity,
+}
+
+/// The names an object carries into the ID AOVs: several instances may share one object name (a glTF
+/// mesh placed by two nodes, an OBJ group split over materials); each instance is its own.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct Identity {
+    /// The object's name: RIB `Attribute "identifier" "name"`, a glTF mesh's name, an OBJ object or
+    /// group name. Empty when the scene gives none (the renderer then names it by its source).
+    pub object: String,
+    /// The instance's name: the RIB identifier, a glTF node's name, the OBJ object or group name. Empty
+    /// when the scene gives none.
+    pub instance: String,
 }
 
 /// The pixel filter kinds RenderMan offers.
@@ -300,10 +314,88 @@ pub enum Aov {
     P,
     /// The camera ray's direction, world space (`cameraDirection`).
     CameraDirection,
+    /// Camera-space z of the hit, whatever the projection's deep metric (`cameraZ`).
+    CameraZ,
+    /// Distance from the camera ray's origin to the hit, along the ray (`distance`).
+    Distance,
+    /// Hit position, camera space at the ray's time (`Pcamera`).
+    PCamera,
+    /// Shading normal, camera space at the ray's time (`Ncamera`).
+    NCamera,
+    /// The hit object's ID, an integer (`objectId`; 0 = nothing hit).
+    ObjectId,
+    /// The hit instance's ID, an integer (`instanceId`; 0 = nothing hit).
+    InstanceId,
+    /// The hit material's ID, an integer (`materialId`; 0 = nothing hit).
+    MaterialId,
+    /// Raster displacement toward shutter close or the next frame (`flowForward`), pixels.
+    FlowForward,
+    /// Raster displacement toward the previous frame (`flowBackward`), pixels.
+    FlowBackward,
+    /// Where each flow is defined (`flowValid`: `.forward`, `.backward`, 1 or 0).
+    FlowValid,
     /// The textured base colour at the first hit, linear RGB (`albedo`).
     Albedo,
     /// The first texture coordinate set at the first hit, as stored in the file (`uv`).
     Uv,
+}
+
+impl Aov {
+    /// The ground-truth AOVs (everything but the beauty, alpha, `Z`, `N`, `P` and `cameraDirection`),
+    /// in the order `--aov all` adds them.
+    pub const GROUND_TRUTH: [Aov; 10] = [
+        Aov::CameraZ,
+        Aov::Distance,
+        Aov::PCamera,
+        Aov::NCamera,
+        Aov::ObjectId,
+        Aov::InstanceId,
+        Aov::MaterialId,
+        Aov::FlowForward,
+        Aov::FlowBackward,
+        Aov::FlowValid,
+    ];
+
+    /// The texture AOVs (issue 13), which `--aov all` adds after the ground-truth ones.
+    pub const TEXTURE: [Aov; 2] = [Aov::Albedo, Aov::Uv];
+
+    /// The name a `Display` channel list and `--aov` use for this AOV.
+    #[must_use]
+    pub fn name(self) -> &'static str {
+        match self {
+            Aov::Ci => "Ci",
+            Aov::Alpha => "a",
+            Aov::Z => "z",
+            Aov::N => "N",
+            Aov::P => "P",
+            Aov::CameraDirection => "cameraDirection",
+            Aov::CameraZ => "cameraZ",
+            Aov::Distance => "distance",
+            Aov::PCamera => "Pcamera",
+            Aov::NCamera => "Ncamera",
+            Aov::ObjectId => "objectId",
+            Aov::InstanceId => "instanceId",
+            Aov::MaterialId => "materialId",
+            Aov::FlowForward => "flowForward",
+            Aov::FlowBackward => "flowBackward",
+            Aov::FlowValid => "flowValid",
+            Aov::Albedo => "albedo",
+            Aov::Uv => "uv",
+        }
+    }
+
+    /// The AOV a single name means (the names of [`Aov::name`]), `None` for anything else.
+    #[must_use]
+    pub fn from_name(name: &str) -> Option<Aov> {
+        const RENDERMAN: [Aov; 6] = [Aov::Ci, Aov::Alpha, Aov::Z, Aov::N, Aov::P, Aov::CameraDirection];
+        (RENDERMAN.into_iter().chain(Aov::GROUND_TRUTH).chain(Aov::TEXTURE)).find(|a| a.name() == name)
+    }
+
+    /// True for the flow AOVs, which need the flow pass.
+    #[must_use]
+    pub fn is_flow(self) -> bool {
+        matches!(self, Aov::FlowForward | Aov::FlowBackward | Aov::FlowValid)
+    }
 }
 
 /// `Display "file" "driver" "channels"`.
@@ -352,6 +444,9 @@ pub struct Scene {
     pub auto_light: bool,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
     pub warnings: Vec<String>,
+    /// Seconds of animation the file holds (glTF animations); `None` for a still scene. An animated
+    /// scene is posed per frame by its reader ([`crate::gltf_scene::load_gltf_at`]).
+    pub animation_seconds: Option<f32>,
 }
 
 impl Scene {
@@ -373,6 +468,7 @@ impl Scene {
             auto_camera: None,
             auto_light: false,
             warnings: Vec::new(),
+            animation_seconds: None,
         }
     }
 }

@@ -108,7 +108,9 @@ impl Violation {
     pub fn describe(self) -> &'static str {
         match self {
             Violation::Panicked => "samples lost to a panic in project",
-            Violation::Failed => "samples lost to an error returned by project",
+            Violation::Failed => {
+                "samples lost to a failed project call (an error it returned, or its isolated worker's crash or hang)"
+            }
             Violation::NonFiniteOrigin => "non-finite origins",
             Violation::NonFiniteDirection => "non-finite directions",
             Violation::NonUnitDirection => "directions neither unit length nor zero",

@@ -17,6 +17,24 @@ pub enum PluginLoadError {
         /// The loader's reason.
         reason: String,
     },
+    /// The file was refused before the system loader saw it: not a shared library of this host,
+    /// truncated, or an entry point that is not a function (see [`super::validate`]).
+    #[error("{}: not loaded: {reason}", path.display())]
+    Refused {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        reason: String,
+    },
+    /// The plugin's worker process (`--isolate-plugins`) failed: it crashed or hung while loading or
+    /// describing the library, or could not be started.
+    #[error("{}: {reason}", path.display())]
+    Isolated {
+        /// The file.
+        path: PathBuf,
+        /// What happened.
+        reason: String,
+    },
     /// The library does not export the entry point.
     #[error("{}: not an Obscura projection plugin: it does not export `{}` ({reason})", path.display(), ENTRY_SYMBOL)]
     MissingSymbol {

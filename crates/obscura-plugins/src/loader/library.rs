@@ -160,6 +160,7 @@ pub(super) fn open(path: &Path) -> Result<&'static Loaded, PluginLoadError> {
     if let Some(l) = cache.iter().find(|l| l.path == canonical) {
         return Ok(l);
     }
+    super::validate::validate(&canonical)?;
     // SAFETY: loading a library runs its initialisers; that is what loading a plugin means. The
     // library is leaked below, so nothing it hands out ever dangles.
     let lib = unsafe { libloading::Library::new(&canonical) }.map_err(|e| PluginLoadError::Open {

@@ -3,13 +3,15 @@
 //! A plugin is a shared library (`<Name>.so`, `.dylib` on macOS, `.dll` on Windows) exporting
 //! `obscura_projection_entry` (see `include/obscura/projection.h` and [`obscura_sdk::abi`]). Loading one
 //!
-//! 1. opens the library (never unloaded: the [`libloading::Library`] is leaked, and a library opened
+//! 1. checks the file before the system loader sees it ([`validate`]: file type, architecture, size,
+//!    the entry symbol a function), so a truncated or foreign file is an error, not a crash;
+//! 2. opens the library (never unloaded: the [`libloading::Library`] is leaked, and a library opened
 //!    twice in a process is opened once);
-//! 2. looks up the entry point and calls it with the host's ABI version;
-//! 3. checks the descriptor before calling anything else: not null, the same ABI version, a
+//! 3. looks up the entry point and calls it with the host's ABI version;
+//! 4. checks the descriptor before calling anything else: not null, the same ABI version, a
 //!    `struct_size` at least this version's layout, a name, the required function pointers, and a
 //!    well-formed parameter table (copied into the host);
-//! 4. registers a [`PluginFactory`] — an ordinary [`ProjectionFactory`] — in the [`Registry`], so a
+//! 5. registers a [`PluginFactory`] — an ordinary [`ProjectionFactory`] — in the [`Registry`], so a
 //!    loaded projection goes through the same camera stage, validation and culling as a built-in.
 //!
 //! Nothing of the plugin runs but its entry point: the registry calls `init`, with the library's path,
@@ -26,10 +28,11 @@
 //! | `search.rs` | [`PluginSearch`], [`library_file_name`], [`PLUGIN_PATH_VAR`] |
 //! | `library.rs` | opening a library, the descriptor checks, the `init`/`finalize` session |
 //! | `adapter.rs` | [`PluginFactory`] and its projections, through the function pointers |
+//! | `validate.rs` | [`validate::validate`]: the file checks before `dlopen` |
 //! | `error.rs` | [`PluginLoadError`] |
 //! | here | [`load_file`], [`load_all`], [`ensure`] |
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use obscura_sdk::{ProjectionFactory, Registry, did_you_mean};
 
@@ -37,27 +40,67 @@ mod adapter;
 mod error;
 mod library;
 mod search;
+pub mod validate;
 
 pub use adapter::PluginFactory;
 pub use error::PluginLoadError;
 pub use search::{PLUGIN_PATH_VAR, PluginSearch, library_file_name, looks_like_path};
 
-/// Loads the plugin library at `path` into `registry`.
+/// Loads the plugin library at `path` into `registry`, in process.
 ///
 /// # Errors
 /// A [`PluginLoadError`] naming the file and the reason, or [`PluginLoadError::Duplicate`] when the
 /// registry already has a projection of that name.
 pub fn load_file(registry: &mut Registry, path: &Path) -> Result<String, PluginLoadError> {
-    register(registry, PluginFactory::open(path)?)
+    let (factory, path) = open(path, &PluginSearch::default())?;
+    register(registry, factory, path)
+}
+
+/// Opens the library at `path`: in a worker process when `search`'s isolation names it (after the
+/// file checks, which run here either way), else in process. Returns the factory and the library's
+/// canonical path.
+fn open(
+    path: &Path,
+    search: &PluginSearch,
+) -> Result<(Box<dyn ProjectionFactory>, PathBuf), PluginLoadError> {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+    let Some(isolation) = search.isolation().filter(|i| i.applies_to(stem)) else {
+        let f = PluginFactory::open(path)?;
+        let path = f.path().to_path_buf();
+        return Ok((Box::new(f), path));
+    };
+    let canonical = path.canonicalize().map_err(|e| PluginLoadError::Open {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    validate::validate(&canonical)?;
+    match crate::isolate::IsolatedFactory::open(&canonical, isolation) {
+        #[cfg(target_os = "linux")]
+        Ok(f) => Ok((Box::new(f), canonical)),
+        #[cfg(not(target_os = "linux"))]
+        Ok(_) => unreachable!("no isolation without Linux"),
+        Err(reason) => {
+            // The worker's loader names the file itself.
+            let prefix = format!("{}: ", canonical.display());
+            let reason = reason.strip_prefix(&prefix).map(str::to_string).unwrap_or(reason);
+            Err(PluginLoadError::Isolated {
+                path: canonical,
+                reason,
+            })
+        }
+    }
 }
 
 /// Registers `factory` under its name with its file's path (handed to `init` later), and returns
 /// the name.
-fn register(registry: &mut Registry, factory: PluginFactory) -> Result<String, PluginLoadError> {
+fn register(
+    registry: &mut Registry,
+    factory: Box<dyn ProjectionFactory>,
+    path: PathBuf,
+) -> Result<String, PluginLoadError> {
     let name = factory.name().to_string();
-    let path = factory.path().to_path_buf();
     registry
-        .register(Box::new(factory), &path.to_string_lossy())
+        .register(factory, &path.to_string_lossy())
         .map_err(|d| PluginLoadError::Duplicate { path, name: d.0 })?;
     Ok(name)
 }
@@ -106,7 +149,8 @@ pub fn ensure(
         return Ok(name_or_path.to_string());
     }
     if looks_like_path(name_or_path) {
-        return load_file(registry, Path::new(name_or_path));
+        let (factory, path) = open(Path::new(name_or_path), search)?;
+        return register(registry, factory, path);
     }
     let Some(path) = search.find(name_or_path) else {
         let known = registry.names();
@@ -117,15 +161,15 @@ pub fn ensure(
             known,
         });
     };
-    let factory = PluginFactory::open(&path)?;
+    let (factory, path) = open(&path, search)?;
     if factory.name() != name_or_path {
         return Err(PluginLoadError::NameMismatch {
-            path: factory.path().to_path_buf(),
+            path,
             expected: name_or_path.to_string(),
             found: factory.name().to_string(),
         });
     }
-    register(registry, factory)
+    register(registry, factory, path)
 }
 
 #[cfg(test)]
@@ -159,11 +203,14 @@ mod tests {
         std::fs::write(&p, b"not an ELF file").unwrap();
         let mut reg = Registry::new();
         let e = load_file(&mut reg, &p).unwrap_err();
-        assert!(matches!(e, PluginLoadError::Open { .. }), "{e:?}");
+        assert!(matches!(e, PluginLoadError::Refused { .. }), "{e:?}");
         assert!(e.to_string().contains("Junk"), "{e}");
-        // The system loader's reason, not only libloading's "dlopen failed".
-        #[cfg(target_os = "linux")]
-        assert!(e.to_string().contains("file too short"), "{e}");
+        // Refused before the system loader sees it, saying what the file is.
+        assert!(
+            e.to_string()
+                .contains("not loaded: it is a text file (it starts \"not an ELF file\")"),
+            "{e}"
+        );
         let e = load_file(&mut reg, &dir.path().join("missing.so")).unwrap_err();
         assert!(e.to_string().contains("missing.so: cannot load"), "{e}");
     }

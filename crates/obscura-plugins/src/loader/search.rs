@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use crate::isolate::Isolation;
+
 /// The environment variable listing plugin directories (colon-separated; `;` on Windows).
 pub const PLUGIN_PATH_VAR: &str = "OBSCURA_PLUGIN_PATH";
 
@@ -10,13 +12,31 @@ pub const PLUGIN_PATH_VAR: &str = "OBSCURA_PLUGIN_PATH";
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct PluginSearch {
     paths: Vec<PathBuf>,
+    isolation: Option<Isolation>,
 }
 
 impl PluginSearch {
     /// Searches exactly these directories, in order.
     #[must_use]
     pub fn new(paths: Vec<PathBuf>) -> Self {
-        PluginSearch { paths }
+        PluginSearch {
+            paths,
+            isolation: None,
+        }
+    }
+
+    /// The same search, loading the plugins `isolation` names in worker processes
+    /// ([`crate::isolate`]); `None` loads every plugin in process.
+    #[must_use]
+    pub fn with_isolation(mut self, isolation: Option<Isolation>) -> Self {
+        self.isolation = isolation;
+        self
+    }
+
+    /// Which plugins are loaded in worker processes.
+    #[must_use]
+    pub fn isolation(&self) -> Option<&Isolation> {
+        self.isolation.as_ref()
     }
 
     /// `extra` (the CLI's `--plugin-path`, most specific first), then every directory of
@@ -34,7 +54,7 @@ impl PluginSearch {
         if let Some(v) = plugin_path {
             paths.extend(std::env::split_paths(v).filter(|p| !p.as_os_str().is_empty()));
         }
-        PluginSearch { paths }
+        PluginSearch::new(paths)
     }
 
     /// The directories, in search order.

@@ -10,6 +10,10 @@
  *   destroy
  *   finalize
  *
+ * Once `init` has named the plugin path, the record is also written to the file `<plugin_path>.calls`
+ * (what came before, then each call as it comes): that is how tests/isolate.rs reads the record of a
+ * plugin run in a worker process.
+ *
  * `property`, `project` and `unproject` are not recorded: the host calls them from many threads, and
  * the lifecycle is the point. Otherwise it is the smallest modifier: no parameters, no properties, the
  * host's default rays left alone. The host serialises the recorded calls, so the buffer needs no lock.
@@ -23,6 +27,22 @@ OBSCURA_EXPORT const char *recorder_calls(void);
 
 static char CALLS[8192];
 static size_t CALLS_LEN;
+/* The length of CALLS already in the file, and the file (once init named the plugin path). */
+static size_t FLUSHED;
+static char LOG_PATH[4096];
+
+/* Appends what the file lacks to `<plugin_path>.calls`, when init has named it. */
+static void flush_log(void) {
+    if (LOG_PATH[0] == '\0' || FLUSHED == CALLS_LEN) {
+        return;
+    }
+    FILE *f = fopen(LOG_PATH, "a");
+    if (f) {
+        fwrite(CALLS + FLUSHED, 1, CALLS_LEN - FLUSHED, f);
+        fclose(f);
+        FLUSHED = CALLS_LEN;
+    }
+}
 
 /* Appends `what` (and ` detail` when not NULL) as one line; a full buffer keeps what fits. */
 static void record(const char *what, const char *detail) {
@@ -31,6 +51,7 @@ static void record(const char *what, const char *detail) {
     if (n > 0) {
         CALLS_LEN += (size_t)n < room ? (size_t)n : room - 1;
     }
+    flush_log();
 }
 
 OBSCURA_EXPORT const char *recorder_calls(void) {
@@ -44,6 +65,9 @@ static ObscuraStatus recorder_init(const ObscuraProjectionDescriptor *self, cons
                                    void **factory, const ObscuraErrorSink *error) {
     (void)self;
     (void)error;
+    if (plugin_path) {
+        snprintf(LOG_PATH, sizeof(LOG_PATH), "%s.calls", plugin_path);
+    }
     record("init", plugin_path ? plugin_path : "(NULL)");
     *factory = &FACTORY_STATE;
     return OBSCURA_OK;

@@ -23,7 +23,110 @@ fn pixel_value(x: u32, y: u32) -> SampleValues {
         camera_direction: Vec3::new(0.1, 0.2, 0.974_679_4),
         albedo: Rgb::new(0.01 * fx, 0.5, 0.02 * fy),
         uv: glam::Vec2::new(0.25 * fx, -fy),
+        truth: crate::truth::Truth {
+            camera_z: 2.0 + fx,
+            distance: 3.0 + fy,
+            p_camera: Vec3::new(fx, fy, 7.0),
+            n_camera: Vec3::new(0.0, 1.0, 0.0),
+            object_id: x,
+            instance_id: 100 + y,
+            material_id: 4_000_000_000,
+        },
+        flow: crate::flow::FlowPixel::NONE,
     }
+}
+
+#[test]
+fn ground_truth_channels_are_named_and_ids_are_exact_integers() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("truth.exr");
+    let crop = PixelRect {
+        x0: 0,
+        x1: 5,
+        y0: 0,
+        y1: 3,
+    };
+    let mut f = film(5, 3, crop);
+    let flow = (0..15)
+        .map(|i| crate::flow::FlowPixel {
+            forward: [i as f32, -0.5],
+            backward: [0.25, i as f32],
+            forward_valid: 1.0,
+            backward_valid: (i % 2) as f32,
+        })
+        .collect();
+    f.set_flow(flow);
+    write_exr(&path, &f, &Aov::GROUND_TRUTH, true, 1.0, &[]).unwrap();
+    let image = read_back(&path);
+    let layer = &image.layer_data;
+    let mut names: Vec<String> = layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "Ncamera.X",
+            "Ncamera.Y",
+            "Ncamera.Z",
+            "Pcamera.X",
+            "Pcamera.Y",
+            "Pcamera.Z",
+            "cameraZ",
+            "distance",
+            "flowBackward.X",
+            "flowBackward.Y",
+            "flowForward.X",
+            "flowForward.Y",
+            "flowValid.backward",
+            "flowValid.forward",
+            "instanceId",
+            "materialId",
+            "objectId",
+        ]
+    );
+    // IDs stay 32-bit integers even in a half file: 4e9 survives exactly.
+    match channel(layer, "materialId") {
+        FlatSamples::U32(v) => assert!(v.iter().all(|&m| m == 4_000_000_000)),
+        other => panic!("{other:?}"),
+    }
+    match channel(layer, "instanceId") {
+        FlatSamples::U32(v) => assert_eq!(v[7], 101),
+        other => panic!("{other:?}"),
+    }
+    match channel(layer, "flowForward.X") {
+        FlatSamples::F16(v) => assert_eq!(v[7].to_f32(), 7.0),
+        other => panic!("{other:?}"),
+    }
+    match channel(layer, "flowValid.backward") {
+        FlatSamples::F16(v) => assert_eq!((v[0].to_f32(), v[1].to_f32()), (0.0, 1.0)),
+        other => panic!("{other:?}"),
+    }
+    // The reference OpenEXR library reads the IDs as 32-bit unsigned integers, exactly.
+    let Some(out) = run_independent_reader("film_exr_read.py", &path) else {
+        return;
+    };
+    let line = |name: &str| {
+        out.lines()
+            .find(|l| l.starts_with(&format!("{name} ")))
+            .unwrap_or_else(|| panic!("no {name} in {out}"))
+            .to_string()
+    };
+    assert!(
+        line("materialId").starts_with("materialId uint32 4000000000.0 "),
+        "{}",
+        line("materialId")
+    );
+    let instance: Vec<String> = line("instanceId")
+        .split(' ')
+        .skip(2)
+        .map(str::to_string)
+        .collect();
+    assert_eq!(instance[7], "101.0");
+    assert!(line("flowForward.X").starts_with("flowForward.X float16 0.0 1.0 2.0 "));
 }
 
 /// A film whose every crop pixel holds exactly `pixel_value` (one sample at each centre, width-1

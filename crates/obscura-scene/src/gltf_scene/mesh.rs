@@ -6,7 +6,7 @@ use gltf::accessor::{DataType, Dimensions};
 
 use super::{GltfError, Loader};
 use crate::framing::grow_bounds;
-use crate::types::{Mesh, MotionTransform, Object, Shape};
+use crate::types::{Identity, Mesh, MotionTransform, Object, Shape};
 
 impl Loader<'_> {
     /// One object per triangle primitive of `mesh`, placed by `world`.
@@ -37,6 +37,10 @@ impl Loader<'_> {
                     mesh.index(),
                     prim.index()
                 ),
+                identity: Identity {
+                    object: mesh.name().unwrap_or_default().to_string(),
+                    instance: node.name().unwrap_or_default().to_string(),
+                },
             });
         }
         Ok(())

@@ -35,6 +35,7 @@
 //! header, buffers, what validation misses), `mesh.rs` the triangle primitives, `camera.rs`,
 //! `lights.rs` and `materials.rs` convert those to ours.
 
+mod animation;
 mod camera;
 mod container;
 mod lights;
@@ -57,6 +58,8 @@ use container::{
     check_before_validation, check_glb_header, check_required_extensions, json_chunk, load_buffers,
 };
 use lights::PunctualLights;
+
+pub use animation::Animation;
 
 /// A glTF file could not be loaded. Every message starts with the file's path.
 #[derive(Debug, thiserror::Error)]
@@ -161,7 +164,33 @@ pub enum GltfError {
 /// # Errors
 /// A [`GltfError`] naming the file: unreadable, malformed JSON or GLB, missing or short buffers,
 /// accessors of the wrong type or outside their buffers, indices out of range, node cycles.
+///
+/// An animated file is posed at time 0 (see [`load_gltf_at`] for any other time).
 pub fn load_gltf(path: &Path, camera: CameraDesc) -> Result<Scene, GltfError> {
+    load_posed(path, camera, &[(0.0, 0.0)])
+}
+
+/// Loads a `.gltf` or `.glb` file posed by its animations (node translation, rotation and scale,
+/// glTF's interpolation modes; see [`Animation`]) at `seconds`, with the shutter's motion: camera and
+/// objects get one motion sample at shutter open (animation time `seconds + open/fps`) and, when the
+/// shutter has a length, one at close (`seconds + close/fps`). The shutter is thus read in frames, as
+/// RenderMan's `Shutter 0 0.5` is half a frame. [`Scene::animation_seconds`] is the animation's length.
+///
+/// # Errors
+/// As [`load_gltf`], and [`GltfError::Invalid`] for a malformed animation channel.
+pub fn load_gltf_at(path: &Path, camera: CameraDesc, seconds: f32, fps: f32) -> Result<Scene, GltfError> {
+    let (open, close) = camera.shutter;
+    let mut times = vec![(open, seconds + open / fps)];
+    if close > open {
+        times.push((close, seconds + close / fps));
+    }
+    load_posed(path, camera, &times)
+}
+
+/// [`load_gltf`] posed at `times`: `(shutter time, animation seconds)`, the first for everything that
+/// does not move (materials, lights, framing), all of them as motion samples of moving objects and the
+/// camera.
+fn load_posed(path: &Path, camera: CameraDesc, times: &[(f32, f32)]) -> Result<Scene, GltfError> {
     let bytes = std::fs::read(path).map_err(|source| GltfError::Read {
         path: path.to_path_buf(),
         source,
@@ -191,20 +220,41 @@ pub fn load_gltf(path: &Path, camera: CameraDesc) -> Result<Scene, GltfError> {
         scene: Scene::new(camera),
         bounds: None,
     };
-    let placed = loader.walk(&document)?;
+    let animation = loader.read_animation(&document)?;
+    let mut poses = Vec::with_capacity(times.len());
+    for &(_, seconds) in times {
+        poses.push(loader.walk(&document, &|node| animation.local(node, seconds))?);
+    }
+    let placed = poses[0].clone();
     loader.read_materials(&document);
-    for (node, world) in &placed {
+    // The node of every object, to give each its motion.
+    let mut object_nodes = Vec::new();
+    for (i, (node, world)) in placed.iter().enumerate() {
         if let Some(mesh) = node.mesh() {
             loader.read_mesh(node, &mesh, *world)?;
+            object_nodes.resize(loader.scene.objects.len(), i);
         }
+    }
+    if !animation.is_empty() {
+        loader.scene.animation_seconds = Some(animation.duration());
     }
     let first_camera = placed
         .iter()
         .find_map(|(node, world)| node.camera().map(|c| (node, c, *world)));
     let mut camera_set = false;
+    let mut camera_at = None;
     if let Some((node, cam, world)) = first_camera {
         camera_set = loader.apply_camera(node.index(), &cam, world);
+        camera_at = placed.iter().position(|(n, _)| n.index() == node.index());
     }
+    animation::add_motion(
+        &mut loader.scene,
+        times,
+        &poses,
+        &object_nodes,
+        camera_at.filter(|_| camera_set),
+    );
+    loader.scene.warnings.dedup();
     if !camera_set {
         frame_scene(&mut loader.scene, loader.bounds, &loader.file);
     }
@@ -235,8 +285,13 @@ impl Loader<'_> {
         self.scene.warnings.push(format!("{}: {what}", self.file));
     }
 
-    /// Every node under the scene's roots with its world matrix, depth first, parents before children.
-    fn walk<'d>(&mut self, document: &'d gltf::Document) -> Result<Vec<(gltf::Node<'d>, Mat4)>, GltfError> {
+    /// Every node under the scene's roots with its world matrix (from each node's `local` matrix), depth
+    /// first, parents before children.
+    fn walk<'d>(
+        &mut self,
+        document: &'d gltf::Document,
+        local: &dyn Fn(&gltf::Node<'_>) -> Mat4,
+    ) -> Result<Vec<(gltf::Node<'d>, Mat4)>, GltfError> {
         let roots: Vec<gltf::Node<'d>> = match document.default_scene().or_else(|| document.scenes().next()) {
             Some(scene) => scene.nodes().collect(),
             None => {
@@ -266,7 +321,7 @@ impl Loader<'_> {
                 });
             }
             visited[node.index()] = true;
-            let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+            let world = parent * local(&node);
             let children: Vec<gltf::Node<'d>> = node.children().collect();
             stack.extend(children.into_iter().rev().map(|c| (c, world)));
             placed.push((node, world));

@@ -21,7 +21,7 @@ use obscura_host::CameraDesc;
 use obscura_sdk::Rgb;
 
 use crate::framing::{add_default_dome_if_unlit, frame_scene, grow_bounds};
-use crate::types::{Material, Mesh, MotionTransform, Object, Scene, Shape};
+use crate::types::{Identity, Material, Mesh, MotionTransform, Object, Scene, Shape};
 
 mod maps;
 
@@ -300,6 +300,10 @@ fn model_object(
         material,
         micropolygon_length: 1.0,
         source: format!("{file}: object \"{}\"", model.name),
+        identity: Identity {
+            object: model.name.clone(),
+            instance: model.name.clone(),
+        },
     }))
 }
 

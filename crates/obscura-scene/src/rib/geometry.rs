@@ -10,7 +10,7 @@ use super::lex::{Value, describe};
 use super::request::{Req, get_floats, to_points};
 use super::triangulate::triangulate;
 use super::{Reader, RibError};
-use crate::types::{Mesh, Object, Shape, SubdivMesh};
+use crate::types::{Identity, Mesh, Object, Shape, SubdivMesh};
 
 impl Reader {
     /// Adds an object of `shape` with the current transform, material and dicing.
@@ -21,6 +21,10 @@ impl Reader {
             material: self.material,
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
+            identity: Identity {
+                object: self.identifier.clone(),
+                instance: self.identifier.clone(),
+            },
         });
     }
 

@@ -202,6 +202,8 @@ struct Reader {
     material: u32,
     /// The current `Attribute "dice" "micropolygonlength"`.
     micropolygon_length: f32,
+    /// The current `Attribute "identifier" "name"` (empty before one).
+    identifier: String,
     /// The open attribute and transform blocks, innermost last.
     blocks: Vec<Block>,
     /// The open motion block.
@@ -223,6 +225,7 @@ impl Reader {
             ctm: Ctm::identity(),
             material: 0,
             micropolygon_length: 1.0,
+            identifier: String::new(),
             blocks: Vec::new(),
             motion: None,
             world: None,

@@ -24,7 +24,7 @@ pub(super) const FILTERS: [(&str, FilterKind); 6] = [
 ];
 
 /// The names a `Display` channel list may use.
-const CHANNELS: [(&str, &[Aov]); 12] = [
+const CHANNELS: [(&str, &[Aov]); 22] = [
     ("rgb", &[Aov::Ci]),
     ("rgba", &[Aov::Ci, Aov::Alpha]),
     ("rgbz", &[Aov::Ci, Aov::Z]),
@@ -35,6 +35,16 @@ const CHANNELS: [(&str, &[Aov]); 12] = [
     ("N", &[Aov::N]),
     ("P", &[Aov::P]),
     ("cameraDirection", &[Aov::CameraDirection]),
+    ("cameraZ", &[Aov::CameraZ]),
+    ("distance", &[Aov::Distance]),
+    ("Pcamera", &[Aov::PCamera]),
+    ("Ncamera", &[Aov::NCamera]),
+    ("objectId", &[Aov::ObjectId]),
+    ("instanceId", &[Aov::InstanceId]),
+    ("materialId", &[Aov::MaterialId]),
+    ("flowForward", &[Aov::FlowForward]),
+    ("flowBackward", &[Aov::FlowBackward]),
+    ("flowValid", &[Aov::FlowValid]),
     ("albedo", &[Aov::Albedo]),
     ("uv", &[Aov::Uv]),
 ];

@@ -8,11 +8,19 @@ use super::{Reader, RibError};
 use crate::types::{Light, Material};
 
 impl Reader {
-    /// `Attribute "dice"` with `micropolygonlength`; other attributes are warned about once each.
+    /// `Attribute "dice"` with `micropolygonlength` and `Attribute "identifier"` with `name` (the
+    /// object and instance name of the ID AOVs); other attributes are warned about once each.
     pub(super) fn attribute(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let [Value::Str(name), rest @ ..] = r.args else {
             return Err(r.err("Attribute expects an attribute name (a string) then parameters"));
         };
+        if name == "identifier" {
+            let list = self.params(r, rest, &["string name"], false)?;
+            if let Some(id) = get_string(&list, "name") {
+                self.identifier = id.to_string();
+            }
+            return Ok(());
+        }
         if name != "dice" {
             if self.warned_attributes.insert(name.clone()) {
                 self.warn(r, format!("Attribute \"{name}\" is not supported, ignored"));

@@ -107,6 +107,7 @@ pub(super) struct Block {
     pub(super) ctm: Ctm,
     pub(super) material: u32,
     pub(super) micropolygon_length: f32,
+    pub(super) identifier: String,
     pub(super) file: String,
     pub(super) line: u32,
 }
@@ -165,6 +166,7 @@ impl Reader {
             ctm: self.ctm.clone(),
             material: self.material,
             micropolygon_length: self.micropolygon_length,
+            identifier: self.identifier.clone(),
             file: r.file.to_string(),
             line: r.line,
         });
@@ -189,6 +191,7 @@ impl Reader {
         if kind == BlockKind::Attribute {
             self.material = b.material;
             self.micropolygon_length = b.micropolygon_length;
+            self.identifier = b.identifier;
         }
         Ok(())
     }

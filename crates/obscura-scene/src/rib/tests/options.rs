@@ -204,7 +204,8 @@ fn display_with_unknown_channel_names_it_and_the_known_ones() {
     assert_eq!(
         fail("\nDisplay \"a.exr\" \"openexr\" \"rgba,Cs\""),
         "t.rib:2: Display: unknown channel \"Cs\"; known channels: rgb, rgba, rgbz, rgbaz, Ci, a, z, N, \
-         P, cameraDirection, albedo, uv"
+         P, cameraDirection, cameraZ, distance, Pcamera, Ncamera, objectId, instanceId, materialId, \
+         flowForward, flowBackward, flowValid, albedo, uv"
     );
     assert_eq!(
         fail("Display \"a.tif\" \"tiff\" \"rgba\""),

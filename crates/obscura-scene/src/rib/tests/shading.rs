@@ -130,16 +130,29 @@ fn lights_are_read_with_defaults_and_transforms() {
 
 #[test]
 fn dice_attribute_sets_micropolygon_length_and_others_warn_once() {
-    let scene = ok("WorldBegin\nAttribute \"identifier\" \"string name\" \"a\"\n\
-         Attribute \"identifier\" \"string name\" \"b\"\n\
+    let scene = ok("WorldBegin\nAttribute \"trace\" \"int maxdiffusedepth\" [1]\n\
+         Attribute \"trace\" \"int maxdiffusedepth\" [2]\n\
          Attribute \"dice\" \"micropolygonlength\" [3]\nSphere 1 -1 1 360\n");
     assert_eq!(scene.objects[0].micropolygon_length, 3.0);
     assert_eq!(
         scene.warnings,
-        vec!["t.rib:2: Attribute \"identifier\" is not supported, ignored".to_string()]
+        vec!["t.rib:2: Attribute \"trace\" is not supported, ignored".to_string()]
     );
     assert_eq!(
         fail("WorldBegin\nAttribute \"dice\" \"float micropolygonlength\" [0]"),
         "t.rib:2: Attribute \"dice\": micropolygonlength must be greater than 0, got 0"
     );
+}
+
+#[test]
+fn identifier_names_the_objects_of_its_attribute_block() {
+    let scene = ok(
+        "WorldBegin\nAttributeBegin\nAttribute \"identifier\" \"string name\" \"hero\"\n\
+         Sphere 1 -1 1 360\nAttributeBegin\nAttribute \"identifier\" \"name\" \"hat\"\nDisk 0 1 360\n\
+         AttributeEnd\nCone 1 1 360\nAttributeEnd\nTorus 1 0.2 0 360 360\n",
+    );
+    let names: Vec<&str> = scene.objects.iter().map(|o| o.identity.object.as_str()).collect();
+    assert_eq!(names, ["hero", "hat", "hero", ""]);
+    assert_eq!(scene.objects[1].identity.instance, "hat");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
 }

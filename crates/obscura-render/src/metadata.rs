@@ -1,0 +1,266 @@
+//! Per-frame camera metadata and the ID sidecar: what a vision user needs to reproject a render with
+//! their own tools.
+//!
+//! # The camera JSON (`<image>.camera.json`, and the EXR header attribute `obscura:camera`)
+//!
+//! ```json
+//! {
+//!   "schema": "obscura-camera/1",
+//!   "frame": 12,                                  // null outside a sequence
+//!   "projection": "PxrPerspective",
+//!   "parameters": {"fov": [50.0]},                // as given (scene, --param, calibration)
+//!   "image": {"width": 640, "height": 360, "pixel_aspect": 1.0,
+//!             "screen_window": [l, r, b, t], "data_window": [x0, y0, x1, y1]},
+//!   "shutter": [open, close], "clipping": [near, far],   // far null when infinite
+//!   "deep_metric": "CameraZ" | "RayLength", "field_of_view": 50.0,
+//!   "world_to_camera": {"open": M, "close": M},   // 4×4, rows, column vectors: p_cam = M·p_world
+//!   "opencv": {"K": 3×3, "dist": [..], "model": "pinhole" | "fisheye",
+//!              "world_to_camera": {"open": M, "close": M}},
+//!   "colmap": {"model": "PINHOLE", "width": 640, "height": 360, "params": [fx, fy, cx, cy]}
+//! }
+//! ```
+//!
+//! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
+//! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a
+//! pinhole-equivalent camera: `PxrPerspective` (its chief rays, `fx = d·W/(r − l)`, `fy = d·H/(t − b)`,
+//! `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster coordinates, `d = 1/tan(fov/2)`) and a
+//! `CalibratedCamera` whose model is one of COLMAP's pinhole-family or OpenCV's (`SIMPLE_PINHOLE`,
+//! `PINHOLE`, `SIMPLE_RADIAL`, `RADIAL`, `OPENCV`, `FULL_OPENCV`, `OPENCV_FISHEYE`, `OPENCV_PINHOLE`),
+//! rescaled to the render's size. COLMAP puts the centre of the top-left pixel at (0.5, 0.5) (raster
+//! coordinates), OpenCV at (0, 0): OpenCV's `cx` is COLMAP's minus ½.
+//!
+//! # The ID sidecar (`<image>.ids.json`, and `obscura:ids`)
+//!
+//! [`crate::truth::IdTable::to_json`]: names of every object, instance and material ID.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, Mat4};
+use obscura_scene::Scene;
+use obscura_sdk::{DeepMetric, ParamValue};
+use serde_json::{Value, json};
+
+use crate::atomic::{AtomicWriteError, write_atomically};
+use crate::render::{Prepared, RenderError, camera_motion};
+
+/// The schema name written into every camera JSON.
+pub const SCHEMA: &str = "obscura-camera/1";
+
+/// `image.exr` → `image.<suffix>` (`image.camera.json`, `image.ids.json`).
+#[must_use]
+pub fn sidecar_path(image: &Path, suffix: &str) -> PathBuf {
+    image.with_extension(suffix)
+}
+
+/// Writes `value` (pretty-printed, with a final newline) to `path` atomically.
+///
+/// # Errors
+/// An [`AtomicWriteError`] naming `path`.
+pub fn write_json(path: &Path, value: &Value) -> Result<(), AtomicWriteError> {
+    let mut text = serde_json::to_string_pretty(value).unwrap_or_default();
+    text.push('\n');
+    write_atomically(path, |out| out.write_all(text.as_bytes()))
+}
+
+/// A matrix as rows (column-vector convention).
+fn rows(m: Mat4) -> Value {
+    json!((0..4).map(|r| m.row(r).to_array()).collect::<Vec<_>>())
+}
+
+/// A number, or `null` when it is not finite (JSON has no infinity).
+fn num(v: f64) -> Value {
+    if v.is_finite() { json!(v) } else { Value::Null }
+}
+
+/// The camera metadata of one frame (see the module documentation).
+///
+/// # Errors
+/// [`RenderError::Camera`] when a camera transform is singular.
+pub fn camera_json(scene: &Scene, prepared: &Prepared, frame: Option<i64>) -> Result<Value, RenderError> {
+    let cam = &scene.camera;
+    let motion = camera_motion(cam.environment().world_to_camera(), cam.shutter)?;
+    let w2c = |t: f32| Mat4::from(motion.object_to_world(t).inverse());
+    let (open, close) = (w2c(0.0), w2c(1.0));
+    let parameters: serde_json::Map<String, Value> = (scene.projection_params.entries().iter())
+        .map(|e| {
+            let v = match &e.value {
+                ParamValue::Floats(v) => json!(v),
+                ParamValue::Ints(v) => json!(v),
+                ParamValue::Strings(v) => json!(v),
+            };
+            (e.name.clone(), v)
+        })
+        .collect();
+    let win = cam.screen_window();
+    let crop = cam.pixels();
+    let props = prepared.stage().properties();
+    let mut j = json!({
+        "schema": SCHEMA,
+        "frame": frame,
+        "projection": scene.projection,
+        "parameters": parameters,
+        "image": {
+            "width": cam.format.width,
+            "height": cam.format.height,
+            "pixel_aspect": cam.format.pixel_aspect,
+            "screen_window": [win.left, win.right, win.bottom, win.top],
+            "data_window": [crop.x0, crop.y0, crop.x1, crop.y1],
+        },
+        "shutter": [cam.shutter.0, cam.shutter.1],
+        "clipping": [num(cam.clipping.0 as f64), num(cam.clipping.1 as f64)],
+        "deep_metric": match props.deep_metric {
+            DeepMetric::CameraZ => "CameraZ",
+            DeepMetric::RayLength => "RayLength",
+        },
+        "field_of_view": props.field_of_view.map(f64::from).map(num),
+        "world_to_camera": {"open": rows(open), "close": rows(close)},
+    });
+    if let Some(intr) = intrinsics(scene, props.field_of_view) {
+        let flip = Mat4::from(Affine3A::from_scale(glam::Vec3::new(1.0, -1.0, 1.0)));
+        let [fx, fy, cx, cy] = intr.pinhole;
+        j["opencv"] = json!({
+            "model": intr.opencv_model,
+            "K": [[fx, 0.0, cx - 0.5], [0.0, fy, cy - 0.5], [0.0, 0.0, 1.0]],
+            "dist": intr.opencv_dist,
+            "world_to_camera": {"open": rows(flip * open), "close": rows(flip * close)},
+        });
+        if !intr.colmap_model.is_empty() {
+            j["colmap"] = json!({
+                "model": intr.colmap_model,
+                "width": cam.format.width,
+                "height": cam.format.height,
+                "params": intr.colmap_params,
+            });
+        }
+    }
+    Ok(j)
+}
+
+/// A pinhole-equivalent camera's intrinsics at the render's size.
+struct Intrinsics {
+    /// `fx, fy, cx, cy` in raster coordinates (COLMAP's convention).
+    pinhole: [f64; 4],
+    opencv_model: &'static str,
+    opencv_dist: Vec<f64>,
+    colmap_model: String,
+    colmap_params: Vec<f64>,
+}
+
+/// The intrinsics of `scene`'s camera when it is pinhole-equivalent (see the module documentation).
+fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
+    let cam = &scene.camera;
+    let (w, h) = (cam.format.width as f64, cam.format.height as f64);
+    let win = cam.screen_window();
+    let (l, r, b, t) = (
+        win.left as f64,
+        win.right as f64,
+        win.bottom as f64,
+        win.top as f64,
+    );
+    match scene.projection.as_str() {
+        "PxrPerspective" => {
+            let fov = field_of_view? as f64;
+            let d = 1.0 / (fov.to_radians() / 2.0).tan();
+            let p = [
+                d * w / (r - l),
+                d * h / (t - b),
+                -l * w / (r - l),
+                t * h / (t - b),
+            ];
+            Some(Intrinsics {
+                pinhole: p,
+                opencv_model: "pinhole",
+                opencv_dist: Vec::new(),
+                colmap_model: "PINHOLE".into(),
+                colmap_params: p.to_vec(),
+            })
+        }
+        "CalibratedCamera" => calibrated(scene, w, h),
+        _ => None,
+    }
+}
+
+/// A calibrated camera's own model in COLMAP's and OpenCV's terms, rescaled to `w × h`.
+fn calibrated(scene: &Scene, w: f64, h: f64) -> Option<Intrinsics> {
+    let list = &scene.projection_params;
+    let string = |n: &str| match &list.get(n)?.value {
+        ParamValue::Strings(v) => v.first().cloned(),
+        _ => None,
+    };
+    let model = string("model")?;
+    let params: Vec<f64> = match &list.get("params")?.value {
+        ParamValue::Floats(v) => v.iter().map(|&x| x as f64).collect(),
+        _ => return None,
+    };
+    let (rw, rh) = match &list.get("resolution")?.value {
+        ParamValue::Ints(v) if v.len() == 2 => (v[0] as f64, v[1] as f64),
+        _ => return None,
+    };
+    let colmap_family = model != "OPENCV_PINHOLE";
+    // Pixel centres: COLMAP's models default to COLMAP's convention, OPENCV_PINHOLE to OpenCV's.
+    let shift = match string("pixelConvention").as_deref().unwrap_or("auto") {
+        "colmap" => 0.0,
+        "opencv" => 0.5,
+        "matlab" => -0.5,
+        _ if colmap_family => 0.0,
+        _ => 0.5,
+    };
+    // (focal parameters, principal point index, OpenCV model, distortion parameter range)
+    let (single_f, c, opencv_model, dist): (bool, usize, &str, std::ops::Range<usize>) = match model.as_str()
+    {
+        "SIMPLE_PINHOLE" => (true, 1, "pinhole", 3..3),
+        "PINHOLE" => (false, 2, "pinhole", 4..4),
+        "SIMPLE_RADIAL" => (true, 1, "pinhole", 3..4),
+        "RADIAL" => (true, 1, "pinhole", 3..5),
+        "OPENCV" | "FULL_OPENCV" | "OPENCV_PINHOLE" => (false, 2, "pinhole", 4..params.len()),
+        "OPENCV_FISHEYE" => (false, 2, "fisheye", 4..8),
+        _ => return None,
+    };
+    if params.len() < dist.end.max(c + 2) {
+        return None;
+    }
+    let (sx, sy) = (w / rw, h / rh);
+    let (fx, fy) = if single_f {
+        (params[0] * sx, params[0] * sy)
+    } else {
+        (params[0] * sx, params[1] * sy)
+    };
+    let (cx, cy) = ((params[c] + shift) * sx, (params[c + 1] + shift) * sy);
+    let k: Vec<f64> = params[dist.clone()].to_vec();
+    // OpenCV's order: k1 k2 p1 p2 k3 k4 k5 k6 ...; COLMAP's radial models give k1 (k2) only.
+    let opencv_dist = match model.as_str() {
+        "SIMPLE_RADIAL" => vec![k[0], 0.0, 0.0, 0.0],
+        "RADIAL" => vec![k[0], k[1], 0.0, 0.0],
+        _ => k.clone(),
+    };
+    let mut colmap_params = if single_f && sx == sy {
+        vec![fx, cx, cy]
+    } else if single_f {
+        return None;
+    } else {
+        vec![fx, fy, cx, cy]
+    };
+    colmap_params.extend(&k);
+    let colmap_model = if model == "OPENCV_PINHOLE" {
+        match k.len() {
+            0 => "PINHOLE",
+            4 => "OPENCV",
+            8 => "FULL_OPENCV",
+            _ => "",
+        }
+        .to_string()
+    } else {
+        model.clone()
+    };
+    Some(Intrinsics {
+        pinhole: [fx, fy, cx, cy],
+        opencv_model,
+        opencv_dist,
+        colmap_model,
+        colmap_params,
+    })
+}
+
+#[cfg(test)]
+mod tests;
