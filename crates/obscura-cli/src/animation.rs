@@ -14,13 +14,16 @@ use obscura_render::sequence::frame_displays;
 use obscura_scene::{Aov, Display, Scene};
 use obscura_sdk::{Format, Registry};
 
-/// Reads `--aov`: one AOV name, or `all` for every ground-truth AOV.
+/// Reads `--aov`: one AOV name, or `all` for every ground-truth AOV and the texture AOVs (`albedo`,
+/// `uv`).
 pub fn parse_aovs(text: &str) -> Result<Vec<Aov>, String> {
     if text == "all" {
-        return Ok(Aov::GROUND_TRUTH.to_vec());
+        return Ok(Aov::GROUND_TRUTH.into_iter().chain(Aov::TEXTURE).collect());
     }
     Aov::from_name(text).map(|a| vec![a]).ok_or_else(|| {
-        let names: Vec<&str> = Aov::GROUND_TRUTH.iter().map(|a| a.name()).collect();
+        let names: Vec<&str> = (Aov::GROUND_TRUTH.iter().chain(&Aov::TEXTURE))
+            .map(|a| a.name())
+            .collect();
         format!(
             "unknown AOV '{text}'; expected one of {}, or all",
             names.join(", ")
@@ -81,6 +84,8 @@ impl Animation<'_> {
     pub fn render(&self, frames: &[u32], registry: &mut Registry) -> Result<(), String> {
         let several = frames.len() > 1;
         let mut skipped = 0;
+        // The textures and the automatic framing are the same at every frame: told once.
+        let mut told = false;
         for &n in frames {
             let displays = frame::without_backward_flow(&frame_displays(self.displays, n, several), n > 1);
             if frame::is_complete(&displays) {
@@ -93,6 +98,15 @@ impl Animation<'_> {
             let prepared = prepare(&scene, registry, self.base_dir, self.opts).map_err(|e| e.to_string())?;
             for w in prepared.stage().setup_warnings() {
                 eprintln!("{w}");
+            }
+            if !told {
+                told = true;
+                for w in prepared.texture_warnings() {
+                    eprintln!("warning: {w}");
+                }
+                if !prepared.info().is_empty() {
+                    eprintln!("info: {}", prepared.info());
+                }
             }
             let mut out = prepared.render(self.opts, &|_, _| {}, &job::CANCEL);
             let neighbours = Neighbours {
@@ -144,5 +158,20 @@ impl Animation<'_> {
             outln!("{skipped} complete frame(s) skipped");
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn aov_all_adds_the_ground_truth_and_the_texture_aovs() {
+        let all = parse_aovs("all").unwrap();
+        assert_eq!(&all[..10], &Aov::GROUND_TRUTH);
+        assert_eq!(&all[10..], &[Aov::Albedo, Aov::Uv]);
+        assert_eq!(parse_aovs("uv").unwrap(), [Aov::Uv]);
+        let err = parse_aovs("Cs").unwrap_err();
+        assert!(err.ends_with("flowValid, albedo, uv, or all"), "{err}");
     }
 }

@@ -135,8 +135,9 @@ struct RenderArgs {
     /// No progress bar, summary or notes. Warnings and errors are still printed.
     #[arg(short, long)]
     quiet: bool,
-    /// Ground-truth AOVs to add to every EXR: cameraZ, distance, Pcamera, Ncamera, objectId,
-    /// instanceId, materialId, flowForward, flowBackward, flowValid, or all of them with 'all'.
+    /// AOVs to add to every EXR: cameraZ, distance, Pcamera, Ncamera, objectId, instanceId,
+    /// materialId, flowForward, flowBackward, flowValid (ground truth), albedo, uv (textures), or all
+    /// of them with 'all'.
     /// Repeatable or comma-separated. IDs and flow also write <image>.ids.json and <image>.camera.json.
     #[arg(long = "aov", value_name = "NAME", value_delimiter = ',', value_parser = animation::parse_aovs)]
     aovs: Vec<Vec<obscura_scene::Aov>>,
@@ -532,6 +533,12 @@ fn render_image(
     // Warnings are printed even with --quiet, which only silences progress and summaries.
     for w in prepared.stage().setup_warnings() {
         eprintln!("{w}");
+    }
+    for w in prepared.texture_warnings() {
+        eprintln!("warning: {w}");
+    }
+    if !prepared.info().is_empty() {
+        eprintln!("info: {}", prepared.info());
     }
     // From here a signal finishes the tiles in flight and writes what is rendered.
     let cancellable = signals::Cancellable::enter();

@@ -3,7 +3,7 @@
 //! Every camera sample is splatted onto the pixels its filter reaches: pixel `(i, j)` receives the
 //! weight `w = filter.eval(i + 0.5 − x, j + 0.5 − y)` and adds `w·Ci` and `w·alpha`; the resolved
 //! value is `Σ w·Ci / Σ w` (0 where `Σ w ≤ 0`, which negative lobes make possible, or where no sample
-//! reached). `z`, `N`, `P` and `cameraDirection` are not filtered (a filtered depth is a depth of
+//! reached). `z`, `N`, `P`, `cameraDirection`, `albedo` and `uv` are not filtered (a filtered depth is a depth of
 //! nothing): each pixel keeps the values of the sample nearest its centre among the samples that
 //! landed inside the pixel itself, RenderMan's "closest" behaviour. A miss is a sample like any other
 //! with `z = +∞` and `N = P = 0` ([`SampleValues::EMPTY`] with its camera direction), so a pixel
@@ -14,7 +14,7 @@
 //! [`Film::merge`] adds the weighted sums. Sums are kept in `f64`, so the order in which tiles are
 //! merged changes a result by far less than an `f32` ulp.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use obscura_host::PixelRect;
 use obscura_sdk::Rgb;
 
@@ -38,6 +38,12 @@ pub struct SampleValues {
     pub p: Vec3,
     /// The camera ray's direction, world space (0 for a culled sample).
     pub camera_direction: Vec3,
+    /// The textured base colour at the hit, linear (the material's colour when untextured); 0 for a
+    /// miss.
+    pub albedo: Rgb,
+    /// The first texture coordinate set at the hit, as stored in the file; 0 for a miss or a surface
+    /// without coordinates.
+    pub uv: Vec2,
     /// Depths, camera-space position and normal, IDs: unfiltered, like `z`.
     pub truth: Truth,
     /// The pixel's optical flow: not a per-sample value; [`Film::pixel`] fills it from the flow pass
@@ -55,6 +61,8 @@ impl SampleValues {
         n: Vec3::ZERO,
         p: Vec3::ZERO,
         camera_direction: Vec3::ZERO,
+        albedo: Rgb::BLACK,
+        uv: Vec2::ZERO,
         truth: Truth::EMPTY,
         flow: FlowPixel::NONE,
     };
@@ -74,6 +82,8 @@ struct Accum {
     n: Vec3,
     p: Vec3,
     camera_direction: Vec3,
+    albedo: Rgb,
+    uv: Vec2,
     truth: Truth,
 }
 
@@ -88,6 +98,8 @@ impl Accum {
         n: Vec3::ZERO,
         p: Vec3::ZERO,
         camera_direction: Vec3::ZERO,
+        albedo: Rgb::BLACK,
+        uv: Vec2::ZERO,
         truth: Truth::EMPTY,
     };
 
@@ -114,6 +126,8 @@ impl Accum {
             self.n = v.n;
             self.p = v.p;
             self.camera_direction = v.camera_direction;
+            self.albedo = v.albedo;
+            self.uv = v.uv;
             self.truth = v.truth;
         }
     }
@@ -131,6 +145,8 @@ impl Accum {
             self.n = o.n;
             self.p = o.p;
             self.camera_direction = o.camera_direction;
+            self.albedo = o.albedo;
+            self.uv = o.uv;
             self.truth = o.truth;
         }
     }
@@ -151,6 +167,8 @@ impl Accum {
             v.n = self.n;
             v.p = self.p;
             v.camera_direction = self.camera_direction;
+            v.albedo = self.albedo;
+            v.uv = self.uv;
             v.truth = self.truth;
         }
         v

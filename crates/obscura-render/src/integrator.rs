@@ -28,10 +28,11 @@
 //! Alpha is 1 when the camera ray hits geometry or an area light, 0 when it escapes. Every
 //! contribution is checked: NaN, infinite and negative values never reach the result.
 
-use glam::Vec3A;
+use glam::{Vec2, Vec3A};
 use obscura_scene::Material;
 
 use crate::light::Lights;
+use crate::material::textured::Texturing;
 use crate::material::{Bsdf, sanitize};
 use crate::ray::{Hit, Ray, Tracer};
 use crate::rng::Rng;
@@ -45,6 +46,8 @@ pub struct ShadingScene {
     pub instance_material: Vec<u32>,
     /// The scene's lights.
     pub lights: Lights,
+    /// Textures, textured materials and the meshes' texture coordinates.
+    pub texturing: Texturing,
 }
 
 impl ShadingScene {
@@ -56,6 +59,55 @@ impl ShadingScene {
             .and_then(|&m| self.materials.get(m as usize))
             .copied()
             .unwrap_or_default()
+    }
+
+    /// The index of instance `instance`'s material, when it is a known one.
+    #[must_use]
+    pub fn material_index(&self, instance: u32) -> Option<u32> {
+        self.instance_material
+            .get(instance as usize)
+            .copied()
+            .filter(|&m| (m as usize) < self.materials.len())
+    }
+}
+
+/// A ray's footprint cone in world units: radius `width + spread·t` at distance `t` (the
+/// projection's `originRadius` and `raySpread` for a camera ray, in world units).
+///
+/// Secondary rays start with the radius the cone had at the hit and widen by the lobe they were
+/// drawn from (ray cones, Akenine-Möller et al. 2019/2021, without the curvature term): a mirror keeps
+/// the spread, a GGX lobe adds `α/2` radians, a diffuse lobe `1/4` radian (about the angle one of the
+/// lobe's directions stands for when a few rays represent the hemisphere). Textures seen after a
+/// bounce are therefore looked up from coarser mip levels, which is both faster and what a pixel's
+/// worth of indirect rays would average to.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RayCone {
+    /// Radius at the ray's origin.
+    pub width: f32,
+    /// Growth of the radius per unit distance (radians, small-angle).
+    pub spread: f32,
+}
+
+impl RayCone {
+    /// The radius at distance `t` (0 when the cone is not finite).
+    #[must_use]
+    pub fn radius_at(&self, t: f32) -> f32 {
+        let r = self.width + self.spread * t;
+        if r.is_finite() { r.max(0.0) } else { 0.0 }
+    }
+
+    /// The cone of a ray leaving a hit at distance `t`, drawn from a lobe of material `m`.
+    #[must_use]
+    pub fn bounce(&self, t: f32, m: &Material, specular: bool) -> RayCone {
+        let widen = match *m {
+            _ if specular => 0.0,
+            Material::Surface { roughness, .. } => 0.5 * roughness.clamp(0.0, 1.0).powi(2),
+            _ => 0.25,
+        };
+        RayCone {
+            width: self.radius_at(t),
+            spread: self.spread.max(0.0) + widen,
+        }
     }
 }
 
@@ -69,7 +121,14 @@ pub struct PathResult {
     /// The camera ray's nearest geometry hit, for the z / N / P outputs; `None` when it escaped or
     /// an area light lies in front of the geometry.
     pub first_hit: Option<Hit>,
+    /// The base colour at the first hit (linear; footprint-filtered when textured); 0 without a hit.
+    pub albedo: Vec3A,
+    /// The first texture coordinate set at the first hit; 0 without one.
+    pub uv: Vec2,
 }
+
+/// How many times a path may pass through cut-out or transparent surfaces before it is stopped.
+const MAX_PASS_THROUGH: u32 = 64;
 
 /// Path-tracing options.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -122,11 +181,25 @@ fn accumulate(acc: &mut Vec3A, c: Vec3A) {
 
 /// Traces one camera path through `scene` and returns the radiance arriving along `ray` (world
 /// space), its alpha and the camera ray's hit. `ray` is used as given (its `t_min`, `t_max`,
-/// `time`); every later ray keeps its `time`. Deterministic for a given `rng` state.
+/// `time`); every later ray keeps its `time`. Deterministic for a given `rng` state. Textures are
+/// looked up without a footprint; [`trace_path_cone`] gives the camera ray's cone.
 pub fn trace_path(
     scene: &ShadingScene,
     tracer: &dyn Tracer,
     ray: &Ray,
+    rng: &mut Rng,
+    opts: &PathOptions,
+) -> PathResult {
+    trace_path_cone(scene, tracer, ray, RayCone::default(), rng, opts)
+}
+
+/// [`trace_path`] for a camera ray with footprint cone `cone` (world units): every texture lookup
+/// is filtered over the cone's footprint at the hit, widened at each bounce ([`RayCone`]).
+pub fn trace_path_cone(
+    scene: &ShadingScene,
+    tracer: &dyn Tracer,
+    ray: &Ray,
+    mut cone: RayCone,
     rng: &mut Rng,
     opts: &PathOptions,
 ) -> PathResult {
@@ -135,6 +208,10 @@ pub fn trace_path(
     let mut throughput = Vec3A::ONE;
     let mut alpha = 0.0;
     let mut first_hit = None;
+    let mut albedo = Vec3A::ZERO;
+    let mut uv = Vec2::ZERO;
+    let mut passes = 0u32;
+    let cutouts = scene.texturing.has_cutouts();
     let mut ray = *ray;
     // The BSDF density of the current ray's direction; `None` for the camera ray and after a
     // mirror bounce (no MIS: weight 1).
@@ -147,6 +224,10 @@ pub fn trace_path(
             break;
         }
         let hit = tracer.intersect(&ray);
+        let hit = match hit {
+            Some(h) if cutouts => pass_cutouts(scene, tracer, &ray, h, rng, &mut passes),
+            h => h,
+        };
         let t_geometry = hit.map_or(ray.t_max, |h| h.t);
 
         if let Some(area) = lights.intersect_area(&ray, t_geometry) {
@@ -188,8 +269,23 @@ pub fn trace_path(
         if n_s.dot(wo) <= 0.0 {
             n_s = n_g;
         }
-        let bsdf = Bsdf::new(&scene.material(hit.instance), n_s);
-        accumulate(&mut radiance, throughput * bsdf.emission());
+        let d = ray.direction / dir_len;
+        let surface = scene.texturing.surface(
+            &hit,
+            scene.material(hit.instance),
+            scene.material_index(hit.instance),
+            d,
+            n_s,
+            cone.radius_at(hit.t * dir_len),
+            depth == 0,
+        );
+        if depth == 0 {
+            albedo = surface.albedo;
+            uv = surface.uv;
+        }
+        let n_s = surface.normal;
+        let bsdf = Bsdf::new(&surface.material, n_s);
+        accumulate(&mut radiance, throughput * (bsdf.emission() + surface.emission));
 
         if depth >= opts.max_depth || !bsdf.reflects() {
             break;
@@ -218,7 +314,7 @@ pub fn trace_path(
                     t_max,
                     time: ray.time,
                 };
-                if t_max > eps && !tracer.occluded(&shadow) {
+                if t_max > eps && !shadow_blocked(scene, tracer, &shadow, cutouts, rng) {
                     let w = if ls.mis {
                         power_heuristic(ls.pdf, pdf_b)
                     } else {
@@ -243,6 +339,7 @@ pub fn trace_path(
             break;
         }
         bsdf_pdf = (!s.specular).then_some(s.pdf);
+        cone = cone.bounce(hit.t * dir_len, &surface.material, s.specular);
         depth += 1;
 
         if depth >= opts.rr_start {
@@ -266,7 +363,70 @@ pub fn trace_path(
         radiance: sanitize(radiance),
         alpha,
         first_hit,
+        albedo,
+        uv,
     }
+}
+
+/// The surface opacity of `hit` (1 unless its material is MASK or BLEND).
+fn opacity(scene: &ShadingScene, ray: &Ray, hit: &Hit) -> f32 {
+    let d = ray.direction.normalize_or_zero();
+    scene
+        .texturing
+        .surface(
+            hit,
+            scene.material(hit.instance),
+            scene.material_index(hit.instance),
+            d,
+            hit.geometric_normal,
+            0.0,
+            false,
+        )
+        .opacity
+}
+
+/// The first hit along `ray` from `hit` on that is there: a cut-out (opacity 0) is passed, a
+/// transparent surface (0 < opacity < 1) is passed with probability `1 − opacity`. At most
+/// [`MAX_PASS_THROUGH`] surfaces are passed per path; then the next one counts as opaque.
+fn pass_cutouts(
+    scene: &ShadingScene,
+    tracer: &dyn Tracer,
+    ray: &Ray,
+    mut hit: Hit,
+    rng: &mut Rng,
+    passes: &mut u32,
+) -> Option<Hit> {
+    loop {
+        let o = opacity(scene, ray, &hit);
+        if o >= 1.0 || *passes >= MAX_PASS_THROUGH || (o > 0.0 && rng.next_f32() < o) {
+            return Some(hit);
+        }
+        *passes += 1;
+        let next = Ray {
+            t_min: hit.t.next_up().max(hit.t * (1.0 + 1e-6)),
+            ..*ray
+        };
+        hit = tracer.intersect(&next)?;
+    }
+}
+
+/// True when a shadow ray is blocked: by anything when the scene has no cut-outs, else by a surface
+/// that is there ([`pass_cutouts`]'s rule, with its own budget).
+fn shadow_blocked(
+    scene: &ShadingScene,
+    tracer: &dyn Tracer,
+    ray: &Ray,
+    cutouts: bool,
+    rng: &mut Rng,
+) -> bool {
+    if !cutouts {
+        return tracer.occluded(ray);
+    }
+    let mut passes = 0;
+    tracer
+        .intersect(ray)
+        .and_then(|h| pass_cutouts(scene, tracer, ray, h, rng, &mut passes))
+        .is_some()
 }
 
 #[cfg(test)]

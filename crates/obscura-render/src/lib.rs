@@ -11,6 +11,7 @@
 //! | [`bvh`] | binned-SAH BVH per mesh, and the two-level motion-blurred scene accelerator |
 //! | [`motion`] | transforms keyed in time (camera and instances), interpolated at a ray's time |
 //! | [`material`], [`light`], [`integrator`] | shading: BSDFs, the four lights, the path tracer |
+//! | [`texture`] | images as mip pyramids, filtered by each ray's footprint (EWA) |
 //! | [`filter`], [`film`], [`output`], [`deep`] | pixel filters, AOV accumulation, EXR/PNG/deep EXR |
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`render`] | the render loop: camera stage → world rays → trace → film |
@@ -42,4 +43,5 @@ pub mod render;
 pub mod rng;
 pub mod sequence;
 pub mod stmap;
+pub mod texture;
 pub mod truth;

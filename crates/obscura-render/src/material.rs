@@ -552,5 +552,7 @@ fn specular_albedo(f0: Vec3A, mu: f32, roughness: f32) -> Vec3A {
     (f0 * e1 + (Vec3A::ONE - f0) * e2).clamp(Vec3A::ZERO, Vec3A::ONE)
 }
 
+pub mod textured;
+
 #[cfg(test)]
 mod tests;

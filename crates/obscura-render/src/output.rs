@@ -173,6 +173,8 @@ pub(crate) fn channel_names(aov: Aov) -> &'static [&'static str] {
         Aov::N => &["N.X", "N.Y", "N.Z"],
         Aov::P => &["P.X", "P.Y", "P.Z"],
         Aov::CameraDirection => &["cameraDirection.X", "cameraDirection.Y", "cameraDirection.Z"],
+        Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
+        Aov::Uv => &["uv.X", "uv.Y"],
         Aov::CameraZ => &["cameraZ"],
         Aov::Distance => &["distance"],
         Aov::PCamera => &["Pcamera.X", "Pcamera.Y", "Pcamera.Z"],
@@ -205,6 +207,8 @@ fn component(v: &SampleValues, aov: Aov, k: usize) -> f32 {
         Aov::N => v.n[k],
         Aov::P => v.p[k],
         Aov::CameraDirection => v.camera_direction[k],
+        Aov::Albedo => [v.albedo.r, v.albedo.g, v.albedo.b][k],
+        Aov::Uv => v.uv[k],
         Aov::CameraZ => v.truth.camera_z,
         Aov::Distance => v.truth.distance,
         Aov::PCamera => v.truth.p_camera[k],
@@ -227,7 +231,8 @@ fn resolve(film: &Film) -> Vec<SampleValues> {
 /// Writes the film's crop as an OpenEXR with the requested AOVs, atomically.
 ///
 /// Channels: Ci → `R`, `G`, `B`; Alpha → `A`; Z → `Z`; N → `N.X`, `N.Y`, `N.Z`; P → `P.X`, `P.Y`,
-/// `P.Z`; CameraDirection → `cameraDirection.X`, `.Y`, `.Z`; the ground truth as `cameraZ`,
+/// `P.Z`; CameraDirection → `cameraDirection.X`, `.Y`, `.Z`; Albedo → `albedo.R`, `.G`, `.B`; Uv →
+/// `uv.X`, `uv.Y`; the ground truth as `cameraZ`,
 /// `distance`, `Pcamera.{X,Y,Z}`, `Ncamera.{X,Y,Z}`, `flowForward.{X,Y}`, `flowBackward.{X,Y}`,
 /// `flowValid.{forward,backward}` and the IDs `objectId`, `instanceId`, `materialId` as 32-bit
 /// unsigned integers (whatever `half` says). ZIP compression (16 scanlines per

@@ -43,6 +43,9 @@ pub struct Hit {
     pub instance: u32,
     /// Which triangle of that instance's mesh.
     pub primitive: u32,
+    /// The triangle's world-space edges `p₁ − p₀`, `p₂ − p₀` (zero where the surface is not a
+    /// triangle): with the vertices' texture coordinates they give the texture-space footprint.
+    pub edges: [Vec3A; 2],
 }
 
 /// What the shading code needs from geometry: nearest hit and any-hit (shadow) queries.

@@ -24,8 +24,8 @@
 //! `trace_path`, `aovs`, splat, deep).
 
 use std::path::Path;
-use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Mat4, Vec3, Vec3A};
@@ -41,8 +41,9 @@ use crate::deep::{DeepImage, DeepSample};
 use crate::dice::{DiceError, DicingContext, TriangleBudget, dice};
 use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
-use crate::integrator::{PathOptions, PathResult, ShadingScene, trace_path};
+use crate::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
 use crate::light::{Lights, ShadeError};
+use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
 use crate::motion::Motion;
 use crate::ray::{Ray, Tracer, TriangleMesh};
 use crate::rng::Rng;
@@ -91,6 +92,8 @@ pub struct RenderOptions {
     pub tile_size: u32,
     /// The most triangles the scene may dice into (see [`crate::dice::TriangleBudget`]).
     pub max_triangles: u64,
+    /// How textures are filtered (by the camera ray's footprint unless a comparison asks otherwise).
+    pub texture_lookup: TextureLookup,
 }
 
 impl Default for RenderOptions {
@@ -102,6 +105,7 @@ impl Default for RenderOptions {
             deep: false,
             tile_size: 16,
             max_triangles: crate::dice::DEFAULT_SCENE_TRIANGLES,
+            texture_lookup: TextureLookup::Footprint,
         }
     }
 }
@@ -168,6 +172,10 @@ pub struct Prepared {
     /// Camera-to-world over the shutter (shutter-normalised time).
     camera_to_world: Motion,
     deep_metric: DeepMetric,
+    /// Textures that could not be used, one message each.
+    texture_warnings: Vec<String>,
+    /// What was chosen for the scene (automatic camera, default lights); empty when nothing was.
+    info: String,
     /// Object, instance and material IDs of the scene's objects.
     ids: IdTable,
     setup_seconds: f64,
@@ -239,12 +247,25 @@ pub fn prepare(
     opts: &RenderOptions,
 ) -> Result<Prepared, RenderError> {
     let start = Instant::now();
-    let stage = CameraStage::new(
+    let mut stage = CameraStage::new(
         registry,
         &scene.projection,
         &scene.projection_params,
         &scene.camera,
     )?;
+    let mut info = Vec::new();
+    if let Some((min, max)) = scene.auto_camera {
+        let camera = auto_camera_for(&stage, min, max, &mut info);
+        stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, &camera)?;
+    }
+    if scene.auto_light {
+        info.push(format!(
+            "no light in the scene: a soft sky (dome of colour {:.2} {:.2} {:.2}) and a distant key light from above, front left",
+            obscura_scene::framing::DEFAULT_SKY.r,
+            obscura_scene::framing::DEFAULT_SKY.g,
+            obscura_scene::framing::DEFAULT_SKY.b
+        ));
+    }
     let props = *stage.properties();
     let shutter = scene.camera.shutter;
     let camera_to_world = camera_motion(stage.environment().world_to_camera(), shutter)?;
@@ -265,10 +286,25 @@ pub fn prepare(
         })
         .collect();
     let accel = SceneAccel::build(meshes, instances);
+    let (mut texturing, texture_warnings) = Texturing::new(
+        &scene.textures,
+        scene.material_maps.clone(),
+        scene
+            .objects
+            .iter()
+            .map(|o| match &o.shape {
+                obscura_scene::Shape::Mesh(m) => SurfaceAttributes::of_mesh(m).map(Arc::new),
+                _ => None,
+            })
+            .collect(),
+        base_dir,
+    );
+    texturing.lookup = opts.texture_lookup;
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),
         lights: Lights::new(&scene.lights, base_dir)?,
+        texturing,
     };
     let spp = opts.samples_per_pixel.unwrap_or(scene.samples_per_pixel).max(1);
     if spp > obscura_host::sampler::MAX_SAMPLES {
@@ -282,9 +318,50 @@ pub fn prepare(
         shading,
         samples_per_pixel: spp,
         camera_to_world,
+        texture_warnings: texture_warnings.into_iter().map(|w| w.0).collect(),
+        info: info.join("; "),
         ids: IdTable::new(scene),
         setup_seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
+/// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
+/// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
+fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<String>) -> CameraDesc {
+    use obscura_scene::framing::{AutoView, auto_camera};
+    use obscura_sdk::DicingHint;
+    let props = stage.properties();
+    let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
+    let view = match (props.dicing_hint, fov) {
+        (DicingHint::Orthographic, _) => AutoView::Orthographic,
+        (DicingHint::Spherical, f) => AutoView::Wide {
+            fov: f.unwrap_or(360.0).min(360.0),
+        },
+        (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
+        (_, f) => AutoView::Perspective {
+            fov: f.unwrap_or(45.0),
+        },
+    };
+    let mut camera = stage.camera().clone();
+    let w = camera.screen_window();
+    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
+    let auto = auto_camera(min, max, view, if aspect.is_finite() { aspect } else { 1.0 });
+    camera.world_to_camera = vec![obscura_sdk::MotionSample {
+        time: camera.shutter.0,
+        world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),
+    }];
+    if auto.screen_window.is_some() {
+        camera.screen_window = auto.screen_window;
+    }
+    // A wide view stands close: keep the near plane in front of the asset (RenderMan's default of
+    // 0.1 would cut a small asset open).
+    let near = camera.clipping.0.min(1e-3 * auto.distance);
+    if near > 0.0 {
+        camera.clipping.0 = near;
+    }
+    info.push(auto.description);
+    camera
 }
 
 /// Camera-to-world over the shutter (shutter-normalised time), from world-to-camera motion samples
@@ -384,6 +461,25 @@ impl Prepared {
     #[must_use]
     pub fn accel(&self) -> &SceneAccel {
         &self.accel
+    }
+
+    /// One line saying what the renderer chose for the scene (the automatic camera for this
+    /// projection, the default lights); empty when the scene chose everything itself.
+    #[must_use]
+    pub fn info(&self) -> &str {
+        &self.info
+    }
+
+    /// One warning per texture that could not be read or decoded (its material uses the factor).
+    #[must_use]
+    pub fn texture_warnings(&self) -> &[String] {
+        &self.texture_warnings
+    }
+
+    /// Bytes held by the loaded textures' mip pyramids.
+    #[must_use]
+    pub fn texture_memory_bytes(&self) -> usize {
+        self.shading.texturing.memory_bytes()
     }
 
     /// The scene's object, instance and material IDs.
@@ -781,10 +877,16 @@ impl<'a> TileIntegrator<'a> {
             ((px as u64) << 32 | py as u64) ^ self.path_seed,
             sample.index as u64,
         );
-        let path = trace_path(
+        // The cone in world units: distances scale by `stretch`, angles do not.
+        let cone = RayCone {
+            width: sample.ray.origin_radius * world.stretch,
+            spread: sample.ray.ray_spread,
+        };
+        let path = trace_path_cone(
             &self.prepared.shading,
             &tile.tracer,
             &world.ray,
+            cone,
             &mut rng,
             &self.opts.path,
         );
@@ -847,6 +949,8 @@ impl<'a> TileIntegrator<'a> {
             n,
             p,
             camera_direction: Vec3::from(world.ray.direction),
+            albedo: Rgb::new(path.albedo.x, path.albedo.y, path.albedo.z),
+            uv: path.uv,
             truth,
             flow: crate::flow::FlowPixel::NONE,
         }

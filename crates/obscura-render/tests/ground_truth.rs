@@ -522,6 +522,8 @@ fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, name: &str) -> Object {
             ],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            uvs: Vec::new(),
+            colors: None,
         }),
         transform: MotionTransform::default(),
         material: 0,

@@ -121,6 +121,7 @@ fn wall_scene(projection: &str, format: Format) -> Scene {
             ],
             normals: None,
             triangles: vec![[0, 1, 2], [0, 2, 3]],
+            ..Mesh::default()
         }),
         transform: MotionTransform::fixed(Mat4::IDENTITY),
         material: 1,

@@ -1,9 +1,11 @@
 //! What the glTF and OBJ readers share about cameras and lighting: the framing camera for a scene
-//! without one ([`frame_bounds`]), storing a world-to-camera transform and a field of view, the default
-//! dome light, and glam ↔ SDK matrix conventions (the RIB reader uses [`to_row_vector`] too).
+//! without one ([`frame_bounds`] when reading; [`auto_camera`], which the renderer calls again for the
+//! projection it renders through), storing a world-to-camera transform and a field of view, the
+//! default lights (a soft sky and a key light), and glam ↔ SDK matrix conventions (the RIB reader
+//! uses `to_row_vector` too).
 
-use glam::{Mat4, Vec3};
-use obscura_sdk::{Matrix4, MotionSample, ParamValue, Rgb};
+use glam::{Mat4, Vec3, Vec4};
+use obscura_sdk::{Matrix4, MotionSample, ParamValue, Rgb, ScreenWindow};
 
 use crate::types::{Light, Scene};
 
@@ -83,9 +85,12 @@ pub(crate) fn set_fov(scene: &mut Scene, fov_deg: f32, origin: String) {
     }
 }
 
-/// Frames the scene's world bounds (or `[−1, 1]³` when it has no geometry) with a 45° perspective.
+/// Frames the scene's world bounds (or `[−1, 1]³` when it has no geometry) with a 45° perspective,
+/// and records the bounds in [`Scene::auto_camera`] so the renderer frames them again for the
+/// projection it ends up using ([`auto_camera`]).
 pub(crate) fn frame_scene(scene: &mut Scene, bounds: Option<(Vec3, Vec3)>, file: &str) {
     let (min, max) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
+    scene.auto_camera = Some((min, max));
     set_world_to_camera(scene, frame_bounds(min, max, FRAMING_FOV_DEG));
     scene.projection = "PxrPerspective".into();
     set_fov(
@@ -95,19 +100,181 @@ pub(crate) fn frame_scene(scene: &mut Scene, bounds: Option<(Vec3, Vec3)>, file:
     );
 }
 
-/// Adds a white dome light when the scene has no light at all, with a warning saying so.
-pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, file: &str) {
+/// The colour of the default sky: a light blue-grey, so a white asset stands out against it.
+pub const DEFAULT_SKY: Rgb = Rgb {
+    r: 0.42,
+    g: 0.48,
+    b: 0.58,
+};
+
+/// The direction the default key light travels (world space, glTF's +Y up and +Z front): from
+/// above, in front and to the left of a camera looking at the front.
+pub const DEFAULT_KEY_DIRECTION: Vec3 = Vec3::new(0.45, -0.75, -0.5);
+
+/// The default lights of a scene without any: a soft sky (a uniform dome of [`DEFAULT_SKY`]) and a
+/// distant key light along [`DEFAULT_KEY_DIRECTION`] (intensity 2.2, 5° wide), so surfaces show their
+/// shape and the backdrop is not the asset's white. The choice is recorded in
+/// [`Scene::auto_light`] for the renderer's info line.
+pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, _file: &str) {
     if scene.lights.is_empty() {
         scene.lights.push(Light::Dome {
-            color: Rgb::WHITE,
+            color: DEFAULT_SKY,
             intensity: 1.0,
             exposure: 0.0,
             map: None,
             transform: Mat4::IDENTITY,
         });
-        scene.warnings.push(format!(
-            "{file}: the file has no light; added a white dome light (intensity 1) so the render is not black"
-        ));
+        let z = DEFAULT_KEY_DIRECTION.normalize();
+        let x = z.any_orthonormal_vector();
+        let y = z.cross(x);
+        scene.lights.push(Light::Distant {
+            color: Rgb::WHITE,
+            intensity: 2.2,
+            exposure: 0.0,
+            angle_extent: 5.0,
+            transform: Mat4::from_cols(x.extend(0.0), y.extend(0.0), z.extend(0.0), Vec4::W),
+        });
+        scene.auto_light = true;
+    }
+}
+
+/// What the automatic camera is framing for: the projection's kind, from its dicing hint and field
+/// of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AutoView {
+    /// A perspective camera spanning `fov` degrees across the smaller image side.
+    Perspective {
+        /// Field of view, degrees.
+        fov: f32,
+    },
+    /// Parallel rays: the screen window is fitted to the bounds.
+    Orthographic,
+    /// A panorama or fisheye (FieldOfView ≥ 150° or a Spherical dicing hint).
+    Wide {
+        /// Field of view, degrees (360 for a full panorama).
+        fov: f32,
+    },
+}
+
+/// An automatic camera: where it stands and what it shows.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AutoCamera {
+    /// World-to-camera (column vectors, RenderMan camera space).
+    pub world_to_camera: Mat4,
+    /// The screen window an orthographic view needs; `None` keeps the default.
+    pub screen_window: Option<ScreenWindow>,
+    /// Distance from the camera to the bounds' centre: a near clipping plane should stay well in
+    /// front of it.
+    pub distance: f32,
+    /// One line saying what was chosen.
+    pub description: String,
+}
+
+/// How wide the asset's bounding box should appear for each view: the whole view minus a margin for
+/// a perspective camera; 140° (or 80 % of a narrower field of view) for a wide one, so a fisheye or
+/// panorama stands close and the asset fills a useful part of the picture.
+fn target_angle(view: AutoView) -> f32 {
+    match view {
+        AutoView::Perspective { fov } => 0.9 * fov,
+        AutoView::Wide { fov } => (0.8 * fov).min(140.0),
+        AutoView::Orthographic => 0.0,
+    }
+}
+
+/// An automatic camera for the bounds `min..max` (world, glTF's +Y up, the asset's front toward +Z).
+///
+/// - **Direction.** When the bounds' thinnest side is less than half the middle one (a flat asset),
+///   the camera looks straight at its broad face: from +Y down (image up = −Z) for an asset lying
+///   flat, from +X or +Z for one standing; otherwise from the front, raised and turned a little,
+///   along `normalize(0.35, 0.3, 1)`, so three faces show.
+/// - **Distance.** The nearest distance at which every corner of the box lies within the target
+///   angle `θ` (`target_angle`: 90 % of a perspective field of view, 140° for a wide view) across
+///   both image axes: `d = max over corners (max(|x|, |y|)/tan(θ/2) − z)`, with `(x, y, z)` the
+///   corner's offset from the centre along the camera's right, up and forward axes.
+/// - **Orthographic.** The camera stands `2R` away and the screen window is `±R` in y and `±R·a`
+///   in x (`a` the frame aspect ≥ 1, else the other way round).
+#[must_use]
+pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCamera {
+    let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
+        (min, max)
+    } else {
+        (Vec3::splat(-1.0), Vec3::splat(1.0))
+    };
+    let centre = 0.5 * (min + max);
+    let ext = max - min;
+    let radius = (0.5 * ext.length()).max(1e-3);
+    let mut sides = [(ext.x, 0usize), (ext.y, 1), (ext.z, 2)];
+    sides.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let flat = sides[0].0 < 0.5 * sides[1].0;
+    let (toward_eye, up, side) = match (flat, sides[0].1) {
+        (true, 1) => (Vec3::Y, Vec3::NEG_Z, "top"),
+        (true, 0) => (Vec3::X, Vec3::Y, "side (+X)"),
+        (true, _) => (Vec3::Z, Vec3::Y, "front"),
+        (false, _) => (
+            Vec3::new(0.35, 0.3, 1.0).normalize(),
+            Vec3::Y,
+            "front, raised and turned",
+        ),
+    };
+    let forward = -toward_eye;
+    let right = forward.cross(up).normalize();
+    let cam_up = right.cross(forward);
+    let (distance, window) = match view {
+        AutoView::Orthographic => {
+            let (wx, wy) = if aspect >= 1.0 {
+                (radius * aspect, radius)
+            } else {
+                (radius, radius / aspect.max(1e-3))
+            };
+            (
+                2.0 * radius,
+                Some(ScreenWindow {
+                    left: -wx,
+                    right: wx,
+                    bottom: -wy,
+                    top: wy,
+                }),
+            )
+        }
+        AutoView::Perspective { .. } | AutoView::Wide { .. } => {
+            // The nearest distance at which every corner of the box is inside the target angle.
+            let t = (0.5 * target_angle(view)).clamp(1.0, 89.0).to_radians().tan();
+            let d = (0..8)
+                .map(|i| {
+                    let corner = Vec3::new(
+                        if i & 1 == 0 { min.x } else { max.x },
+                        if i & 2 == 0 { min.y } else { max.y },
+                        if i & 4 == 0 { min.z } else { max.z },
+                    ) - centre;
+                    let (x, y, z) = (corner.dot(right), corner.dot(cam_up), corner.dot(forward));
+                    x.abs().max(y.abs()) / t - z
+                })
+                .fold(0.0f32, f32::max);
+            (d.max(1e-3 * radius), None)
+        }
+    };
+    let eye = centre + toward_eye * distance;
+    // RenderMan camera space: +Z forward, +Y up, +X right (`right = forward × up` in world).
+    let world_to_camera = Mat4::from_cols(
+        right.extend(0.0),
+        cam_up.extend(0.0),
+        forward.extend(0.0),
+        eye.extend(1.0),
+    )
+    .inverse();
+    let what = match view {
+        AutoView::Perspective { fov } => format!("perspective ({fov:.0}°)"),
+        AutoView::Orthographic => "orthographic".to_string(),
+        AutoView::Wide { fov } => format!("wide ({fov:.0}°)"),
+    };
+    AutoCamera {
+        world_to_camera,
+        screen_window: window,
+        distance,
+        description: format!(
+            "automatic camera for a {what} view: {side} view of the bounds ({:.3} × {:.3} × {:.3}) from {:.3} away",
+            ext.x, ext.y, ext.z, distance
+        ),
     }
 }
 
@@ -120,4 +287,67 @@ pub(crate) fn grow_bounds(bounds: &mut Option<(Vec3, Vec3)>, p: Vec3) {
         Some((lo, hi)) => (lo.min(p), hi.max(p)),
         None => (p, p),
     });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bounding box's corners in camera space.
+    fn corners(m: Mat4, min: Vec3, max: Vec3) -> Vec<Vec3> {
+        (0..8)
+            .map(|i| {
+                let p = Vec3::new(
+                    if i & 1 == 0 { min.x } else { max.x },
+                    if i & 2 == 0 { min.y } else { max.y },
+                    if i & 4 == 0 { min.z } else { max.z },
+                );
+                m.transform_point3(p)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_flat_asset_lying_down_is_seen_from_above_and_whole() {
+        // A rug: 4 × 0.05 × 2. Looking down −Y, the rug's front (+Z) at the bottom of the image.
+        let (min, max) = (Vec3::new(-2.0, 0.0, -1.0), Vec3::new(2.0, 0.05, 1.0));
+        let cam = auto_camera(min, max, AutoView::Perspective { fov: 45.0 }, 1.5);
+        let forward = cam.world_to_camera.inverse().transform_vector3(Vec3::Z);
+        assert!((forward - Vec3::NEG_Y).length() < 1e-5, "{forward}");
+        let front = cam.world_to_camera.transform_point3(Vec3::new(0.0, 0.0, 1.0));
+        assert!(front.y < 0.0, "the front edge is low in the picture: {front}");
+        let t = (22.5f32).to_radians().tan();
+        for c in corners(cam.world_to_camera, min, max) {
+            assert!(c.z > 0.0 && (c.x / c.z).abs() < t && (c.y / c.z).abs() < t, "{c}");
+        }
+        assert!(cam.description.contains("top"));
+    }
+
+    #[test]
+    fn a_wide_view_stands_closer_and_an_orthographic_one_fits_its_window() {
+        let (min, max) = (Vec3::splat(-1.0), Vec3::splat(1.0));
+        let dist = |v| {
+            let m: Mat4 = auto_camera(min, max, v, 1.0).world_to_camera;
+            m.inverse().transform_point3(Vec3::ZERO).length()
+        };
+        let persp = dist(AutoView::Perspective { fov: 45.0 });
+        let fisheye = dist(AutoView::Wide { fov: 180.0 });
+        assert!(fisheye < 0.6 * persp, "{fisheye} vs {persp}");
+        // The cube's corners fit 140° of a fisheye: the nearest corner offsets give
+        // d = max(max(|x|, |y|)/tan 70° − z) over the corners.
+        assert!(fisheye > 1.0 && fisheye < 2.0, "{fisheye}");
+        let wide = auto_camera(min, max, AutoView::Wide { fov: 180.0 }, 1.0);
+        let t = 70f32.to_radians().tan();
+        let worst = corners(wide.world_to_camera, min, max)
+            .iter()
+            .map(|c| (c.x / c.z).abs().max((c.y / c.z).abs()))
+            .fold(0.0f32, f32::max);
+        assert!(worst <= t * (1.0 + 1e-5) && worst > 0.99 * t, "{worst} vs {t}");
+        let ortho = auto_camera(min, max, AutoView::Orthographic, 2.0);
+        let w = ortho.screen_window.unwrap();
+        assert!((w.top - 3f32.sqrt()).abs() < 1e-5 && (w.right - 2.0 * 3f32.sqrt()).abs() < 1e-5);
+        for c in corners(ortho.world_to_camera, min, max) {
+            assert!(c.z > 0.0 && c.x.abs() <= w.right && c.y.abs() <= w.top, "{c}");
+        }
+    }
 }

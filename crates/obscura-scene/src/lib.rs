@@ -12,10 +12,11 @@
 #![forbid(unsafe_code)]
 
 pub mod classic;
-mod framing;
+pub mod framing;
 pub mod gltf_scene;
 pub mod obj;
 pub mod rib;
+pub mod texture;
 pub mod types;
 
 #[cfg(test)]
@@ -71,9 +72,11 @@ pub fn load_frames(path: &Path, camera: CameraDesc) -> Result<Vec<rib::Frame>, L
 fn light_if_unlit(scene: &mut Scene, path: &Path) {
     if scene.lights.is_empty() {
         framing::add_default_dome_if_unlit(scene, &path.display().to_string());
-        if let Some(w) = scene.warnings.last_mut() {
-            w.push_str("; any LightSource in the file replaces it");
-        }
+        scene.warnings.push(format!(
+            "{}: the scene has no light the renderer uses; added the default sky and key light \
+             (as for glTF and OBJ); any LightSource in the file replaces them",
+            path.display()
+        ));
     }
 }
 

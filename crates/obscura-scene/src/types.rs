@@ -2,11 +2,14 @@
 
 use std::path::PathBuf;
 
-use glam::{Mat4, Vec3};
+use std::collections::BTreeMap;
+
+use glam::{Mat4, Vec2, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::{ParamList, Rgb};
 
 use crate::classic::{BezierPatch, Blobby, Curves, NuPatch, Points};
+use crate::texture::{SurfaceMaps, TextureDesc};
 
 /// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
 /// least one. Matrices act on column vectors (`p' = M·p`).
@@ -47,6 +50,12 @@ pub struct Mesh {
     pub normals: Option<Vec<Vec3>>,
     /// Triangles, as indices into `positions`.
     pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinate sets (`TEXCOORD_0`, `TEXCOORD_1`, … or RIB `st`), each one per position,
+    /// as stored in the file (glTF: origin top-left, t down; OBJ and RIB: t up, flipped to glTF's
+    /// convention when read so every texture lookup is the same).
+    pub uvs: Vec<Vec<Vec2>>,
+    /// Linear RGBA vertex colours (`COLOR_0`, OBJ's `v x y z r g b`), one per position.
+    pub colors: Option<Vec<[f32; 4]>>,
 }
 
 /// A Catmull–Clark subdivision control mesh (`SubdivisionMesh "catmull-clark"`).
@@ -395,6 +404,10 @@ pub enum Aov {
     FlowBackward,
     /// Where each flow is defined (`flowValid`: `.forward`, `.backward`, 1 or 0).
     FlowValid,
+    /// The textured base colour at the first hit, linear RGB (`albedo`).
+    Albedo,
+    /// The first texture coordinate set at the first hit, as stored in the file (`uv`).
+    Uv,
 }
 
 impl Aov {
@@ -412,6 +425,9 @@ impl Aov {
         Aov::FlowBackward,
         Aov::FlowValid,
     ];
+
+    /// The texture AOVs (issue 13), which `--aov all` adds after the ground-truth ones.
+    pub const TEXTURE: [Aov; 2] = [Aov::Albedo, Aov::Uv];
 
     /// The name a `Display` channel list and `--aov` use for this AOV.
     #[must_use]
@@ -433,6 +449,8 @@ impl Aov {
             Aov::FlowForward => "flowForward",
             Aov::FlowBackward => "flowBackward",
             Aov::FlowValid => "flowValid",
+            Aov::Albedo => "albedo",
+            Aov::Uv => "uv",
         }
     }
 
@@ -440,7 +458,7 @@ impl Aov {
     #[must_use]
     pub fn from_name(name: &str) -> Option<Aov> {
         const RENDERMAN: [Aov; 6] = [Aov::Ci, Aov::Alpha, Aov::Z, Aov::N, Aov::P, Aov::CameraDirection];
-        (RENDERMAN.into_iter().chain(Aov::GROUND_TRUTH)).find(|a| a.name() == name)
+        (RENDERMAN.into_iter().chain(Aov::GROUND_TRUTH).chain(Aov::TEXTURE)).find(|a| a.name() == name)
     }
 
     /// True for the flow AOVs, which need the flow pass.
@@ -484,6 +502,16 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Lights.
     pub lights: Vec<Light>,
+    /// Textures, indexed by [`crate::texture::TextureSlot::texture`].
+    pub textures: Vec<TextureDesc>,
+    /// Materials whose parameters come from textures, by index into [`Scene::materials`]; such a
+    /// material's entry there is its untextured fallback.
+    pub material_maps: BTreeMap<u32, SurfaceMaps>,
+    /// The world bounds `(min, max)` the scene's camera was framed on when the file has no camera of
+    /// its own: the renderer frames them again for the projection it renders through.
+    pub auto_camera: Option<(Vec3, Vec3)>,
+    /// True when the file has no light and the default sky and key light were added.
+    pub auto_light: bool,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
     pub warnings: Vec<String>,
     /// Seconds of animation the file holds (glTF animations); `None` for a still scene. An animated
@@ -505,6 +533,10 @@ impl Scene {
             objects: Vec::new(),
             materials: vec![Material::default()],
             lights: Vec::new(),
+            textures: Vec::new(),
+            material_maps: BTreeMap::new(),
+            auto_camera: None,
+            auto_light: false,
             warnings: Vec::new(),
             animation_seconds: None,
         }

@@ -139,6 +139,7 @@ impl SceneHit {
             uv: (self.u, self.v),
             instance: self.instance,
             primitive: self.primitive,
+            edges: [q[1] - q[0], q[2] - q[0]],
         }
     }
 }

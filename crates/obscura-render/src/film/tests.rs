@@ -51,6 +51,7 @@ fn hit(c: f32, z: f32) -> SampleValues {
             ..crate::truth::Truth::EMPTY
         },
         flow: crate::flow::FlowPixel::NONE,
+        ..SampleValues::EMPTY
     }
 }
 

@@ -48,6 +48,7 @@ impl Tracer for Spheres {
             uv: (0.0, 0.0),
             instance: i as u32,
             primitive: 0,
+            edges: [Vec3A::ZERO; 2],
         })
     }
 
@@ -72,6 +73,7 @@ fn scene(material: Material, lights: Lights) -> ShadingScene {
         materials: vec![material],
         instance_material: vec![0],
         lights,
+        texturing: Default::default(),
     }
 }
 
@@ -289,6 +291,7 @@ fn constant_material_is_unlit_emission() {
         ],
         instance_material: vec![0, 1],
         lights: uniform_dome(1.0),
+        texturing: Default::default(),
     };
     let ray = Ray {
         origin: Vec3A::new(0.0, 0.0, -5.0),
@@ -449,6 +452,7 @@ proptest! {
             materials: spheres.iter().map(|s| s.2).collect(),
             instance_material: (0..spheres.len() as u32).collect(),
             lights: Lights::new(&lights, Path::new(".")).unwrap(),
+            texturing: Default::default(),
         };
         let direction = direction.try_normalize().unwrap_or(Vec3A::Z);
         let ray = Ray { origin, direction, t_min: 0.0, t_max: f32::INFINITY, time: 0.5 };

@@ -21,6 +21,8 @@ fn pixel_value(x: u32, y: u32) -> SampleValues {
         n: Vec3::new(fx, -fy, 0.5),
         p: Vec3::new(10.0 * fx, 1.0 / (1.0 + fy), -3.0),
         camera_direction: Vec3::new(0.1, 0.2, 0.974_679_4),
+        albedo: Rgb::new(0.01 * fx, 0.5, 0.02 * fy),
+        uv: glam::Vec2::new(0.25 * fx, -fy),
         truth: crate::truth::Truth {
             camera_z: 2.0 + fx,
             distance: 3.0 + fy,
@@ -187,6 +189,8 @@ fn output_exr_float_channels_values_and_windows() {
         Aov::P,
         Aov::CameraDirection,
         Aov::Z,
+        Aov::Albedo,
+        Aov::Uv,
     ];
     let attrs = [
         ("projection", "PxrPerspective".to_string()),
@@ -224,9 +228,14 @@ fn output_exr_float_channels_values_and_windows() {
             "P.Z",
             "R",
             "Z",
+            "albedo.B",
+            "albedo.G",
+            "albedo.R",
             "cameraDirection.X",
             "cameraDirection.Y",
-            "cameraDirection.Z"
+            "cameraDirection.Z",
+            "uv.X",
+            "uv.Y"
         ]
     );
     assert_eq!(
@@ -242,6 +251,10 @@ fn output_exr_float_channels_values_and_windows() {
         ("N.Y", Aov::N, 1),
         ("P.Y", Aov::P, 1),
         ("cameraDirection.Z", Aov::CameraDirection, 2),
+        ("albedo.R", Aov::Albedo, 0),
+        ("albedo.B", Aov::Albedo, 2),
+        ("uv.X", Aov::Uv, 0),
+        ("uv.Y", Aov::Uv, 1),
     ] {
         let FlatSamples::F32(values) = channel(layer, name) else {
             panic!("{name} is not float");

@@ -83,6 +83,49 @@ pub(super) fn check_before_validation(path: &Path, root: &gltf::json::Root) -> R
     Ok(())
 }
 
+/// Extensions a file may require that this reader honours; the `gltf` crate validates only those its
+/// enabled features know, so the others are taken off the required list once checked here.
+const SUPPORTED_REQUIRED: [&str; 3] = [
+    "KHR_texture_transform",
+    "KHR_materials_emissive_strength",
+    "KHR_lights_punctual",
+];
+
+/// What an unsupported required extension is, for the error message.
+fn extension_meaning(name: &str) -> &'static str {
+    match name {
+        "KHR_draco_mesh_compression" => "Draco-compressed geometry",
+        "EXT_meshopt_compression" | "KHR_meshopt_compression" => "meshoptimizer-compressed buffers",
+        "KHR_mesh_quantization" => "quantized vertex attributes",
+        "KHR_materials_pbrSpecularGlossiness" => "specular–glossiness materials",
+        "KHR_texture_basisu" => "Basis Universal (KTX2) textures",
+        "EXT_texture_webp" => "WebP textures",
+        "EXT_texture_avif" => "AVIF textures",
+        _ => "an extension",
+    }
+}
+
+/// Refuses a file that requires an extension this reader does not honour, naming it (a file
+/// requiring Draco otherwise fails deep inside validation with "Missing data"), and removes the
+/// honoured ones from the required list so validation accepts them.
+pub(super) fn check_required_extensions(path: &Path, root: &mut gltf::json::Root) -> Result<(), GltfError> {
+    if let Some(name) = root
+        .extensions_required
+        .iter()
+        .find(|e| !SUPPORTED_REQUIRED.contains(&e.as_str()))
+    {
+        return Err(GltfError::Invalid {
+            path: path.to_path_buf(),
+            what: format!(
+                "the file requires extension {name} ({}), which Obscura does not read; export or convert it without it (for example with Blender's glTF exporter, compression off)",
+                extension_meaning(name)
+            ),
+        });
+    }
+    root.extensions_required.clear();
+    Ok(())
+}
+
 /// Rejects GLB headers whose declared length would underflow the `gltf` crate's arithmetic.
 pub(super) fn check_glb_header(path: &Path, bytes: &[u8]) -> Result<(), GltfError> {
     if !bytes.starts_with(b"glTF") {
@@ -161,7 +204,7 @@ pub(super) fn load_buffers(
 
 /// The file a non-`data:` buffer URI names: `file:` URIs as they are, relative references from the
 /// document's folder; percent-escapes are decoded. `None` for other schemes and undecodable escapes.
-fn external_path(base: &Path, uri: &str) -> Option<PathBuf> {
+pub(super) fn external_path(base: &Path, uri: &str) -> Option<PathBuf> {
     if let Some(rest) = uri.strip_prefix("file://").or_else(|| uri.strip_prefix("file:")) {
         return Some(PathBuf::from(percent_decode(rest)?));
     }

@@ -1,7 +1,7 @@
 //! Mesh primitives: each `TRIANGLES` primitive becomes an object, its accessors checked before the
 //! `gltf` crate's readers (which assert) see them.
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
 use super::{GltfError, Loader};
@@ -53,10 +53,13 @@ impl Loader<'_> {
         prim: &gltf::Primitive<'_>,
     ) -> Result<Option<Mesh>, GltfError> {
         let here = format!("mesh {mesh} primitive {}", prim.index());
-        if prim.mode() != gltf::mesh::Mode::Triangles {
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            gltf::mesh::Mode::Triangles | gltf::mesh::Mode::TriangleStrip | gltf::mesh::Mode::TriangleFan
+        ) {
             self.warn(format!(
-                "{here}: mode {:?} is not TRIANGLES; skipped",
-                prim.mode()
+                "{here}: mode {mode:?} (points or lines) has no surface to render; skipped"
             ));
             return Ok(None);
         }
@@ -106,18 +109,62 @@ impl Loader<'_> {
                 "index {index} is out of range: the primitive has {n} vertices"
             )));
         }
-        if !indices.len().is_multiple_of(3) {
-            self.warn(format!(
-                "{here}: {} indices is not a multiple of 3; the last {} ignored",
-                indices.len(),
-                indices.len() % 3
-            ));
+        let triangles = match mode {
+            gltf::mesh::Mode::TriangleStrip => strip_triangles(&indices),
+            gltf::mesh::Mode::TriangleFan => fan_triangles(&indices),
+            _ => {
+                if !indices.len().is_multiple_of(3) {
+                    self.warn(format!(
+                        "{here}: {} indices is not a multiple of 3; the last {} ignored",
+                        indices.len(),
+                        indices.len() % 3
+                    ));
+                }
+                indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()
+            }
+        };
+        let mut uvs = Vec::new();
+        for set in 0.. {
+            if prim.get(&gltf::Semantic::TexCoords(set)).is_none() {
+                break;
+            }
+            let uv: Vec<Vec2> = reader
+                .read_tex_coords(set)
+                .ok_or_else(|| bad(format!("TEXCOORD_{set} data cannot be read")))?
+                .into_f32()
+                .map(Vec2::from)
+                .collect();
+            if uv.len() != n {
+                self.warn(format!(
+                    "{here}: {} TEXCOORD_{set} values for {n} positions; ignored with the sets after it",
+                    uv.len()
+                ));
+                break;
+            }
+            uvs.push(uv);
         }
-        let triangles = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let mut colors = None;
+        if prim.get(&gltf::Semantic::Colors(0)).is_some() {
+            let c: Vec<[f32; 4]> = reader
+                .read_colors(0)
+                .ok_or_else(|| bad("COLOR_0 data cannot be read".into()))?
+                .into_rgba_f32()
+                .collect();
+            if c.len() == n {
+                colors = Some(c);
+            } else {
+                self.warn(format!(
+                    "{here}: {} COLOR_0 values for {n} positions; vertex colours ignored",
+                    c.len()
+                ));
+            }
+        }
         Ok(Some(Mesh {
             positions,
             normals,
             triangles,
+            uvs,
+            colors,
         }))
     }
 
@@ -134,6 +181,19 @@ impl Loader<'_> {
         if let Some(acc) = &prim.get(&gltf::Semantic::Normals) {
             self.check_accessor(acc, Dimensions::Vec3, &float)
                 .map_err(|e| format!("NORMAL {e}"))?;
+        }
+        let normalized = [DataType::F32, DataType::U8, DataType::U16];
+        for set in 0.. {
+            let Some(acc) = prim.get(&gltf::Semantic::TexCoords(set)) else {
+                break;
+            };
+            self.check_accessor(&acc, Dimensions::Vec2, &normalized)
+                .map_err(|e| format!("TEXCOORD_{set} {e}"))?;
+        }
+        if let Some(acc) = &prim.get(&gltf::Semantic::Colors(0)) {
+            self.check_accessor(acc, Dimensions::Vec4, &normalized)
+                .or_else(|_| self.check_accessor(acc, Dimensions::Vec3, &normalized))
+                .map_err(|e| format!("COLOR_0 {e} (or Vec4)"))?;
         }
         if let Some(acc) = prim.indices() {
             self.check_accessor(
@@ -208,5 +268,36 @@ impl Loader<'_> {
             ));
         }
         Ok(())
+    }
+}
+
+/// The triangles of a `TRIANGLE_STRIP` (glTF 2.0 §3.7.2.1): triangle `i` is
+/// `(v_i, v_{i+1+i%2}, v_{i+2−i%2})`, which keeps every triangle's winding that of the first.
+fn strip_triangles(v: &[u32]) -> Vec<[u32; 3]> {
+    (0..v.len().saturating_sub(2))
+        .map(|i| [v[i], v[i + 1 + i % 2], v[i + 2 - i % 2]])
+        .collect()
+}
+
+/// The triangles of a `TRIANGLE_FAN`: triangle `i` is `(v_{i+1}, v_{i+2}, v_0)`.
+fn fan_triangles(v: &[u32]) -> Vec<[u32; 3]> {
+    (0..v.len().saturating_sub(2))
+        .map(|i| [v[i + 1], v[i + 2], v[0]])
+        .collect()
+}
+
+#[cfg(test)]
+mod strip_tests {
+    use super::*;
+
+    #[test]
+    fn strips_and_fans_keep_the_winding_of_the_first_triangle() {
+        assert_eq!(
+            strip_triangles(&[0, 1, 2, 3, 4]),
+            [[0, 1, 2], [1, 3, 2], [2, 3, 4]]
+        );
+        assert_eq!(fan_triangles(&[0, 1, 2, 3]), [[1, 2, 0], [2, 3, 0]]);
+        assert!(strip_triangles(&[0, 1]).is_empty());
+        assert!(fan_triangles(&[]).is_empty());
     }
 }

@@ -41,6 +41,7 @@ mod container;
 mod lights;
 mod materials;
 mod mesh;
+mod textures;
 
 #[cfg(test)]
 mod tests;
@@ -53,7 +54,9 @@ use obscura_host::CameraDesc;
 pub use crate::framing::frame_bounds;
 use crate::framing::{add_default_dome_if_unlit, frame_scene};
 use crate::types::Scene;
-use container::{check_before_validation, check_glb_header, json_chunk, load_buffers};
+use container::{
+    check_before_validation, check_glb_header, check_required_extensions, json_chunk, load_buffers,
+};
 use lights::PunctualLights;
 
 pub use animation::Animation;
@@ -198,7 +201,8 @@ fn load_posed(path: &Path, camera: CameraDesc, times: &[(f32, f32)]) -> Result<S
         source,
     };
     let gltf::Gltf { document, blob } = gltf::Gltf::from_slice_without_validation(&bytes).map_err(parse)?;
-    let root = document.into_json();
+    let mut root = document.into_json();
+    check_required_extensions(path, &mut root)?;
     check_before_validation(path, &root)?;
     let document = gltf::Document::from_json(root).map_err(parse)?;
     let base = match path.parent() {
@@ -212,6 +216,7 @@ fn load_posed(path: &Path, camera: CameraDesc, times: &[(f32, f32)]) -> Result<S
         path,
         file: path.display().to_string(),
         buffers: &buffers,
+        base,
         scene: Scene::new(camera),
         bounds: None,
     };
@@ -266,6 +271,8 @@ struct Loader<'a> {
     file: String,
     /// The document's buffers, by index.
     buffers: &'a [Vec<u8>],
+    /// The folder relative URIs are taken from.
+    base: &'a Path,
     /// The scene so far.
     scene: Scene,
     /// World-space bounds of every vertex read so far.

@@ -309,24 +309,23 @@ fn gltf_materials_map_metallic_roughness() {
 }
 
 #[test]
-fn gltf_without_lights_gets_a_dome_and_a_warning() {
+fn gltf_without_lights_gets_a_sky_that_is_not_white_and_a_key_light() {
     let scene = load(&Fixture::new([0, 1, 2]), 640, 480);
-    assert_eq!(
-        scene.lights,
-        vec![Light::Dome {
-            color: Rgb::WHITE,
-            intensity: 1.0,
-            exposure: 0.0,
-            map: None,
-            transform: Mat4::IDENTITY
-        }]
-    );
+    let [
+        Light::Dome { color, map: None, .. },
+        Light::Distant { transform, .. },
+    ] = scene.lights.as_slice()
+    else {
+        panic!("{:?}", scene.lights)
+    };
     assert!(
-        scene
-            .warnings
-            .iter()
-            .any(|w| w.contains("no light") && w.contains("scene.gltf"))
+        color.r < 0.9 && color.b > color.r,
+        "a backdrop unlike a white asset: {color:?}"
     );
+    // The key light comes from above: it travels downward.
+    assert!(transform.transform_vector3(Vec3::Z).y < -0.5);
+    assert!(scene.auto_light);
+    assert!(!scene.warnings.iter().any(|w| w.contains("no light")));
 }
 
 #[test]
@@ -423,7 +422,39 @@ fn gltf_non_triangle_primitives_are_skipped_with_a_warning() {
     f.mode = 1;
     let scene = load(&f, 640, 480);
     assert!(scene.objects.is_empty());
-    assert!(scene.warnings.iter().any(|w| w.contains("not TRIANGLES")));
+    assert!(scene.warnings.iter().any(|w| w.contains("points or lines")));
+}
+
+#[test]
+fn gltf_triangle_strips_and_fans_are_read() {
+    for mode in [5, 6] {
+        let mut f = Fixture::new([0, 1, 2]);
+        f.mode = mode;
+        let scene = load(&f, 640, 480);
+        let Shape::Mesh(m) = &scene.objects[0].shape else {
+            panic!("not a mesh")
+        };
+        assert_eq!(m.triangles.len(), 1, "mode {mode}");
+    }
+}
+
+#[test]
+fn gltf_a_required_extension_we_do_not_read_is_named() {
+    let mut f = Fixture::new([0, 1, 2]);
+    f.extensions = r#""extensionsUsed": ["KHR_draco_mesh_compression"], "extensionsRequired": ["KHR_draco_mesh_compression"],"#.into();
+    let dir = tempfile::tempdir().unwrap();
+    let e = load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("KHR_draco_mesh_compression") && e.contains("Draco"),
+        "{e}"
+    );
+    // A required extension we honour is accepted.
+    f.extensions =
+        r#""extensionsUsed": ["KHR_texture_transform"], "extensionsRequired": ["KHR_texture_transform"],"#
+            .into();
+    assert!(load_gltf(&f.write(&dir, "scene.gltf"), camera_desc(64, 64)).is_ok());
 }
 
 fn error_of(contents: &[u8], name: &str) -> String {

@@ -16,12 +16,14 @@ use std::cell::{Cell, RefCell};
 use std::io::{BufRead, Read};
 use std::path::{Path, PathBuf};
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::Rgb;
 
 use crate::framing::{add_default_dome_if_unlit, frame_scene, grow_bounds};
 use crate::types::{Identity, Material, Mesh, MotionTransform, Object, Scene, Shape};
+
+mod maps;
 
 /// An OBJ file (or a material library it names) could not be loaded. Every message starts with the
 /// file's path, and with the line when one is known.
@@ -80,7 +82,8 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let text = utf8(path, &bytes)?;
+    let (text, latin1_line) = text_of(&bytes);
+    let text = &*text;
     let usemtl = check_faces(path, text)?;
     let file = path.display().to_string();
     let Parsed {
@@ -90,6 +93,11 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
     } = parse(path, text)?;
 
     let mut scene = Scene::new(camera);
+    if let Some(line) = latin1_line {
+        scene.warnings.push(format!(
+            "{file}:{line}: not UTF-8 text; the file is read as Latin-1 (ISO 8859-1)"
+        ));
+    }
     scene.warnings.extend(unknown_statements(&file, text));
     read_materials(&mut scene, &file, &libraries, &materials, usemtl);
     let mut bounds = None;
@@ -180,6 +188,12 @@ fn read_materials(
     usemtl: Vec<(usize, String)>,
 ) {
     for library in libraries {
+        if let Some(line) = library.latin1 {
+            scene.warnings.push(format!(
+                "{}:{line}: not UTF-8 text; the material library is read as Latin-1 (ISO 8859-1)",
+                library.path.display()
+            ));
+        }
         if let LibraryState::Unreadable { what } = &library.state {
             scene.warnings.push(format!(
                 "{file}:{}: cannot read material library {}: {what}; its materials fall back to the default",
@@ -188,17 +202,17 @@ fn read_materials(
             ));
         }
     }
-    let mut textured = None;
+    let base = match Path::new(file).parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
     for m in materials {
-        if textured.is_none() && uses_texture(m) {
-            textured = Some(m.name.clone());
-        }
+        let index = scene.materials.len() as u32;
         scene.materials.push(convert_material(m));
-    }
-    if let Some(name) = textured {
-        scene.warnings.push(format!(
-            "{file}: texture maps are ignored (material \"{name}\" is the first to use one); only the colours are read"
-        ));
+        let roughness = roughness_from_ns(m.shininess.unwrap_or(0.0));
+        if let Some(maps) = maps::material_maps(scene, file, &base, m, roughness) {
+            scene.material_maps.insert(index, maps);
+        }
     }
     if libraries.iter().all(|l| matches!(l.state, LibraryState::Loaded)) {
         for (line, name) in usemtl {
@@ -254,6 +268,23 @@ fn model_object(
         }
         None
     };
+    let n = positions.len();
+    let uvs = if m.texcoords.len() == 2 * n {
+        vec![
+            m.texcoords
+                .chunks_exact(2)
+                .map(|t| Vec2::new(t[0], 1.0 - t[1]))
+                .collect(),
+        ]
+    } else {
+        Vec::new()
+    };
+    let colors = (m.vertex_color.len() == 3 * n).then(|| {
+        m.vertex_color
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2], 1.0])
+            .collect()
+    });
     let material = match m.material_id {
         Some(i) if i < materials => u32::try_from(i + 1).unwrap_or(0),
         _ => 0,
@@ -263,6 +294,8 @@ fn model_object(
             positions,
             normals,
             triangles: m.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
+            uvs,
+            colors,
         }),
         transform: MotionTransform::default(),
         material,
@@ -287,12 +320,16 @@ fn line_at(data: &[u8], pos: usize) -> usize {
     }
 }
 
-fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str, ObjError> {
-    std::str::from_utf8(bytes).map_err(|e| ObjError::Parse {
-        path: path.to_path_buf(),
-        line: line_at(bytes, e.valid_up_to() + 1),
-        what: "not UTF-8 text".into(),
-    })
+/// The text of an OBJ or MTL file: UTF-8 when it is, else Latin-1 (every byte one character, as
+/// older exporters wrote names), with the first line that is not UTF-8.
+fn text_of(bytes: &[u8]) -> (std::borrow::Cow<'_, str>, Option<usize>) {
+    match std::str::from_utf8(bytes) {
+        Ok(t) => (t.into(), None),
+        Err(e) => (
+            bytes.iter().map(|&b| char::from(b)).collect::<String>().into(),
+            Some(line_at(bytes, e.valid_up_to() + 1)),
+        ),
+    }
 }
 
 /// A `BufRead` over text that publishes how far it has been read, so the line `tobj` failed on (or
@@ -473,6 +510,8 @@ struct Library {
     state: LibraryState,
     /// What is handed back to `tobj`.
     result: tobj::MTLLoadResult,
+    /// The first line that is not UTF-8, when the library was read as Latin-1.
+    latin1: Option<usize>,
 }
 
 enum LibraryState {
@@ -488,6 +527,7 @@ impl Library {
             line,
             state,
             result: Err(error),
+            latin1: None,
         };
         let bytes = match std::fs::read(&path) {
             Ok(b) => b,
@@ -498,15 +538,8 @@ impl Library {
                 );
             }
         };
-        let text = match std::str::from_utf8(&bytes) {
-            Ok(t) => t,
-            Err(e) => {
-                let line = line_at(&bytes, e.valid_up_to() + 1);
-                let what = "not UTF-8 text".to_owned();
-                return failed(LibraryState::Malformed { line, what }, tobj::LoadError::ReadError);
-            }
-        };
-        let text = match normalise_mtl(text) {
+        let (text, latin1) = text_of(&bytes);
+        let text = match normalise_mtl(&text) {
             Ok(t) => t,
             Err((line, what)) => {
                 return failed(
@@ -526,6 +559,7 @@ impl Library {
                 line,
                 state: LibraryState::Loaded,
                 result: Ok(ok),
+                latin1,
             },
             Err(e) => {
                 let state = LibraryState::Malformed {
@@ -563,15 +597,6 @@ fn normalise_mtl(text: &str) -> Result<String, (usize, String)> {
         out.push('\n');
     }
     Ok(out)
-}
-
-fn uses_texture(m: &tobj::Material) -> bool {
-    m.diffuse_texture.is_some()
-        || m.ambient_texture.is_some()
-        || m.specular_texture.is_some()
-        || m.normal_texture.is_some()
-        || m.shininess_texture.is_some()
-        || m.dissolve_texture.is_some()
 }
 
 /// One MTL material as ours (see [`load_obj`]).

@@ -200,17 +200,20 @@ fn obj_camera_frames_every_corner_of_the_bounds() {
 }
 
 #[test]
-fn obj_gets_a_default_dome_light() {
+fn obj_gets_the_default_sky_and_key_light() {
     let scene = load_cube(Some(MTL));
     assert!(matches!(
         scene.lights.as_slice(),
-        [Light::Dome {
-            intensity: 1.0,
-            map: None,
-            ..
-        }]
+        [
+            Light::Dome {
+                intensity: 1.0,
+                map: None,
+                ..
+            },
+            Light::Distant { .. }
+        ]
     ));
-    assert!(scene.warnings.iter().any(|w| w.contains("dome")));
+    assert!(scene.auto_light && scene.auto_camera.is_some());
 }
 
 fn error_of(obj: &str, mtl: Option<&str>) -> String {
@@ -266,14 +269,26 @@ fn obj_malformed_mtl_is_an_error_naming_the_mtl_and_line() {
 }
 
 #[test]
-fn obj_missing_and_non_utf8_files_are_errors() {
+fn obj_missing_files_are_errors_and_latin1_is_read_with_a_warning() {
     let e = load_obj(Path::new("/nonexistent/model.obj"), camera()).unwrap_err();
     assert!(matches!(e, ObjError::Read { .. }) && e.to_string().contains("/nonexistent/model.obj"));
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("latin1.obj");
-    std::fs::write(&path, b"v 0 0 0\no caf\xe9\n").unwrap();
-    let e = load_obj(&path, camera()).unwrap_err().to_string();
-    assert!(e.contains("latin1.obj:2:") && e.contains("UTF-8"), "{e}");
+    std::fs::write(&path, b"v 0 0 0\nv 1 0 0\nv 0 1 0\no caf\xe9\nf 1 2 3\n").unwrap();
+    let scene = load_obj(&path, camera()).unwrap();
+    assert!(
+        scene.objects[0].source.contains("café"),
+        "{}",
+        scene.objects[0].source
+    );
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("latin1.obj:4:") && w.contains("Latin-1")),
+        "{:?}",
+        scene.warnings
+    );
 }
 
 #[test]
@@ -388,4 +403,40 @@ fn obj_unknown_statements_are_warned_about_once_each_with_their_first_line() {
         ]
     );
     assert_eq!(meshes(&scene).len(), 1);
+}
+
+#[test]
+fn obj_texture_maps_and_coordinates_are_read_with_t_flipped() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        &dir,
+        "quad.mtl",
+        "newmtl wood\nKd 1 1 1\nKe 0 0 0\nmap_Kd -s 2 2 1 wood grain.png\nmap_Ke glow.png\nnorm -bm 1 n.png\nmap_d a.png\n",
+    );
+    let obj =
+        "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 0.25\nusemtl wood\nf 1/1 2/2 3/3\n";
+    let scene = load_obj(&write(&dir, "quad.obj", obj), camera()).unwrap();
+    let Shape::Mesh(m) = &scene.objects[0].shape else {
+        panic!("not a mesh")
+    };
+    assert_eq!(
+        m.uvs[0],
+        [Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.75)]
+    );
+    let maps = &scene.material_maps[&scene.objects[0].material];
+    let kd = maps.base_color.unwrap();
+    let crate::texture::ImageSource::File(p) = &scene.textures[kd.texture as usize].source else {
+        panic!("not a file")
+    };
+    assert!(p.ends_with("wood grain.png"), "{}", p.display());
+    assert_eq!(
+        scene.textures[kd.texture as usize].color_space,
+        crate::texture::ColorSpace::Srgb
+    );
+    // -s 2 2 in OBJ's (s, t) is v' = 2 v − 1 on the flipped coordinates.
+    assert_eq!(kd.transform, [2.0, 0.0, 0.0, 0.0, 2.0, -1.0]);
+    assert!(maps.emissive.is_some() && maps.emissive_factor == Rgb::WHITE);
+    assert!(maps.normal.is_some() && maps.opacity.is_some());
+    assert_eq!(maps.alpha, crate::texture::AlphaMode::Blend);
+    assert!(maps.diffuse_only);
 }

@@ -13,7 +13,7 @@
 //! The mode is `rgb`, `rgba`, `rgbz`, `rgbaz`, `a`, `z`, `az`, or a comma-separated list of AOV names
 //! (`Ci`, `a`, `z`, `N`, `P`, `cameraDirection` and the ground-truth AOVs `cameraZ`, `distance`,
 //! `Pcamera`, `Ncamera`, `objectId`, `instanceId`, `materialId`, `flowForward`, `flowBackward`,
-//! `flowValid`; a leading type such as `color Ci` is allowed). An AOV
+//! `flowValid`, and `albedo`, `uv`; a leading type such as `color Ci` is allowed). An AOV
 //! the renderer does not produce is left out with a warning; a display left with none is skipped.
 //!
 //! A name starting with `+` adds a display; without it the display replaces the ones before. Two
@@ -27,7 +27,7 @@ use super::{Reader, RibError};
 use crate::types::{Aov, Display, DisplayDriver};
 
 /// The names a `Display` mode may use.
-const CHANNELS: [(&str, &[Aov]); 23] = [
+const CHANNELS: [(&str, &[Aov]); 25] = [
     ("rgb", &[Aov::Ci]),
     ("rgba", &[Aov::Ci, Aov::Alpha]),
     ("rgbz", &[Aov::Ci, Aov::Z]),
@@ -51,6 +51,8 @@ const CHANNELS: [(&str, &[Aov]); 23] = [
     ("flowForward", &[Aov::FlowForward]),
     ("flowBackward", &[Aov::FlowBackward]),
     ("flowValid", &[Aov::FlowValid]),
+    ("albedo", &[Aov::Albedo]),
+    ("uv", &[Aov::Uv]),
 ];
 
 /// Drivers that show the image in a window.

@@ -223,6 +223,7 @@ impl Reader {
                     positions,
                     normals,
                     triangles,
+                    ..Mesh::default()
                 }),
             );
         }

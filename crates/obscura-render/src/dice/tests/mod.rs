@@ -232,6 +232,7 @@ fn meshes_pass_through_with_their_normals() {
         positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
         normals: Some(vec![Vec3::Z; 3]),
         triangles: vec![[0, 1, 2]],
+        ..Mesh::default()
     };
     let ctx = context(DicingHint::Perspective, 90.0, 10.0);
     let out = dice(&Shape::Mesh(mesh.clone()), &ctx).unwrap();

@@ -279,7 +279,7 @@ fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
         scene
             .warnings
             .iter()
-            .any(|w| w.contains("no light") && w.contains("any LightSource in the file replaces it")),
+            .any(|w| w.contains("no light") && w.contains("any LightSource in the file replaces them")),
         "{:?}",
         scene.warnings
     );

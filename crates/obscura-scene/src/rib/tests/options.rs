@@ -213,7 +213,7 @@ fn display_leaves_out_an_unknown_aov_with_a_warning_naming_it() {
         [
             "t.rib:2: Display \"a.exr\": AOV \"Cs\" is not produced by this renderer, left out (known: rgb, \
           rgba, rgbz, rgbaz, az, Ci, a, z, Z, N, P, cameraDirection, depth, cameraZ, distance, Pcamera, Ncamera, \
-          objectId, instanceId, materialId, flowForward, flowBackward, flowValid)"
+          objectId, instanceId, materialId, flowForward, flowBackward, flowValid, albedo, uv)"
         ]
     );
     // A display left with no AOV is skipped, said so.

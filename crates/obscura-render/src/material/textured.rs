@@ -1,0 +1,354 @@
+//! Materials whose parameters come from textures: what a surface is at one hit.
+//!
+//! [`Texturing`] holds the loaded textures, the per-material [`SurfaceMaps`] and the per-instance
+//! vertex attributes (texture coordinates, colours). [`Texturing::surface`] turns a hit into a
+//! [`SurfacePoint`]: the material to build the BSDF from, the shading normal (normal-mapped), the
+//! emitted radiance, the base colour for the `albedo` AOV, the first texture coordinates for the `uv`
+//! AOV, and the opacity. Every lookup is filtered by the ray cone's footprint
+//! ([`crate::texture::footprint`]), or by none at all when [`TextureLookup::Point`] asks so (the tests'
+//! aliased reference).
+//!
+//! The metallic–roughness model is glTF's, mapped onto PxrSurface as the factor-only glTF reader
+//! does: `diffuse = base·(1 − m)`, `specular = lerp(0.04, base, m)`, roughness `r` (see
+//! [`SurfaceMaps`]).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+use glam::{Vec2, Vec3, Vec3A, Vec4};
+use obscura_scene::Material;
+use obscura_scene::texture::{AlphaMode, ImageSource, SurfaceMaps, TextureDesc, TextureSlot};
+use obscura_sdk::Rgb;
+
+use crate::ray::Hit;
+use crate::texture::footprint::{UvMap, cone_footprint};
+use crate::texture::{Footprint, Texture, image};
+
+/// How texture lookups are filtered.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TextureLookup {
+    /// By the ray cone's footprint (EWA over the mip pyramid): the renderer's behaviour.
+    #[default]
+    Footprint,
+    /// The nearest level-0 texel, unfiltered: aliases; for comparisons.
+    Point,
+    /// Each texture's mean (its last mip level), everywhere: the same colours on average without
+    /// the cost of filtering; for measuring that cost.
+    Mean,
+}
+
+/// Per-vertex attributes of one mesh for texturing, with its triangles.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SurfaceAttributes {
+    /// Triangles (the same as the diced mesh's).
+    pub triangles: Vec<[u32; 3]>,
+    /// Texture coordinate sets, one coordinate per vertex.
+    pub uvs: Vec<Vec<Vec2>>,
+    /// Linear RGBA vertex colours.
+    pub colors: Option<Vec<Vec4>>,
+}
+
+impl SurfaceAttributes {
+    /// The attributes of a scene mesh, or `None` when it has neither coordinates nor colours.
+    #[must_use]
+    pub fn of_mesh(mesh: &obscura_scene::Mesh) -> Option<Self> {
+        let n = mesh.positions.len();
+        let uvs: Vec<Vec<Vec2>> = mesh.uvs.iter().filter(|s| s.len() == n).cloned().collect();
+        let colors = mesh
+            .colors
+            .as_ref()
+            .filter(|c| c.len() == n)
+            .map(|c| c.iter().map(|&v| Vec4::from(v)).collect());
+        (!uvs.is_empty() || colors.is_some()).then(|| SurfaceAttributes {
+            triangles: mesh.triangles.clone(),
+            uvs,
+            colors,
+        })
+    }
+
+    /// Texture coordinates of set `set` at barycentrics `(b1, b2)` of triangle `tri` with the three
+    /// vertex values.
+    fn uv(&self, set: usize, tri: [u32; 3], b: (f32, f32)) -> Option<(Vec2, [Vec2; 3])> {
+        let uvs = self.uvs.get(set).or_else(|| self.uvs.first())?;
+        let v = tri.map(|i| uvs[i as usize]);
+        Some((v[0] * (1.0 - b.0 - b.1) + v[1] * b.0 + v[2] * b.1, v))
+    }
+}
+
+/// What a surface is at one hit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// The material to build the BSDF from.
+    pub material: Material,
+    /// Shading normal (world space; normal-mapped where the material says so).
+    pub normal: Vec3A,
+    /// Radiance emitted by the surface in addition to the BSDF's own.
+    pub emission: Vec3A,
+    /// The base colour (linear), for the `albedo` AOV.
+    pub albedo: Vec3A,
+    /// The first texture coordinate set, for the `uv` AOV.
+    pub uv: Vec2,
+    /// Probability that the surface is there (1 opaque; alpha MASK gives 0 or 1, BLEND the alpha).
+    pub opacity: f32,
+}
+
+/// The base colour of an untextured material: its diffuse or emitted colour.
+#[must_use]
+pub fn material_albedo(m: &Material) -> Vec3A {
+    match *m {
+        Material::Diffuse { color } | Material::Constant { color } => super::color(color),
+        Material::Surface { diffuse, .. } => super::color(diffuse),
+    }
+}
+
+/// Textures, surface maps and vertex attributes of a prepared scene.
+#[derive(Debug, Clone, Default)]
+pub struct Texturing {
+    textures: Vec<Option<Arc<Texture>>>,
+    maps: BTreeMap<u32, SurfaceMaps>,
+    /// Per instance, its mesh's attributes (shared between instances of one mesh).
+    attributes: Vec<Option<Arc<SurfaceAttributes>>>,
+    /// How lookups are filtered.
+    pub lookup: TextureLookup,
+}
+
+/// A texture of the scene could not be used (the render goes on with the factor alone).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureWarning(pub String);
+
+impl Texturing {
+    /// Loads every texture of `descs` (in parallel) and keeps `maps` and the per-instance
+    /// `attributes`. A texture that cannot be read or decoded becomes a warning naming its user and
+    /// file, and its slots read as 1 (the factor alone). Relative paths are taken from `base_dir`.
+    #[must_use]
+    pub fn new(
+        descs: &[TextureDesc],
+        maps: BTreeMap<u32, SurfaceMaps>,
+        attributes: Vec<Option<Arc<SurfaceAttributes>>>,
+        base_dir: &Path,
+    ) -> (Texturing, Vec<TextureWarning>) {
+        use rayon::prelude::*;
+        let loaded: Vec<Result<Texture, String>> = descs
+            .par_iter()
+            .map(|d| {
+                let source = match &d.source {
+                    ImageSource::File(p) if p.is_relative() => ImageSource::File(base_dir.join(p)),
+                    s => s.clone(),
+                };
+                image::decode(&source, d.color_space)
+                    .map(|(w, h, texels)| Texture::from_texels(w, h, texels, d.wrap, d.nearest))
+                    .map_err(|e| {
+                        format!(
+                            "{}: cannot use texture {}: {e}; the factor alone is used",
+                            d.used_by,
+                            source.describe()
+                        )
+                    })
+            })
+            .collect();
+        let mut warnings = Vec::new();
+        let textures = loaded
+            .into_iter()
+            .map(|r| match r {
+                Ok(t) => Some(Arc::new(t)),
+                Err(w) => {
+                    warnings.push(TextureWarning(w));
+                    None
+                }
+            })
+            .collect();
+        (
+            Texturing {
+                textures,
+                maps,
+                attributes,
+                lookup: TextureLookup::Footprint,
+            },
+            warnings,
+        )
+    }
+
+    /// Bytes held by every loaded texture's pyramid.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        self.textures.iter().flatten().map(|t| t.memory_bytes()).sum()
+    }
+
+    /// True when some material may let rays through (alpha MASK or BLEND).
+    #[must_use]
+    pub fn has_cutouts(&self) -> bool {
+        self.maps.values().any(|m| m.alpha != AlphaMode::Opaque)
+    }
+
+    /// The surface at `hit` for a material `material` (index `index`), seen along unit `direction`
+    /// with shading normal `n_s` (facing the viewer) by a cone of radius `cone_radius` (world units)
+    /// at the hit. `primary` is true for the camera ray's hit: its lookups are filtered over the
+    /// footprint's ellipse (EWA); later hits, whose cones have widened, over a circle of the same
+    /// area (trilinear), as renderers do for indirect rays.
+    #[must_use]
+    #[allow(clippy::too_many_arguments)]
+    pub fn surface(
+        &self,
+        hit: &Hit,
+        material: Material,
+        index: Option<u32>,
+        direction: Vec3A,
+        n_s: Vec3A,
+        cone_radius: f32,
+        primary: bool,
+    ) -> SurfacePoint {
+        let attrs = self
+            .attributes
+            .get(hit.instance as usize)
+            .and_then(Option::as_ref);
+        let tri = attrs.and_then(|a| a.triangles.get(hit.primitive as usize).copied());
+        let uv0 = attrs
+            .zip(tri)
+            .and_then(|(a, t)| a.uv(0, t, hit.uv))
+            .map_or(Vec2::ZERO, |(uv, _)| uv);
+        let maps = index.and_then(|i| self.maps.get(&i));
+        let Some(maps) = maps else {
+            return SurfacePoint {
+                material,
+                normal: n_s,
+                emission: Vec3A::ZERO,
+                albedo: material_albedo(&material),
+                uv: uv0,
+                opacity: 1.0,
+            };
+        };
+        // The footprint on a coordinate set, before any slot's transform.
+        let footprint_on = |set: u32| -> Option<Footprint> {
+            let (a, t) = (attrs?, tri?);
+            let (uv, corners) = a.uv(set as usize, t, hit.uv)?;
+            Some(
+                match (self.lookup, UvMap::new(hit.edges[0], hit.edges[1], corners)) {
+                    (TextureLookup::Footprint, Some(map)) => {
+                        cone_footprint(uv, cone_radius, direction, hit.geometric_normal, &map)
+                    }
+                    _ => Footprint::point(uv),
+                },
+            )
+        };
+        // Most materials read every map through set 0: its footprint is computed once.
+        let set0 = footprint_on(0);
+        let lookup = |slot: Option<TextureSlot>| -> Option<Vec4> {
+            let slot = slot?;
+            let texture = self.textures.get(slot.texture as usize)?.as_ref()?;
+            let footprint = if slot.uv_set == 0 {
+                set0?
+            } else {
+                footprint_on(slot.uv_set)?
+            };
+            let footprint = footprint.transformed(&slot.transform);
+            Some(match self.lookup {
+                TextureLookup::Footprint if primary => texture.filter(&footprint),
+                TextureLookup::Footprint => {
+                    let r = (footprint.a.length() * footprint.b.length()).sqrt();
+                    texture.trilinear(footprint.center, r)
+                }
+                TextureLookup::Point => texture.nearest(footprint.center),
+                TextureLookup::Mean => texture.texel(usize::MAX, 0, 0),
+            })
+        };
+        let mut base = Vec4::from(maps.base_color_factor);
+        if let Some(t) = lookup(maps.base_color) {
+            base *= t;
+        }
+        if maps.vertex_colors
+            && let (Some(a), Some(t)) = (attrs, tri)
+            && let Some(c) = &a.colors
+        {
+            let (b1, b2) = hit.uv;
+            base *= c[t[0] as usize] * (1.0 - b1 - b2) + c[t[1] as usize] * b1 + c[t[2] as usize] * b2;
+        }
+        let (mut metallic, mut roughness) = (maps.metallic, maps.roughness);
+        if let Some(t) = lookup(maps.metallic_roughness) {
+            metallic *= t.z;
+            roughness *= t.y;
+        }
+        let unit = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 0.0 };
+        let (metallic, roughness) = (unit(metallic), unit(roughness));
+        let rgb = Vec3::new(base.x, base.y, base.z);
+        let diffuse = rgb * (1.0 - metallic);
+        let to_rgb = |v: Vec3| Rgb::new(v.x, v.y, v.z);
+        let specular = match maps.specular {
+            Some(ks) => {
+                let mut ks = Vec3::new(ks.r, ks.g, ks.b);
+                if let Some(t) = lookup(maps.specular_map) {
+                    ks *= Vec3::new(t.x, t.y, t.z);
+                }
+                ks
+            }
+            None => Vec3::splat(0.04).lerp(rgb, metallic),
+        };
+        let material = if maps.diffuse_only {
+            Material::Diffuse {
+                color: to_rgb(diffuse),
+            }
+        } else {
+            Material::Surface {
+                diffuse: to_rgb(diffuse),
+                specular: to_rgb(specular),
+                roughness,
+            }
+        };
+        let mut emission = super::color(maps.emissive_factor);
+        if emission != Vec3A::ZERO
+            && let Some(t) = lookup(maps.emissive)
+        {
+            emission *= Vec3A::new(t.x, t.y, t.z);
+        }
+        let normal = match (maps.normal, attrs, tri) {
+            (Some(slot), Some(a), Some(t)) => lookup(Some(slot))
+                .and_then(|texel| {
+                    let (_, corners) = a.uv(slot.uv_set as usize, t, hit.uv)?;
+                    let map = UvMap::new(hit.edges[0], hit.edges[1], corners)?;
+                    normal_mapped(n_s, map, texel, slot.scale)
+                })
+                .filter(|n| n.dot(-direction) > 0.0)
+                .unwrap_or(n_s),
+            _ => n_s,
+        };
+        if let Some(t) = lookup(maps.opacity) {
+            base.w *= t.x;
+        }
+        let opacity = match maps.alpha {
+            AlphaMode::Opaque => 1.0,
+            AlphaMode::Mask(cutoff) => {
+                if base.w >= cutoff {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            AlphaMode::Blend => unit(base.w),
+        };
+        SurfacePoint {
+            material,
+            normal,
+            emission,
+            albedo: Vec3A::from(rgb).max(Vec3A::ZERO),
+            uv: uv0,
+            opacity,
+        }
+    }
+}
+
+/// The shading normal `n` perturbed by a tangent-space normal-map texel (`[0, 1]` → `[−1, 1]`, x and
+/// y scaled by `scale`): tangent `T` along `∂p/∂u`, bitangent `B` toward **decreasing** `v` (up in
+/// the image, since glTF's `v` runs down the image and a normal map's +Y is up), both made
+/// orthogonal to `n`.
+fn normal_mapped(n: Vec3A, map: UvMap, texel: Vec4, scale: f32) -> Option<Vec3A> {
+    let (dpdu, dpdv) = map.dp_duv()?;
+    let t = (dpdu - n * n.dot(dpdu)).try_normalize()?;
+    let mut b = n.cross(t);
+    if b.dot(dpdv) > 0.0 {
+        b = -b;
+    }
+    let x = (2.0 * texel.x - 1.0) * scale;
+    let y = (2.0 * texel.y - 1.0) * scale;
+    let z = 2.0 * texel.z - 1.0;
+    (t * x + b * y + n * z).try_normalize()
+}
