@@ -156,8 +156,14 @@ impl Reader {
                 (Some(faces), rest)
             }
         };
-        let list = self.params(r, rest, &["vertex point P", "vertex normal N"], false)?;
+        let list = self.params(
+            r,
+            rest,
+            &["vertex point P", "vertex normal N", "vertex float[2] st"],
+            false,
+        )?;
         let (positions, normals) = self.points_and_normals(r, &list)?;
+        let uvs = super::pattern::texture_coordinates(r, &list, positions.len())?;
         let faces = match faces {
             Some(f) => f,
             None => vec![vec![(0..positions.len() as i64).collect()]],
@@ -186,6 +192,7 @@ impl Reader {
                     positions,
                     normals,
                     triangles,
+                    uvs,
                     ..Mesh::default()
                 }),
             );

@@ -50,6 +50,7 @@
 mod geometry;
 mod lex;
 mod options;
+mod pattern;
 mod request;
 mod shading;
 mod transform;
@@ -139,7 +140,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 39] = {
+const REQUESTS: [Request; 40] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -176,6 +177,7 @@ const REQUESTS: [Request; 39] = {
         }),
         known("Attribute", Anywhere, Reader::attribute),
         known("Bxdf", Anywhere, Reader::bxdf),
+        known("Pattern", Anywhere, Reader::pattern),
         known("Light", World, Reader::light),
         known("LightSource", World, Reader::light),
         known("AreaLightSource", World, Reader::light),
@@ -216,6 +218,8 @@ struct Reader {
     warned_attributes: HashSet<String>,
     /// Options already warned about.
     warned_options: HashSet<String>,
+    /// `Pattern` handles read so far.
+    patterns: pattern::Patterns,
 }
 
 impl Reader {
@@ -232,6 +236,7 @@ impl Reader {
             declared: HashMap::new(),
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),
+            patterns: pattern::Patterns::new(),
         }
     }
 

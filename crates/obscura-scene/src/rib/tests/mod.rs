@@ -4,6 +4,7 @@ mod archive;
 mod geometry;
 mod lex;
 mod options;
+mod pattern;
 mod requests;
 mod shading;
 mod transform;
