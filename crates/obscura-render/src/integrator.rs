@@ -2,9 +2,9 @@
 //!
 //! For a camera ray, [`trace_path`] estimates the radiance `L` arriving at the camera:
 //!
-//! - At every vertex, light found along the incoming ray is added: the emission of a PxrConstant
-//!   surface (with weight 1: constant surfaces are unlit emitters that light sampling never aims
-//!   at), a rect or sphere light ([`Lights::intersect_area`]), or, when the ray escapes, the domes
+//! - At every vertex, light found along the incoming ray is added: the emission of a surface (a
+//!   PxrConstant, which is what a glTF `emissiveFactor` or an OBJ `Ke` becomes, or a textured
+//!   emissive map), a rect or sphere light ([`Lights::intersect_area`]), or, when the ray escapes, the domes
 //!   and wide distant lights ([`Lights::escaped`]). On the camera ray (and after a mirror bounce)
 //!   the weight is 1; after a BSDF sample it is the power heuristic
 //!   `w_bsdf = p_bsdf² / (p_bsdf² + p_light²)`. A camera ray that escapes sees the domes only
@@ -13,6 +13,11 @@
 //!   sampled ([`Lights::sample`]) and a shadow ray traced ([`Tracer::occluded`]); the contribution
 //!   `β · f · |n·wi| · L / p_light` is weighted by `w_light = p_light² / (p_light² + p_bsdf²)` when
 //!   the light can also be found by BSDF rays, by 1 otherwise (delta-like distant lights).
+//! - At the same vertex, one point on the emissive triangles is sampled too, in proportion to area
+//!   ([`EmissiveTriangles::sample`], a second shadow ray), weighted by the power heuristic against
+//!   the BSDF's density; a BSDF ray that hits such a triangle weights its emission the other way
+//!   ([`EmissiveTriangles::pdf`]). Emitters light sampling cannot aim at (moving, cut out) keep
+//!   weight 1 when hit.
 //! - The BSDF then draws the next direction; the throughput becomes `β ← β · f |n·wi| / p_bsdf`.
 //!   From vertex `rr_start` on, Russian roulette continues the path with probability
 //!   `q = clamp(max(β), 0.05, 1)` and divides `β` by `q`.
@@ -32,6 +37,7 @@ use glam::{Vec2, Vec3A};
 use obscura_scene::Material;
 
 use crate::light::Lights;
+use crate::light::emissive::EmissiveTriangles;
 use crate::material::textured::Texturing;
 use crate::material::{Bsdf, sanitize};
 use crate::ray::{Hit, Ray, Tracer};
@@ -48,6 +54,8 @@ pub struct ShadingScene {
     pub lights: Lights,
     /// Textures, textured materials and the meshes' texture coordinates.
     pub texturing: Texturing,
+    /// The emissive triangles light sampling aims at (empty: emission is found by BSDF rays only).
+    pub emissive: EmissiveTriangles,
 }
 
 impl ShadingScene {
@@ -285,7 +293,18 @@ pub fn trace_path_cone(
         }
         let n_s = surface.normal;
         let bsdf = Bsdf::new(&surface.material, n_s);
-        accumulate(&mut radiance, throughput * (bsdf.emission() + surface.emission));
+        let emitted = bsdf.emission() + surface.emission;
+        if emitted != Vec3A::ZERO {
+            // An emitter light sampling also aims at: weighted against it after a BSDF sample.
+            let w = match (
+                bsdf_pdf,
+                scene.emissive.pdf(hit.instance, hit.t * dir_len, d, n_g),
+            ) {
+                (Some(p), Some(light_pdf)) => power_heuristic(p, light_pdf),
+                _ => 1.0,
+            };
+            accumulate(&mut radiance, throughput * emitted * w);
+        }
 
         if depth >= opts.max_depth || !bsdf.reflects() {
             break;
@@ -322,6 +341,39 @@ pub fn trace_path_cone(
                     };
                     let cos = n_s.dot(ls.wi).abs();
                     accumulate(&mut radiance, throughput * f * ls.radiance * (cos * w / ls.pdf));
+                }
+            }
+        }
+
+        // Next-event estimation on the emissive triangles.
+        if !scene.emissive.is_empty() {
+            let (u_point, u_tri) = (rng.next_2d(), rng.next_f32());
+            let materials = |i: u32| (scene.material(i), scene.material_index(i));
+            if let Some(es) = scene
+                .emissive
+                .sample(p, u_point, u_tri, &materials, &scene.texturing)
+                && es.wi.dot(n_g) > 0.0
+                && es.radiance != Vec3A::ZERO
+            {
+                let (f, pdf_b) = bsdf.eval(wo, es.wi);
+                // Both ends offset off their surfaces, each toward the other's side: the segment
+                // cannot reach the emitter's own plane, whatever the angles.
+                let target = es.point + es.normal * epsilon(es.point, es.dist);
+                let to = target - origin;
+                let length = to.length();
+                if f != Vec3A::ZERO && length > eps {
+                    let shadow = Ray {
+                        origin,
+                        direction: to / length,
+                        t_min: eps,
+                        t_max: length,
+                        time: ray.time,
+                    };
+                    if !shadow_blocked(scene, tracer, &shadow, cutouts, rng) {
+                        let w = power_heuristic(es.pdf, pdf_b);
+                        let cos = n_s.dot(es.wi).abs();
+                        accumulate(&mut radiance, throughput * f * es.radiance * (cos * w / es.pdf));
+                    }
                 }
             }
         }

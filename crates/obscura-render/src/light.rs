@@ -57,6 +57,8 @@ use self::classic::{PointLight, SpotBeam};
 use crate::material::{Frame, color, sanitize};
 use crate::ray::Ray;
 
+pub mod emissive;
+
 /// Distant lights at least this wide (`angleExtent`, degrees) are also found by BSDF rays and
 /// weighted by MIS; narrower ones (the 0.53° default sun) are reached by light sampling only.
 pub const DISTANT_MIS_MIN_DEGREES: f32 = 2.0;

@@ -42,6 +42,7 @@ use crate::dice::{DiceError, DicingContext, TriangleBudget, dice};
 use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
 use crate::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
+use crate::light::emissive::{EmissiveTriangles, EmitterCandidate};
 use crate::light::{Lights, ShadeError};
 use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
 use crate::motion::Motion;
@@ -285,7 +286,6 @@ pub fn prepare(
                 .collect(),
         })
         .collect();
-    let accel = SceneAccel::build(meshes, instances);
     let (mut texturing, texture_warnings) = Texturing::new(
         &scene.textures,
         scene.material_maps.clone(),
@@ -300,11 +300,28 @@ pub fn prepare(
         base_dir,
     );
     texturing.lookup = opts.texture_lookup;
+    let emissive = EmissiveTriangles::new(
+        &(meshes.iter().zip(&instances).zip(&scene.objects))
+            .map(|((mesh, instance), o)| EmitterCandidate {
+                mesh,
+                transform: &instance.transform,
+                material: scene
+                    .materials
+                    .get(o.material as usize)
+                    .copied()
+                    .unwrap_or_default(),
+                material_index: o.material,
+            })
+            .collect::<Vec<_>>(),
+        &texturing,
+    );
+    let accel = SceneAccel::build(meshes, instances);
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),
         lights: Lights::new(&scene.lights, base_dir)?,
         texturing,
+        emissive,
     };
     let spp = opts.samples_per_pixel.unwrap_or(scene.samples_per_pixel).max(1);
     if spp > obscura_host::sampler::MAX_SAMPLES {
@@ -474,6 +491,13 @@ impl Prepared {
     #[must_use]
     pub fn texture_warnings(&self) -> &[String] {
         &self.texture_warnings
+    }
+
+    /// How many emissive triangles light sampling aims at (the emitters that neither move nor have
+    /// alpha cut-outs; see [`crate::light::emissive`]).
+    #[must_use]
+    pub fn emissive_triangles(&self) -> usize {
+        self.shading.emissive.len()
     }
 
     /// Bytes held by the loaded textures' mip pyramids.

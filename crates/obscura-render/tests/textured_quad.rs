@@ -165,3 +165,27 @@ fn khr_texture_transform_offsets_scales_and_rotates_as_the_extension_says() {
         "rotation",
     );
 }
+
+#[test]
+fn a_rib_pxr_texture_referenced_by_a_bxdf_shows_its_texels_the_same_way() {
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbImage::from_fn(4, 2, |x, y| image::Rgb(TEXELS[y as usize][x as usize]));
+    img.save(dir.path().join("texels.png")).unwrap();
+    // RenderMan's camera looks down +Z with +Y up: the quad's top-left corner (−2, 1) has
+    // st = (0, 1), which PxrTexture (invertT 1) reads at the image's top-left texel; filter 0 is
+    // nearest, like the glTF sampler above.
+    let rib = dir.path().join("quad.rib");
+    std::fs::write(
+        &rib,
+        "Format 16 8 1\n\
+         Projection \"orthographic\"\n\
+         ScreenWindow -2 2 -1 1\n\
+         WorldBegin\n\
+         Pattern \"PxrTexture\" \"t\" \"string filename\" [\"texels.png\"] \"int linearize\" [1] \"int filter\" [0]\n\
+         Bxdf \"PxrDiffuse\" \"d\" \"reference color diffuseColor\" [\"t:resultRGB\"]\n\
+         Polygon \"P\" [-2 1 5  2 1 5  2 -1 5  -2 -1 5] \"st\" [0 1  1 1  1 0  0 0]\n\
+         WorldEnd\n",
+    )
+    .unwrap();
+    check(&render_albedo(&rib), |s, t| (s, t), "RIB PxrTexture");
+}

@@ -74,6 +74,7 @@ fn scene(material: Material, lights: Lights) -> ShadingScene {
         instance_material: vec![0],
         lights,
         texturing: Default::default(),
+        emissive: Default::default(),
     }
 }
 
@@ -292,6 +293,7 @@ fn constant_material_is_unlit_emission() {
         instance_material: vec![0, 1],
         lights: uniform_dome(1.0),
         texturing: Default::default(),
+        emissive: Default::default(),
     };
     let ray = Ray {
         origin: Vec3A::new(0.0, 0.0, -5.0),
@@ -453,6 +455,7 @@ proptest! {
             instance_material: (0..spheres.len() as u32).collect(),
             lights: Lights::new(&lights, Path::new(".")).unwrap(),
             texturing: Default::default(),
+            emissive: Default::default(),
         };
         let direction = direction.try_normalize().unwrap_or(Vec3A::Z);
         let ray = Ray { origin, direction, t_min: 0.0, t_max: f32::INFINITY, time: 0.5 };

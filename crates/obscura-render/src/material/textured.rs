@@ -181,6 +181,22 @@ impl Texturing {
         self.maps.values().any(|m| m.alpha != AlphaMode::Opaque)
     }
 
+    /// True when material `index` takes its parameters from maps (its own entry is the fallback).
+    #[must_use]
+    pub fn has_maps(&self, index: u32) -> bool {
+        self.maps.contains_key(&index)
+    }
+
+    /// True when material `index` has maps with a non-zero emissive factor and no alpha cut-out or
+    /// blending: an emitter light sampling may aim at.
+    #[must_use]
+    pub fn opaque_emitter(&self, index: u32) -> bool {
+        self.maps.get(&index).is_some_and(|m| {
+            let e = m.emissive_factor;
+            m.alpha == AlphaMode::Opaque && e.r.max(e.g).max(e.b) > 0.0
+        })
+    }
+
     /// The surface at `hit` for a material `material` (index `index`), seen along unit `direction`
     /// with shading normal `n_s` (facing the viewer) by a cone of radius `cone_radius` (world units)
     /// at the hit. `primary` is true for the camera ray's hit: its lookups are filtered over the

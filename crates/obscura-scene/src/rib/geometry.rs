@@ -195,6 +195,7 @@ impl Reader {
         )?;
         self.primitive_color(r, &list);
         let (positions, normals) = self.points_and_normals(r, &list)?;
+        let uvs = super::pattern::texture_coordinates(r, &list, positions.len())?;
         let faces = match faces {
             Some(f) => f,
             None => vec![vec![(0..positions.len() as i64).collect()]],
@@ -223,6 +224,7 @@ impl Reader {
                     positions,
                     normals,
                     triangles,
+                    uvs,
                     ..Mesh::default()
                 }),
             );

@@ -65,6 +65,7 @@ mod nupatch;
 mod objects;
 mod options;
 mod patch;
+mod pattern;
 mod request;
 mod shading;
 mod teapot;
@@ -257,7 +258,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 76] = {
+const REQUESTS: [Request; 77] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -304,6 +305,7 @@ const REQUESTS: [Request; 76] = {
         }),
         known("Attribute", Anywhere, Reader::attribute),
         known("Bxdf", Anywhere, Reader::bxdf),
+        known("Pattern", Anywhere, Reader::pattern),
         known("Light", Anywhere, Reader::any_light),
         known("LightSource", Anywhere, Reader::any_light),
         known("AreaLightSource", World, Reader::light),
@@ -398,6 +400,8 @@ struct Reader {
     classic_state: classic_shaders::ClassicState,
     /// Retained objects.
     retained: objects::Retained,
+    /// `Pattern` handles read so far.
+    patterns: pattern::Patterns,
 }
 
 /// An `ArchiveBegin` block being read.
@@ -437,6 +441,7 @@ impl Reader {
             classic: classic_shaders::ClassicAttributes::default(),
             classic_state: classic_shaders::ClassicState::default(),
             retained: objects::Retained::default(),
+            patterns: pattern::Patterns::new(),
         }
     }
 

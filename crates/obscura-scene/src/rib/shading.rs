@@ -46,6 +46,10 @@ impl Reader {
         let [Value::Str(kind), Value::Str(_handle), rest @ ..] = r.args else {
             return Err(r.err("Bxdf expects a Bxdf name and a handle (2 strings) then parameters"));
         };
+        // `reference` parameters connect patterns (rib/pattern.rs).
+        let (rest, references) = self.references(r, rest)?;
+        let rest = &rest[..];
+        let mut gain = 1.0;
         let material = match kind.as_str() {
             "PxrDiffuse" => {
                 let list = self.params(r, rest, &["color diffuseColor"], false)?;
@@ -68,7 +72,7 @@ impl Reader {
                 ];
                 let list = self.params(r, rest, &table, false)?;
                 let color = get_color(&list, "diffuseColor").unwrap_or(Rgb::new(0.18, 0.18, 0.18));
-                let gain = get_float(&list, "diffuseGain").unwrap_or(1.0);
+                gain = get_float(&list, "diffuseGain").unwrap_or(1.0);
                 Material::Surface {
                     diffuse: Rgb::new(color.r * gain, color.g * gain, color.b * gain),
                     specular: get_color(&list, "specularFaceColor").unwrap_or(Rgb::BLACK),
@@ -89,7 +93,7 @@ impl Reader {
         self.material = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
         self.classic.surface = None;
-        Ok(())
+        self.connect(r, &references, gain)
     }
 
     /// `Light`, `LightSource` or `AreaLightSource`: the Pxr dome, distant, rect and sphere lights, placed by

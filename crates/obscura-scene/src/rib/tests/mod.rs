@@ -8,6 +8,7 @@ mod frames;
 mod geometry;
 mod lex;
 mod options;
+mod pattern;
 mod requests;
 mod shading;
 mod transform;
