@@ -1,11 +1,13 @@
 //! # obscura-fuzz
 //!
-//! A structured mutation fuzzer for every parser a user's input reaches: RIB (ASCII), glTF, OBJ, the
-//! four calibration formats, `--param` arguments and the plugin ABI's table rows and property
-//! answers. cargo-fuzz needs a nightly compiler, so the fuzzer is ordinary Rust that runs on stable:
+//! A structured mutation fuzzer for every parser a user's input reaches: RIB (ASCII, and a file's
+//! bytes as the CLI reads them: binary, gzip, Latin-1), glTF, OBJ, the four calibration formats,
+//! `--param` arguments and the plugin ABI's table rows and property answers. cargo-fuzz needs a
+//! nightly compiler, so the fuzzer is ordinary Rust that runs on stable:
 //!
 //! - **inputs**: the committed seed corpus (`corpus/<target>/`), mutated by [`mutate::mutate`]
-//!   (byte edits, the target's tokens, numbers at the edges of `f32`/`u32`, splices, repeated lines);
+//!   (byte edits, the target's tokens, numbers at the edges of `f32`/`u32`, splices, repeated lines;
+//!   for binary RIB, encoded tokens and floats at the edges of `f32`);
 //! - **feedback**: without coverage instrumentation, the outcome is the signal: an input that is
 //!   accepted, or refused with a message not seen before, joins the pool that later inputs are
 //!   mutated from, so the fuzzer walks past the first error of each kind;
@@ -32,7 +34,7 @@ use std::time::{Duration, Instant};
 
 pub use targets::{TARGETS, Target};
 
-use crate::mutate::{Rng, mutate};
+use crate::mutate::{Rng, mutate_as};
 
 /// An input slower than this is counted as slow (a hang is far longer: see the runner's watchdog).
 pub const SLOW: Duration = Duration::from_secs(1);
@@ -165,7 +167,14 @@ pub fn fuzz(
     for _ in 0..count {
         let base = &pool[rng.below(pool.len())];
         let other = &pool[rng.below(pool.len())];
-        let input = mutate(&mut rng, base, other, target.dictionary(), MAX_LEN);
+        let input = mutate_as(
+            &mut rng,
+            base,
+            other,
+            target.dictionary(),
+            target.binary(),
+            MAX_LEN,
+        );
         current(&input);
         let t = Instant::now();
         let outcome = run_one(target, &input, scratch);

@@ -8,7 +8,7 @@ use std::time::{Duration, Instant};
 use obscura_fuzz::{TARGETS, Target, fuzz, regressions_root};
 
 const USAGE: &str = "usage: obscura-fuzz TARGET|all [--inputs N] [--seed S] [--save DIR] [--hang SECONDS]
-  TARGET: rib gltf obj colmap opencv kalibr ocamcalib param abi
+  TARGET: rib rib-bytes gltf obj colmap opencv kalibr ocamcalib param abi
   --inputs N     inputs per target (default 100000)
   --seed S       the run's seed (default 1)
   --save DIR     where panicking and hanging inputs are written (default: the crate's regressions/)

@@ -20,6 +20,9 @@ use crate::params;
 pub enum Target {
     /// ASCII RIB, through the reader and the camera stage.
     Rib,
+    /// A RIB file's bytes as the CLI reads them: ASCII, binary (RISpec encoded requests), gzip or
+    /// Latin-1, through the reader's file checks and the camera stage.
+    RibBytes,
     /// glTF 2.0 JSON (`.gltf`) or binary (`.glb`), by the first byte.
     Gltf,
     /// Wavefront OBJ.
@@ -39,8 +42,9 @@ pub enum Target {
 }
 
 /// Every target, in the order the runner reports them.
-pub const TARGETS: [Target; 9] = [
+pub const TARGETS: [Target; 10] = [
     Target::Rib,
+    Target::RibBytes,
     Target::Gltf,
     Target::Obj,
     Target::Colmap,
@@ -57,6 +61,7 @@ impl Target {
     pub fn name(self) -> &'static str {
         match self {
             Target::Rib => "rib",
+            Target::RibBytes => "rib-bytes",
             Target::Gltf => "gltf",
             Target::Obj => "obj",
             Target::Colmap => "colmap",
@@ -74,11 +79,17 @@ impl Target {
         TARGETS.into_iter().find(|t| t.name() == name)
     }
 
+    /// True when the target reads binary inputs, which the mutator edits with binary tokens too.
+    #[must_use]
+    pub fn binary(self) -> bool {
+        matches!(self, Target::RibBytes)
+    }
+
     /// Tokens the mutator inserts.
     #[must_use]
     pub fn dictionary(self) -> &'static [&'static str] {
         match self {
-            Target::Rib => &[
+            Target::Rib | Target::RibBytes => &[
                 "WorldBegin",
                 "WorldEnd",
                 "AttributeBegin",
@@ -289,6 +300,7 @@ impl Target {
     pub fn run(self, input: &[u8], scratch: &Path) -> Result<(), String> {
         match self {
             Target::Rib => rib(input),
+            Target::RibBytes => rib_bytes(input),
             Target::Gltf => {
                 let name = if input.starts_with(b"glTF") {
                     "fuzz.glb"
@@ -319,6 +331,20 @@ fn rib(input: &[u8]) -> Result<(), String> {
     let text = text(input)?;
     let scene = obscura_scene::rib::parse_str(text, "fuzz.rib", Path::new("/nonexistent-obscura-fuzz"))
         .map_err(|e| e.to_string())?;
+    stage(&scene.projection, &scene.projection_params, &scene.camera)
+}
+
+fn rib_bytes(input: &[u8]) -> Result<(), String> {
+    let frames = obscura_scene::rib::parse_file_bytes_frames(
+        input.to_vec(),
+        "fuzz.rib",
+        Path::new("/nonexistent-obscura-fuzz"),
+    )
+    .map_err(|e| e.to_string())?;
+    let Some(last) = frames.last() else {
+        return Err("no image".into());
+    };
+    let scene = &last.scene;
     stage(&scene.projection, &scene.projection_params, &scene.camera)
 }
 

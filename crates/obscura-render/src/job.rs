@@ -313,7 +313,9 @@ pub fn check_render(
     };
     for d in displays {
         match d.driver {
-            DisplayDriver::OpenExr | DisplayDriver::DeepExr => limits::check_output(&d.path, OutputKind::Exr)?,
+            DisplayDriver::OpenExr | DisplayDriver::DeepExr => {
+                limits::check_output(&d.path, OutputKind::Exr)?
+            }
             DisplayDriver::Png => limits::check_output(&d.path, OutputKind::Png)?,
             // RenderMan's `file` driver writes TIFF under whatever name the scene gives.
             DisplayDriver::Tiff => limits::check_output_location(&d.path)?,

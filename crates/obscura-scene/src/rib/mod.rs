@@ -132,6 +132,11 @@ impl RibError {
 /// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name).
 fn read_rib_bytes(path: &Path) -> Result<Vec<u8>, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    decompress(bytes)
+}
+
+/// `bytes`, decompressed when they are gzip (by content).
+fn decompress(bytes: Vec<u8>) -> Result<Vec<u8>, String> {
     if bytes.starts_with(&[0x1f, 0x8b]) {
         let mut out = Vec::new();
         std::io::Read::read_to_end(&mut flate2::read::MultiGzDecoder::new(&bytes[..]), &mut out)
@@ -159,22 +164,34 @@ pub fn parse_file(path: &Path) -> Result<Scene, RibError> {
 /// has no `WorldBegin` (a fragment, such as an archive of options, describes nothing to render).
 pub fn parse_file_frames(path: &Path) -> Result<Vec<Frame>, RibError> {
     let name = path.display().to_string();
-    let bytes = read_rib_bytes(path).map_err(|m| RibError::whole_file(&name, m))?;
+    let bytes =
+        std::fs::read(path).map_err(|e| RibError::whole_file(&name, format!("cannot read the file: {e}")))?;
+    let base = path.parent().unwrap_or_else(|| Path::new(""));
+    parse_file_bytes_frames(bytes, &name, base)
+}
+
+/// Reads the bytes of a RIB file as [`parse_file_frames`] reads the file (the same checks: gzip is
+/// decompressed by content, an empty file or one without `WorldBegin` is an error). `name` is used in
+/// messages; relative paths resolve against `base_dir`.
+///
+/// # Errors
+/// As [`parse_file_frames`].
+pub fn parse_file_bytes_frames(bytes: Vec<u8>, name: &str, base_dir: &Path) -> Result<Vec<Frame>, RibError> {
+    let bytes = decompress(bytes).map_err(|m| RibError::whole_file(name, m))?;
     if bytes.iter().all(u8::is_ascii_whitespace) {
         return Err(RibError::whole_file(
-            &name,
+            name,
             format!(
                 "the file is empty ({} bytes): it holds no requests to render",
                 bytes.len()
             ),
         ));
     }
-    let base = path.parent().unwrap_or_else(|| Path::new(""));
     let mut reader = Reader::new();
-    reader.run(&bytes, &name, base, 0)?;
+    reader.run(&bytes, name, base_dir, 0)?;
     if reader.world.is_none() && reader.images.is_empty() {
         return Err(RibError::whole_file(
-            &name,
+            name,
             "no WorldBegin: the file is a fragment (options or an archive for ReadArchive), not a scene; \
              a scene describes its world between WorldBegin and WorldEnd",
         ));
