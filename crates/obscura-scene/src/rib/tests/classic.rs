@@ -271,7 +271,7 @@ fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
     )
     .unwrap();
     assert!(
-        matches!(scene.lights[..], [Light::Dome { .. }]),
+        matches!(scene.lights[..], [Light::Dome { .. }, Light::Distant { .. }]),
         "{:?}",
         scene.lights
     );
