@@ -204,6 +204,14 @@ const CATALOGUE: &[Case] = &[
         "unknown extension \".jpg\": expected .exr",
     ),
     (
+        // `render -o x.tif` writes TIFF (RenderMan's file driver); the rays are EXR only.
+        "rays -o x.tif",
+        &["rays", "-o", "x.tif", "--format", "4x4"],
+        &[],
+        E,
+        "output x.tif: unknown extension \".tif\": expected .exr",
+    ),
+    (
         "-o in a missing directory",
         &["render", "-o", "missing/x.exr"],
         &[],
@@ -579,6 +587,60 @@ const CATALOGUE: &[Case] = &[
         &[("s.rib", "WorldBegin\nReadArchive \"missing.rib\"\nWorldEnd\n")],
         E,
         "missing.rib",
+    ),
+    (
+        "RIB a NaN in an array",
+        &["render", "s.rib"],
+        &[(
+            "s.rib",
+            "Format 8 6 1\nWorldBegin\nLight \"PxrDomeLight\" \"d\" \"color lightColor\" [nan 1 1]\nWorldEnd\n",
+        )],
+        E,
+        "s.rib:3: a NaN value (\"nan\"): numbers must be finite",
+    ),
+    (
+        "RIB a string where a number is expected",
+        &["render", "s.rib"],
+        &[("s.rib", "Format \"64\" 48 1\nWorldBegin\nWorldEnd\n")],
+        E,
+        "s.rib:1: Format expects width height pixelaspect (3 numbers); argument 1 is the string \"64\", where a number is expected",
+    ),
+    (
+        "RIB two Displays writing one file",
+        &["render", "s.rib"],
+        &[(
+            "s.rib",
+            "Format 8 6 1\nDisplay \"a.exr\" \"openexr\" \"rgba\"\nDisplay \"+a.exr\" \"openexr\" \"z\"\nWorldBegin\nWorldEnd\n",
+        )],
+        E,
+        "s.rib:3: Display \"+a.exr\" writes ",
+    ),
+    (
+        "RIB two Displays writing one file: the first named",
+        &["render", "s.rib"],
+        &[(
+            "s.rib",
+            "Format 8 6 1\nDisplay \"b.exr\" \"openexr\" \"rgba\"\nDisplay \"+b.exr\" \"openexr\" \"z\"\nWorldBegin\nWorldEnd\n",
+        )],
+        E,
+        "which the display at s.rib:2 writes already: two displays naming one file would overwrite each other",
+    ),
+    (
+        "RIB a 0-byte file",
+        &["render", "s.rib"],
+        &[("s.rib", "")],
+        E,
+        "s.rib: the file is empty (0 bytes): it holds no requests to render",
+    ),
+    (
+        "RIB a fragment without WorldBegin",
+        &["render", "s.rib"],
+        &[(
+            "s.rib",
+            "Format 8 6 1\nProjection \"PxrPerspective\" \"float fov\" [40]\n",
+        )],
+        E,
+        "s.rib: no WorldBegin: the file is a fragment",
     ),
     (
         "RIB AttributeEnd without AttributeBegin",
@@ -974,4 +1036,55 @@ fn every_bad_input_of_the_catalogue_gets_its_message() {
         CATALOGUE.len(),
         failures.join("\n")
     );
+}
+
+/// RIB files as they come (issue 16): a Latin-1 byte, gzip (by content, whatever the name) and binary
+/// RIB render instead of failing with "stream did not contain valid UTF-8".
+#[test]
+fn latin1_gzip_and_binary_ribs_render() {
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = |out: &str| {
+        format!(
+            "Format 8 6 1\nDisplay \"{out}\" \"openexr\" \"rgba\"\nWorldBegin\nSphere 1 -1 1 360\nWorldEnd\n"
+        )
+    };
+    std::fs::write(
+        dir.path().join("latin1.rib"),
+        b"# Szene f\xFCr den Test\nFormat 8 6 1\nDisplay \"caf\xE9.exr\" \"openexr\" \"rgba\"\nWorldBegin\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(scene("gz.exr").as_bytes()).unwrap();
+    std::fs::write(dir.path().join("gz.rib"), gz.finish().unwrap()).unwrap();
+    // Binary (RISpec 3.2 C.2): define request 0 "Format" (0xCC 0 0x96 …), use it (0xA6 0) with three
+    // two-byte integers (0x81), then Display with short strings (0x90 + length), then the world.
+    let mut bin = vec![0xCC, 0, 0x96];
+    bin.extend(b"Format");
+    bin.extend([0xA6, 0, 0x81, 0, 8, 0x81, 0, 6, 0x81, 0, 1, 0xCC, 1, 0x97]);
+    bin.extend(b"Display");
+    bin.extend([0xA6, 1, 0x97]);
+    bin.extend(b"bin.exr");
+    bin.extend([0x97]);
+    bin.extend(b"openexr");
+    bin.extend([0x94]);
+    bin.extend(b"rgba");
+    bin.extend(b"\nWorldBegin\nSphere 1 -1 1 360\nWorldEnd\n");
+    std::fs::write(dir.path().join("bin.rib"), bin).unwrap();
+    for (file, output) in [
+        ("latin1.rib", "café.exr"),
+        ("gz.rib", "gz.exr"),
+        ("bin.rib", "bin.exr"),
+    ] {
+        let out = Command::new(env!("CARGO_BIN_EXE_obscura"))
+            .args(["render", file, "--spp", "1"])
+            .current_dir(dir.path())
+            .env_remove("OBSCURA_PLUGIN_PATH")
+            .output()
+            .unwrap();
+        let stderr = text(&out.stderr);
+        assert!(out.status.success(), "{file}: {:?}\n{stderr}", out.status);
+        assert!(!stderr.contains("valid UTF-8"), "{file}: {stderr}");
+        assert!(dir.path().join(output).is_file(), "{file}: no {output}\n{stderr}");
+    }
 }

@@ -292,3 +292,25 @@ fn a_string_where_a_number_is_expected_is_named() {
         )
     );
 }
+
+#[test]
+fn a_files_bytes_read_as_the_file_does() {
+    use crate::rib::parse_file_bytes_frames;
+    let mut enc = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    enc.write_all(ASCII.as_bytes()).unwrap();
+    let gz = enc.finish().unwrap();
+    let frames = parse_file_bytes_frames(gz, "g.rib", Path::new(HERE)).unwrap();
+    assert_eq!(frames.last().unwrap().scene.objects.len(), 2);
+    let binary = encode(&lex(ASCII).unwrap());
+    let frames = parse_file_bytes_frames(binary, "b.rib", Path::new(HERE)).unwrap();
+    assert_eq!(frames.last().unwrap().scene.objects.len(), 2);
+    // The file checks, which parse_bytes leaves out.
+    assert_eq!(
+        parse_file_bytes_frames(b" \n".to_vec(), "e.rib", Path::new(HERE))
+            .unwrap_err()
+            .to_string(),
+        "e.rib: the file is empty (2 bytes): it holds no requests to render"
+    );
+    let e = parse_file_bytes_frames(b"Format 8 6 1\n".to_vec(), "f.rib", Path::new(HERE)).unwrap_err();
+    assert!(e.to_string().starts_with("f.rib: no WorldBegin"), "{e}");
+}
