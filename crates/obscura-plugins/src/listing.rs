@@ -96,7 +96,7 @@ mod tests {
         assert!(text.starts_with("PxrPerspective\n"), "{text}");
         let fov = text.lines().find(|l| l.contains("\"float fov\"")).unwrap();
         assert!(
-            fov.contains("[90]") && fov.contains("(0, 180)") && fov.contains("field of view"),
+            fov.contains("[90]") && fov.contains("[0.001, 180)") && fov.contains("field of view"),
             "{fov}"
         );
         let fstop = text.lines().find(|l| l.contains("\"float fStop\"")).unwrap();
