@@ -144,7 +144,7 @@ def test_projections_lists_builtins_with_parameter_tables():
     table = {p["name"]: p for p in obscura.projections()}
     assert {"PxrPerspective", "Fisheye", "CalibratedCamera", "PxrSphereCamera"} <= set(table)
     fov = next(q for q in table["PxrPerspective"]["params"] if q["name"] == "fov")
-    assert fov["type"] == "float" and fov["range"] == (0, 180)
+    assert fov["type"] == "float" and fov["range"] == (0.001, 180)
     assert table["PxrPerspective"]["path"] is None
     models = {m["name"]: m for m in obscura.calibration_models()}
     assert models["OPENCV_OMNIDIR"]["pixel_convention"] == "opencv"

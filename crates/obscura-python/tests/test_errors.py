@@ -18,7 +18,7 @@ def test_unknown_parameter_names_it_and_suggests(cam):
 
 
 def test_out_of_range_parameter_says_what_was_expected():
-    with pytest.raises(ValueError, match=r'parameter "fov" \(at fov=200\) = 200 is out of range: expected a value in \(0, 180\)'):
+    with pytest.raises(ValueError, match=r'parameter "fov" \(at fov=200\) = 200 is out of range: expected a value in \[0\.001, 180\)'):
         obscura.Camera("PxrPerspective", fov=200)
 
 
