@@ -46,6 +46,23 @@ fn the_shipped_patent_asphere_has_its_sources_figures() {
 }
 
 #[test]
+fn the_shipped_patent_fisheye_has_its_sources_figures() {
+    // US 4,256,373 scaled ×16: f = 1.0 → 16 mm, F/2.8, a 180° field whose image circle is about the
+    // 24 × 36 mm frame's diagonal, so across that diagonal the traced field is a little under 180°.
+    let v = json(&["lens", "fisheye.16mm", "--json", "--film-diagonal", "43.27"]);
+    let f = |k: &str| v[k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"));
+    assert!((f("efl_mm") - 16.0).abs() < 0.005 * 16.0, "{v}");
+    assert!((f("f_number") - 2.8).abs() < 0.01 * 2.8, "{v}");
+    assert!(f("fov_deg") > 0.97 * 180.0 && f("fov_deg") < 180.0, "{v}");
+    // On the 44 mm circle of its full field it sees 180°.
+    let v = json(&["lens", "fisheye.16mm", "--json", "--film-diagonal", "43.9"]);
+    assert!(
+        (v["fov_deg"].as_f64().unwrap() - 180.0).abs() < 0.01 * 180.0,
+        "{v}"
+    );
+}
+
+#[test]
 fn lens_draws_svg_and_png_and_refuses_other_extensions() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["d.svg", "d.png"] {
@@ -77,7 +94,7 @@ fn lens_draws_svg_and_png_and_refuses_other_extensions() {
 
 #[test]
 fn check_lens_system_is_clean() {
-    for lens in ["dgauss.50mm", "fisheye.10mm", "masterprime.100mm"] {
+    for lens in ["dgauss.50mm", "fisheye.10mm", "fisheye.16mm", "masterprime.100mm"] {
         let param = format!("lens={lens}");
         let run = obscura(&["check", "LensSystem", "--param", &param, "--format", "48x32"]);
         let out = text(&run.stdout);

@@ -8,10 +8,10 @@ use std::hint::black_box;
 
 use divan::{Bencher, counter::ItemsCount};
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
-use obscura_sdk::{
-    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
-    ScreenWindow, Vec3,
-};
+use obscura_sdk::{Point2, RayGeometry, Vec3};
+
+mod common;
+use common::{Aperture, Batch, projection};
 
 const BATCHES: [usize; 3] = [64, 256, 4096];
 
@@ -19,78 +19,9 @@ fn main() {
     divan::main();
 }
 
-struct Batch {
-    screen: Vec<Point2>,
-    lens: Vec<Point2>,
-    aperture: Vec<Point2>,
-    time: Vec<f32>,
-    rays: Vec<RayGeometry>,
-    tint: Vec<Rgb>,
-}
-
-impl Batch {
-    /// Screen samples spread over a 1920×1080 frame, stratified lens and time samples.
-    fn new(n: usize) -> Self {
-        let format = Format::new(1920, 1080);
-        let w = ScreenWindow::default_for(format);
-        let side = (n as f64).sqrt().ceil() as usize;
-        let screen = (0..n)
-            .map(|i| {
-                let (x, y) = ((i % side) as f64 + 0.5, (i / side) as f64 + 0.5);
-                w.raster_to_screen(format, x / side as f64 * 1920.0, y / side as f64 * 1080.0)
-            })
-            .collect();
-        let lens: Vec<Point2> = (0..n)
-            .map(|i| Point2::new(((i * 37) % n) as f32 / n as f32, ((i * 91) % n) as f32 / n as f32))
-            .collect();
-        let aperture = lens
-            .iter()
-            .map(|l| Point2::new(2.0 * l.x - 1.0, 2.0 * l.y - 1.0))
-            .collect();
-        Batch {
-            screen,
-            lens,
-            aperture,
-            time: (0..n).map(|i| i as f32 / n as f32).collect(),
-            rays: vec![RayGeometry::CULLED; n],
-            tint: vec![Rgb::WHITE; n],
-        }
-    }
-
-    fn run(&mut self, p: &dyn Projection) {
-        let mut ctx = ProjectionContext::new(
-            &self.screen,
-            &self.lens,
-            &self.aperture,
-            &mut self.time,
-            &mut self.rays,
-            &mut self.tint,
-        )
-        .expect("equal lengths");
-        p.project(&mut ctx);
-    }
-}
-
-fn projection(name: &str, params: &[(&str, &str)]) -> Box<dyn Projection> {
-    let mut list = ParamList::new();
-    for (decl, v) in params {
-        let values: Vec<&str> = v.split_whitespace().collect();
-        list.push_text(decl, &values, None)
-            .expect("valid bench parameter");
-    }
-    let mut env = ProjectionEnvironment::for_format(Format::new(1920, 1080));
-    let mut registry = obscura_sdk::Registry::new();
-    for factory in obscura_projections::factories() {
-        registry.register(factory, "").expect("built-in names are unique");
-    }
-    registry
-        .create(name, &mut env, &list)
-        .expect("valid bench projection")
-}
-
 fn bench_projection(bencher: Bencher, n: usize, name: &str, params: &[(&str, &str)]) {
     let p = projection(name, params);
-    let mut batch = Batch::new(n);
+    let mut batch = Batch::new(n, Aperture::Square);
     bencher.counter(ItemsCount::new(n)).bench_local(|| {
         batch.run(black_box(p.as_ref()));
         black_box(&batch.rays);
@@ -244,7 +175,7 @@ fn reference_scalar_per_ray(bencher: Bencher, n: usize) {
     }
     let rays = PerspectiveRays::new((0.00185, 0.00185), (0.1, f32::INFINITY), 0.0, 1.0);
     let d = screen_distance(60.0);
-    let mut batch = Batch::new(n);
+    let mut batch = Batch::new(n, Aperture::Square);
     bencher.counter(ItemsCount::new(n)).bench_local(|| {
         for (r, s) in batch.rays.iter_mut().zip(&batch.screen) {
             *r = one(black_box(&rays), *s, d);
@@ -256,7 +187,7 @@ fn reference_scalar_per_ray(bencher: Bencher, n: usize) {
 /// Reference: store bandwidth. Writes the same 40 bytes per ray, computing nothing.
 #[divan::bench(args = BATCHES)]
 fn reference_store_bandwidth(bencher: Bencher, n: usize) {
-    let mut batch = Batch::new(n);
+    let mut batch = Batch::new(n, Aperture::Square);
     let ray = RayGeometry {
         origin: Vec3::ZERO,
         origin_radius: 0.0,

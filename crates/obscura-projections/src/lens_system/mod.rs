@@ -79,7 +79,8 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
         ParamDecl::string("lens", "dgauss.50mm").doc(
             "the prescription: a file (.json: Obscura's format with glass and aspheres; else the \
              four-column radius/thickness/index/aperture format) or a shipped lens by name: dgauss.50mm, \
-             dgauss.50mm.dat, fisheye.10mm, fisheye.10mm.dat, telephoto.250mm.dat, wide.100mm.dat, asphere.50mm",
+             dgauss.50mm.dat, fisheye.10mm, fisheye.10mm.dat, fisheye.16mm, telephoto.250mm.dat, wide.100mm.dat, \
+             asphere.50mm, masterprime.100mm",
         ),
         ParamDecl::float("focusDistance", 0.0)
             .range(ValueRange::at_least(0.0))

@@ -62,6 +62,10 @@ pub const SHIPPED: &[(&str, &str)] = &[
         include_str!("../../../../data/lenses/fisheye.10mm.dat"),
     ),
     (
+        "fisheye.16mm",
+        include_str!("../../../../data/lenses/fisheye.16mm.json"),
+    ),
+    (
         "telephoto.250mm.dat",
         include_str!("../../../../data/lenses/telephoto.250mm.dat"),
     ),

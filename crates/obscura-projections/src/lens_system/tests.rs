@@ -51,6 +51,7 @@ fn paraxial_efl_and_bfl_equal_an_independent_y_u_trace() {
         "telephoto.250mm.dat",
         "wide.100mm.dat",
         "fisheye.10mm",
+        "fisheye.16mm",
         "masterprime.100mm",
     ] {
         let p = lens(name);
@@ -100,6 +101,60 @@ fn the_patent_asphere_has_the_focal_length_back_focus_and_f_number_its_source_st
     assert!((par.f_number - 1.24).abs() < 0.02 * 1.24, "F {}", par.f_number);
     let (efl, bfl) = y_u_trace(&p, LAMBDA_D);
     assert!((efl - 99.80).abs() < 0.01 && (bfl - 40.123).abs() < 0.005);
+}
+
+/// The chief ray's angle to the axis (degrees) from film radius `r` of `l`: aimed at the stop's
+/// centre from `guess`, traced through every clear aperture; with the slope for the next guess.
+fn chief_angle(l: &Lens, r: f64, guess: [f64; 2]) -> Option<(f64, [f64; 2])> {
+    let t = super::pupil::aim(l, r, [0.0, 0.0], guess)?;
+    let out = l.trace(super::pupil::film_ray(r, t)).ok()?;
+    Some((out.d[0].hypot(out.d[1]).atan2(out.d[2]).to_degrees(), t))
+}
+
+#[test]
+fn the_patent_fisheye_has_the_focal_length_f_number_and_field_its_source_states() {
+    // US 4,256,373, as shipped in fisheye.16mm.json (×16): the source states f = 1.0, F/2.8 and a
+    // 180° field. The EFL is the transcription's check (a slip in any radius, spacing or index moves
+    // it); the stop diameter is set from the stated F-number, so the F-number only checks the pupil
+    // arithmetic; the field is the lens's own: a chief ray from 90° off the axis must pass every
+    // clear aperture.
+    let p = lens("fisheye.16mm");
+    assert_eq!(p.surfaces.len(), 17);
+    let stop = 2.0 * p.surfaces[p.stop].semi_aperture;
+    let mut l = Lens::new(&p, 0.0);
+    l.focus(f64::INFINITY).unwrap();
+    let par = l.paraxial(LAMBDA_D, stop);
+    assert!((par.efl - 16.0).abs() < 0.005 * 16.0, "EFL {}", par.efl);
+    assert!((par.f_number - 2.8).abs() < 0.01 * 2.8, "F {}", par.f_number);
+    // Walk out from the centre along the film until the chief ray leaves at 90°, then bisect.
+    let (mut r0, mut guess) = (0.0, [0.0, 0.0]);
+    let mut theta0 = 0.0;
+    let step = 0.25;
+    let r90 = loop {
+        let r1 = r0 + step;
+        let (theta1, t) = chief_angle(&l, r1, guess)
+            .unwrap_or_else(|| panic!("the chief ray from {r1} mm (beyond {theta0}°) is blocked"));
+        if theta1 >= 90.0 {
+            let (mut a, mut b, mut g) = (r0, r1, guess);
+            for _ in 0..40 {
+                let m = 0.5 * (a + b);
+                let (th, tm) = chief_angle(&l, m, g).expect("inside the traced range");
+                if th < 90.0 {
+                    (a, g) = (m, tm);
+                } else {
+                    b = m;
+                }
+            }
+            break 0.5 * (a + b);
+        }
+        assert!(theta1 > theta0, "the field angle grows with the film radius");
+        (r0, guess, theta0) = (r1, t, theta1);
+    };
+    // An independent meridional trace of the patent's numbers puts the 90° chief ray at
+    // 1.3727·f: 21.96 mm here. The 180° image circle is then the 24 × 36 mm frame's diagonal
+    // (43.27 mm) within 1.5 %: a full-frame fisheye.
+    assert!((r90 - 1.3727 * par.efl).abs() < 0.002 * r90, "r(90°) = {r90} mm");
+    assert!((2.0 * r90 - 43.27).abs() < 0.02 * 43.27);
 }
 
 #[test]
@@ -545,12 +600,14 @@ fn every_shipped_lens_keeps_the_contract() {
             )],
         );
     }
-    let p = make(
-        &LensSystemFactory,
-        &[("string lens", "fisheye.10mm")],
-        Format::new(32, 32),
-    );
-    assert!(p.property(ProjectionProperty::FieldOfView).is_some());
+    for fisheye in ["fisheye.10mm", "fisheye.16mm"] {
+        let p = make(
+            &LensSystemFactory,
+            &[("string lens", fisheye)],
+            Format::new(32, 32),
+        );
+        assert!(p.property(ProjectionProperty::FieldOfView).is_some());
+    }
 }
 
 #[test]
