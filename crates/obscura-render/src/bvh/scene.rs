@@ -191,7 +191,7 @@ impl SceneAccel {
             return unsafe { self.closest_avx2(k, ray) };
         }
         let _ = scalar_only;
-        self.closest(ScalarKernel, ray)
+        self.closest::<_, false>(ScalarKernel, ray)
     }
 
     /// True when anything is hit, with the AVX2 kernel unless `scalar_only`.
@@ -208,7 +208,7 @@ impl SceneAccel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
-        self.closest(k, ray)
+        self.closest::<_, false>(k, ray)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -231,10 +231,11 @@ impl SceneAccel {
         ))
     }
 
+    /// The nearest hit; with `CAMERA`, the nearest a camera ray sees.
     #[inline(always)]
-    fn closest<K: BoxKernel>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
+    fn closest<K: BoxKernel, const CAMERA: bool>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
         let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
-        let mut visitor = SceneClosest {
+        let mut visitor = SceneClosest::<K, CAMERA> {
             accel: self,
             kernel,
             ray,
@@ -256,27 +257,13 @@ impl SceneAccel {
             return unsafe { self.closest_camera_avx2(k, ray) };
         }
         let _ = scalar_only;
-        self.closest_camera(ScalarKernel, ray)
+        self.closest::<_, true>(ScalarKernel, ray)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_camera_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
-        self.closest_camera(k, ray)
-    }
-
-    #[inline(always)]
-    fn closest_camera<K: BoxKernel>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
-        let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
-        let mut visitor = SceneCameraClosest {
-            accel: self,
-            kernel,
-            ray,
-            lim: ray.t_max,
-            best: None,
-        };
-        traverse(&self.top, kernel, &box_ray, ray.t_max, &mut visitor);
-        visitor.best
+        self.closest::<_, true>(k, ray)
     }
 
     #[inline(always)]
@@ -301,7 +288,9 @@ impl SceneAccel {
     }
 }
 
-struct SceneClosest<'a, K> {
+/// The nearest-hit visitor; with `CAMERA`, one-sided instances and clipping planes refuse hits
+/// (camera rays), otherwise every hit counts.
+struct SceneClosest<'a, K, const CAMERA: bool> {
     accel: &'a SceneAccel,
     kernel: K,
     ray: &'a Ray,
@@ -309,78 +298,47 @@ struct SceneClosest<'a, K> {
     best: Option<SceneHit>,
 }
 
-impl<K: BoxKernel> LeafVisitor for SceneClosest<'_, K> {
+impl<K: BoxKernel, const CAMERA: bool> SceneClosest<'_, K, CAMERA> {
+    /// The nearest hit on `mesh` (instance `instance`, ray `o + t·d` in its object space) below the
+    /// current limit that this visitor's rays see.
     #[inline(always)]
-    fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
-        let ray = self.ray;
-        for &instance in &self.accel.top_ids[first..first + count] {
-            let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
-                continue;
-            };
-            if let Some((t, primitive, u, v)) =
-                self.accel.meshes[mesh].closest(self.kernel, o, d, ray.t_min, self.lim)
-                && self.best.is_none_or(|b| t < b.t || instance < b.instance)
-            {
-                self.best = Some(SceneHit {
-                    t,
-                    instance,
-                    mesh,
-                    primitive,
-                    u,
-                    v,
-                });
-                self.lim = t.next_up();
-                *t_far = t;
-            }
+    fn mesh_hit(&self, instance: u32, mesh: usize, o: Vec3A, d: Vec3A) -> Option<(f32, u32, f32, f32)> {
+        let (ray, bvh) = (self.ray, &self.accel.meshes[mesh]);
+        if !CAMERA {
+            return bvh.closest(self.kernel, o, d, ray.t_min, self.lim);
         }
-        false
+        let planes = &self.accel.camera.clip_planes;
+        let sides = (self.accel.camera.sides.get(instance as usize))
+            .copied()
+            .unwrap_or_default();
+        if sides == Sides::Both && planes.is_empty() {
+            return bvh.closest(self.kernel, o, d, ray.t_min, self.lim);
+        }
+        // `t` is the same along the object-space and the world-space ray.
+        let visible = |t: f32, det: f32| {
+            let facing = match sides {
+                Sides::Both => true,
+                Sides::Front => det > 0.0,
+                Sides::Back => det < 0.0,
+            };
+            facing && {
+                let p = ray.at(t);
+                planes.iter().all(|&(n, c)| n.dot(p) <= c)
+            }
+        };
+        bvh.closest_accepted(self.kernel, o, d, ray.t_min, self.lim, visible)
     }
 }
 
-/// [`SceneClosest`] for camera rays: one-sided instances and clipping planes refuse hits.
-struct SceneCameraClosest<'a, K> {
-    accel: &'a SceneAccel,
-    kernel: K,
-    ray: &'a Ray,
-    lim: f32,
-    best: Option<SceneHit>,
-}
-
-impl<K: BoxKernel> LeafVisitor for SceneCameraClosest<'_, K> {
+impl<K: BoxKernel, const CAMERA: bool> LeafVisitor for SceneClosest<'_, K, CAMERA> {
     #[inline(always)]
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
         let ray = self.ray;
-        let planes = &self.accel.camera.clip_planes;
         for &instance in &self.accel.top_ids[first..first + count] {
             let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
                 continue;
             };
-            let sides = self
-                .accel
-                .camera
-                .sides
-                .get(instance as usize)
-                .copied()
-                .unwrap_or_default();
-            // `t` is the same along the object-space and the world-space ray.
-            let visible = |t: f32, det: f32| {
-                let facing = match sides {
-                    Sides::Both => true,
-                    Sides::Front => det > 0.0,
-                    Sides::Back => det < 0.0,
-                };
-                facing && {
-                    let p = ray.at(t);
-                    planes.iter().all(|&(n, c)| n.dot(p) <= c)
-                }
-            };
-            let mesh_bvh = &self.accel.meshes[mesh];
-            let found = if sides == Sides::Both && planes.is_empty() {
-                mesh_bvh.closest(self.kernel, o, d, ray.t_min, self.lim)
-            } else {
-                mesh_bvh.closest_accepted(self.kernel, o, d, ray.t_min, self.lim, visible)
-            };
-            if let Some((t, primitive, u, v)) = found
+            if let Some((t, primitive, u, v)) = self.mesh_hit(instance, mesh, o, d)
                 && self.best.is_none_or(|b| t < b.t || instance < b.instance)
             {
                 self.best = Some(SceneHit {

@@ -7,7 +7,10 @@
 //! `ReadArchive`; and classic RenderMan Interface scenes: `Color`, `Opacity`, the standard `Surface`
 //! and `LightSource` shaders (mapped to physically based materials and lights), `Basis`, `Patch`,
 //! `PatchMesh`, `NuPatch`, `Hyperboloid`, `Paraboloid`, `Curves`, `Points`, `Blobby`,
-//! `Geometry "teapot"`, retained objects, `Procedural "DelayedReadArchive"` and `SolidBegin`.
+//! `Geometry "teapot"`, retained objects, `Procedural "DelayedReadArchive"` and `SolidBegin`; and
+//! the RI camera model (`camera.rs`): `FrameAspectRatio`, `Perspective`, `DepthOfField`, `Exposure`,
+//! `ClippingPlane`, coordinate systems, and the orientation attributes `Sides`, `Orientation`,
+//! `ReverseOrientation`.
 //!
 //! # Transforms
 //!
