@@ -242,6 +242,13 @@ fn sides_and_orientation_are_attributes_that_pick_the_visible_side() {
         [Sides::Front, Sides::Back]
     );
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    // An instance takes the attributes current where it is placed (RISpec 3.2 §5.10).
+    assert_eq!(
+        sides(&format!(
+            "ObjectBegin 1\n{sphere}\nObjectEnd\nObjectInstance 1\nAttributeBegin\nSides 1\nReverseOrientation\nObjectInstance 1\nAttributeEnd"
+        )),
+        [Sides::Both, Sides::Back]
+    );
     assert_eq!(fail("Sides 3\n"), "t.rib:1: Sides expects 1 or 2, got 3");
     assert_eq!(
         fail("Orientation \"up\"\n"),
