@@ -15,8 +15,11 @@
 //! changes neither: a mirrored object keeps its outside (its vertices now run counter-clockwise on
 //! screen, which a right-handed orientation reads as front-facing).
 //!
-//! The renderer's triangles are wound so that `(v₁ − v₀) × (v₂ − v₀)` is the natural normal; an
-//! object's [`Sides`] then says which side of each triangle the camera may see.
+//! The renderer's triangles are wound so that `(v₁ − v₀) × (v₂ − v₀)` is the natural normal
+//! (polygons and subdivision meshes keep the file's vertex order, patches and NURBS follow
+//! `∂P/∂u × ∂P/∂v`), except that every quadric is wound outward, so a quadric with a negative
+//! `thetamax` keeps its outside as its front; an object's [`Sides`] then says which side of each
+//! triangle the camera may see.
 
 use glam::Vec3;
 
