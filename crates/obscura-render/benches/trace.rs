@@ -15,6 +15,10 @@
 //!
 //! `*_mesh` calls [`MeshBvh`] directly (object space, `(t, triangle, u, v)`); `*_scene` goes through
 //! [`SceneAccel`] as the renderer does (one instance, full world-space [`Hit`] with normals).
+//! `primary_camera*` trace the primary rays as the renderer traces camera rays
+//! ([`Tracer::intersect_camera`]): in the same scene (no one-sided instance, no clipping plane: the
+//! path every scene without `Sides 1` takes), with the instance one-sided (`Sides 1`), and with a
+//! clipping plane through the mesh's centre.
 
 use std::path::Path;
 use std::sync::LazyLock;
@@ -24,6 +28,7 @@ use divan::counter::ItemsCount;
 use glam::{Affine3A, Vec3A};
 use obscura_render::bvh::{Instance, MeshBvh, SceneAccel};
 use obscura_render::ray::{Ray, Tracer, TriangleMesh};
+use obscura_scene::Sides;
 
 const CGAL_DATA: &str = "/usr/share/doc/libcgal-dev/data.tar.gz";
 const BUNNY_ENTRY: &str = "data/meshes/bunny00.off";
@@ -58,6 +63,10 @@ struct Scene {
     name: String,
     bvh: MeshBvh,
     accel: SceneAccel,
+    /// The same instance, one-sided.
+    one_sided: SceneAccel,
+    /// The same instance, clipped by a plane through the centre of its bounds.
+    clipped: SceneAccel,
     primary: Vec<Ray>,
     incoherent: Vec<Ray>,
     shadow: Vec<Ray>,
@@ -67,14 +76,19 @@ struct Scene {
 static SCENE: LazyLock<Scene> = LazyLock::new(|| {
     let (name, mesh) = load_mesh();
     let bvh = MeshBvh::build(mesh.clone());
-    let accel = SceneAccel::build(
-        vec![mesh],
-        vec![Instance {
-            mesh: 0,
-            transform: vec![(0.0, Affine3A::IDENTITY)],
-        }],
-    );
+    let placed = || {
+        SceneAccel::build(
+            vec![mesh.clone()],
+            vec![Instance {
+                mesh: 0,
+                transform: vec![(0.0, Affine3A::IDENTITY)],
+            }],
+        )
+    };
+    let accel = placed();
+    let one_sided = placed().with_camera_visibility(vec![Sides::Front], &[]);
     let (lo, hi) = bvh.bounds();
+    let clipped = placed().with_camera_visibility(vec![], &[((lo + hi) * 0.5, Vec3A::new(0.3, 0.2, 1.0))]);
     let primary = primary_rays(lo, hi);
     let mut rng = SplitMix(0x0b5c_u64);
     let incoherent = (0..RANDOM_RAYS)
@@ -99,6 +113,8 @@ static SCENE: LazyLock<Scene> = LazyLock::new(|| {
         name,
         bvh,
         accel,
+        one_sided,
+        clipped,
         primary,
         incoherent,
         shadow,
@@ -169,6 +185,27 @@ fn primary_mesh(bencher: Bencher) {
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn primary_scene(bencher: Bencher) {
     bench_rays(bencher, &SCENE.primary, |r| SCENE.accel.intersect(r).is_some());
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn primary_camera(bencher: Bencher) {
+    bench_rays(bencher, &SCENE.primary, |r| {
+        SCENE.accel.intersect_camera(r).is_some()
+    });
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn primary_camera_one_sided(bencher: Bencher) {
+    bench_rays(bencher, &SCENE.primary, |r| {
+        SCENE.one_sided.intersect_camera(r).is_some()
+    });
+}
+
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn primary_camera_clipped(bencher: Bencher) {
+    bench_rays(bencher, &SCENE.primary, |r| {
+        SCENE.clipped.intersect_camera(r).is_some()
+    });
 }
 
 #[divan::bench(sample_count = 10, sample_size = 1)]

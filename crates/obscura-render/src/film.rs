@@ -16,6 +16,7 @@
 
 use glam::{Vec2, Vec3};
 use obscura_host::PixelRect;
+use obscura_scene::Exposure;
 use obscura_sdk::Rgb;
 
 use crate::filter::Filter;
@@ -204,6 +205,8 @@ pub struct Film {
     pixels: Vec<Accum>,
     /// The flow pass's result over the crop, row by row, once set.
     flow: Option<Vec<FlowPixel>>,
+    /// `Exposure`, applied to Ci when a pixel is resolved.
+    exposure: Exposure,
 }
 
 impl Film {
@@ -229,7 +232,15 @@ impl Film {
             filter,
             pixels: vec![Accum::ZERO; crop.len()],
             flow: None,
+            exposure: Exposure::default(),
         }
+    }
+
+    /// Sets the `Exposure` every resolved pixel's Ci goes through, `(c·gain)^(1/gamma)` per component
+    /// after the pixel filter (RISpec 3.2 §4.1.2). Alpha, depth and the other AOVs, albedo included
+    /// (a reflectance, not light), are not exposed.
+    pub fn set_exposure(&mut self, exposure: Exposure) {
+        self.exposure = exposure;
     }
 
     /// Stores the flow pass's pixels (the crop's, row by row), reported by [`Film::pixel`].
@@ -307,7 +318,8 @@ impl Film {
         }
     }
 
-    /// Resolved values of pixel (x, y) (absolute pixel coordinates inside the crop).
+    /// Resolved values of pixel (x, y) (absolute pixel coordinates inside the crop), Ci exposed
+    /// ([`Film::set_exposure`]).
     ///
     /// [`SampleValues::EMPTY`] outside the crop and where nothing was recorded.
     #[must_use]
@@ -316,6 +328,10 @@ impl Film {
             let mut v = self.pixels[i].resolve();
             if let Some(flow) = &self.flow {
                 v.flow = flow[i];
+            }
+            if !self.exposure.is_identity() {
+                let e = self.exposure;
+                v.ci = Rgb::new(e.apply(v.ci.r), e.apply(v.ci.g), e.apply(v.ci.b));
             }
             v
         })

@@ -227,7 +227,7 @@ impl Prepared {
             let Some(world) = self.world_ray(ray, time) else {
                 continue;
             };
-            let Some(hit) = self.accel().intersect(&world.ray) else {
+            let Some(hit) = self.accel().intersect_camera(&world.ray) else {
                 continue;
             };
             counts.hits += 1;

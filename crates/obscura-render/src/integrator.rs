@@ -231,9 +231,15 @@ pub fn trace_path_cone(
         if !(dir_len > 0.0 && dir_len.is_finite()) {
             break;
         }
-        let hit = tracer.intersect(&ray);
+        // The camera ray sees what camera rays see (one-sided surfaces, clipping planes).
+        let camera = depth == 0;
+        let hit = if camera {
+            tracer.intersect_camera(&ray)
+        } else {
+            tracer.intersect(&ray)
+        };
         let hit = match hit {
-            Some(h) if cutouts => pass_cutouts(scene, tracer, &ray, h, rng, &mut passes),
+            Some(h) if cutouts => pass_cutouts(scene, tracer, &ray, h, camera, rng, &mut passes),
             h => h,
         };
         let t_geometry = hit.map_or(ray.t_max, |h| h.t);
@@ -445,6 +451,7 @@ fn pass_cutouts(
     tracer: &dyn Tracer,
     ray: &Ray,
     mut hit: Hit,
+    camera: bool,
     rng: &mut Rng,
     passes: &mut u32,
 ) -> Option<Hit> {
@@ -458,7 +465,11 @@ fn pass_cutouts(
             t_min: hit.t.next_up().max(hit.t * (1.0 + 1e-6)),
             ..*ray
         };
-        hit = tracer.intersect(&next)?;
+        hit = if camera {
+            tracer.intersect_camera(&next)?
+        } else {
+            tracer.intersect(&next)?
+        };
     }
 }
 
@@ -477,7 +488,7 @@ fn shadow_blocked(
     let mut passes = 0;
     tracer
         .intersect(ray)
-        .and_then(|h| pass_cutouts(scene, tracer, ray, h, rng, &mut passes))
+        .and_then(|h| pass_cutouts(scene, tracer, ray, h, false, rng, &mut passes))
         .is_some()
 }
 

@@ -52,6 +52,12 @@ pub struct Hit {
 pub trait Tracer: Send + Sync {
     /// The nearest hit with `t_min < t < t_max`, if any.
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
+    /// The nearest hit a camera ray sees: as [`Tracer::intersect`], but past the backs of one-sided
+    /// surfaces and what clipping planes hide (`Sides 1`, `ClippingPlane`). Secondary and shadow rays
+    /// see everything.
+    fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect(ray)
+    }
     /// True when anything lies on the ray with `t_min < t < t_max`.
     fn occluded(&self, ray: &Ray) -> bool;
 }

@@ -179,6 +179,8 @@ pub struct Prepared {
     info: String,
     /// Object, instance and material IDs of the scene's objects.
     ids: IdTable,
+    /// `Exposure`, for the film's colour and the deep samples' gain.
+    exposure: obscura_scene::Exposure,
     setup_seconds: f64,
 }
 
@@ -222,6 +224,10 @@ impl Tracer for CountingTracer<'_> {
     fn occluded(&self, ray: &Ray) -> bool {
         self.rays.fetch_add(1, Ordering::Relaxed);
         self.inner.occluded(ray)
+    }
+    fn intersect_camera(&self, ray: &Ray) -> Option<crate::ray::Hit> {
+        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.inner.intersect_camera(ray)
     }
 }
 
@@ -315,7 +321,8 @@ pub fn prepare(
             .collect::<Vec<_>>(),
         &texturing,
     );
-    let accel = SceneAccel::build(meshes, instances);
+    let accel = SceneAccel::build(meshes, instances)
+        .with_camera_visibility(camera_sides(scene), &clip_planes(scene, &camera_to_world));
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),
@@ -338,6 +345,7 @@ pub fn prepare(
         texture_warnings: texture_warnings.into_iter().map(|w| w.0).collect(),
         info: info.join("; "),
         ids: IdTable::new(scene),
+        exposure: scene.exposure,
         setup_seconds: start.elapsed().as_secs_f64(),
     })
 }
@@ -413,6 +421,34 @@ pub(crate) fn camera_motion(
         camera_to_world.push((normalise_time(s.time, shutter), Affine3A::from_mat4(inverse)));
     }
     Ok(Motion::new(&camera_to_world))
+}
+
+/// Which sides camera rays see of each object. Curves and points face the camera by construction and
+/// blobs are diced without a defined winding, so they show both.
+fn camera_sides(scene: &Scene) -> Vec<obscura_scene::Sides> {
+    use obscura_scene::{Shape, Sides};
+    (scene.objects.iter())
+        .map(|o| match o.shape {
+            Shape::Curves(_) | Shape::Points(_) | Shape::Blobby(_) => Sides::Both,
+            _ => o.sides,
+        })
+        .collect()
+}
+
+/// The scene's clipping planes in world space, `(point, normal)`: those given in camera space placed
+/// by the camera at shutter open.
+fn clip_planes(scene: &Scene, camera_to_world: &Motion) -> Vec<(Vec3A, Vec3A)> {
+    let c2w = camera_to_world.object_to_world(0.0);
+    let normal_to_world = c2w.matrix3.inverse().transpose();
+    (scene.clip_planes.iter())
+        .map(|c| {
+            let (p, n) = (Vec3A::from(c.point), Vec3A::from(c.normal));
+            match c.space {
+                obscura_scene::ClipSpace::World => (p, n),
+                obscura_scene::ClipSpace::Camera => (c2w.transform_point3a(p), normal_to_world * n),
+            }
+        })
+        .collect()
 }
 
 /// Every object of `scene` diced (in parallel) at the rate the projection's DicingHint and FieldOfView
@@ -676,6 +712,9 @@ impl Accumulator {
         let cam = prepared.stage.camera();
         let finished = self.done.into_inner();
         let seconds = |ns: AtomicU64| ns.into_inner() as f64 * 1e-9;
+        // Deep samples take the exposure's gain, which composites exactly; a gamma cannot be applied
+        // before compositing (the reader warns when a deep display meets a gamma other than 1).
+        let gain = prepared.exposure.gain;
         let deep = self.deep.map(|pixels| DeepImage {
             width: cam.format.width,
             height: cam.format.height,
@@ -684,11 +723,21 @@ impl Accumulator {
                 .into_inner()
                 .expect("no panics while holding the deep pixels")
                 .into_iter()
-                .map(|(samples, alive)| composite_deep(samples, alive))
+                .map(|(samples, alive)| {
+                    let mut composited = composite_deep(samples, alive);
+                    if gain != 1.0 {
+                        for s in &mut composited {
+                            (s.r, s.g, s.b) = (s.r * gain, s.g * gain, s.b * gain);
+                        }
+                    }
+                    composited
+                })
                 .collect(),
         });
+        let mut film = self.film.into_inner().expect("no panics while holding the film");
+        film.set_exposure(prepared.exposure);
         RenderOutput {
-            film: self.film.into_inner().expect("no panics while holding the film"),
+            film,
             deep,
             stats: RenderStats {
                 triangles: prepared.accel.triangle_count(),

@@ -173,6 +173,7 @@ mod tests {
             material: 0,
             micropolygon_length: 1.0,
             source: source.into(),
+            sides: Default::default(),
             identity: Identity {
                 object: object.into(),
                 instance: instance.into(),

@@ -101,6 +101,7 @@ fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32)
             material: 0,
             micropolygon_length: mpl,
             source: format!("ball {i}"),
+            sides: Default::default(),
             identity: Identity {
                 object: format!("ball{i}"),
                 instance: format!("ball{i}"),
@@ -390,6 +391,7 @@ fn depth_scene(projection: &str, params: &[(&str, &[&str])]) -> (Scene, DVec3, f
         material: 1,
         micropolygon_length: 0.25,
         source: "sphere".into(),
+        sides: Default::default(),
         identity: Identity {
             object: "ball".into(),
             instance: "ball".into(),
@@ -529,6 +531,7 @@ fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, name: &str) -> Object {
         material: 0,
         micropolygon_length: 1.0,
         source: name.into(),
+        sides: Default::default(),
         identity: Identity {
             object: name.into(),
             instance: name.into(),

@@ -127,6 +127,7 @@ fn wall_scene(projection: &str, format: Format) -> Scene {
         material: 1,
         micropolygon_length: 1.0,
         source: "test".into(),
+        sides: Default::default(),
         identity: Identity::default(),
     });
     scene.samples_per_pixel = 16;
@@ -228,6 +229,7 @@ fn a_crop_equals_the_same_region_of_the_full_render() {
         material: 0,
         micropolygon_length: 1.0,
         source: "test".into(),
+        sides: Default::default(),
         identity: Identity::default(),
     });
     let full = render(&scene);
@@ -278,6 +280,7 @@ fn a_moving_sphere_is_centred_on_its_mid_shutter_position() {
         material: 1,
         micropolygon_length: 1.0,
         source: "test".into(),
+        sides: Default::default(),
         identity: Identity::default(),
     });
     let out = render(&scene);
@@ -318,6 +321,7 @@ fn a_wrong_dicing_hint_changes_the_dicing() {
         material: 0,
         micropolygon_length: 1.0,
         source: "test".into(),
+        sides: Default::default(),
         identity: Identity::default(),
     });
     let right = prepared(&scene).accel().triangle_count();
@@ -355,6 +359,7 @@ fn white_furnace_gives_a_uniform_image() {
         material: 1,
         micropolygon_length: 1.0,
         source: "test".into(),
+        sides: Default::default(),
         identity: Identity::default(),
     });
     let mut opts = RenderOptions::default();

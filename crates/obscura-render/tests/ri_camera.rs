@@ -55,9 +55,10 @@ fn a_depth_of_field_scene_traces_the_thin_lens() {
     );
 }
 
-/// RISpec 3.2: without ScreenWindow the window follows FrameAspectRatio (here 2, so (−2, 2, −1, 1)
-/// on a 4:3 raster), and `fov` spans the screen's [−1, 1]: the chief ray of the top-right corner of
-/// the raster has direction (2·tan(fov/2), tan(fov/2), 1).
+/// RISpec 3.2: without ScreenWindow the window follows FrameAspectRatio (here 2, so (−2, 2, −1, 1)),
+/// and `fov` spans the screen's [−1, 1]: the chief ray of the frame's top-right corner has direction
+/// (2·tan(fov/2), tan(fov/2), 1). On the 4:3 raster the frame is its top 40 × 20 pixels: only those
+/// are traced, and the window spans them.
 #[test]
 fn frame_aspect_ratio_sets_the_screen_window_the_rays_follow() {
     let text =
@@ -73,11 +74,17 @@ fn frame_aspect_ratio_sets_the_screen_window_the_rays_follow() {
     let (map, _) = trace_ray_map(&stage, 0, 0).unwrap();
     let chief = &map.layers[0];
     let t = 30f32.to_radians().tan();
-    // Pixel (39, 0)'s centre: screen x = −2 + 4·39.5/40, y = 1 − 2·0.5/30.
-    let (sx, sy) = (-2.0 + 4.0 * 39.5 / 40.0, 1.0 - 2.0 * 0.5 / 30.0);
-    let d = chief.rays[39].direction;
-    assert!(
-        (d.x / d.z - sx * t).abs() < 1e-5 && (d.y / d.z - sy * t).abs() < 1e-5,
-        "{d:?}"
-    );
+    assert_eq!(chief.rays.len(), 40 * 20, "the frame's pixels only");
+    // Pixel (x, y)'s centre: screen x = −2 + 4·(x + ½)/40, y = 1 − 2·(y + ½)/20.
+    for (x, y) in [(39usize, 0usize), (0, 19), (20, 10)] {
+        let (sx, sy) = (
+            -2.0 + 4.0 * (x as f32 + 0.5) / 40.0,
+            1.0 - 2.0 * (y as f32 + 0.5) / 20.0,
+        );
+        let d = chief.rays[y * 40 + x].direction;
+        assert!(
+            (d.x / d.z - sx * t).abs() < 1e-5 && (d.y / d.z - sy * t).abs() < 1e-5,
+            "pixel ({x}, {y}): {d:?}"
+        );
+    }
 }

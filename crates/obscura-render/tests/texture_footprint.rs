@@ -185,6 +185,7 @@ fn scene(dir: &Path, projection: &str, params: &ParamList) -> Scene {
         material: 1,
         micropolygon_length: 1.0,
         source: "plane".into(),
+        sides: Default::default(),
         identity: obscura_scene::Identity::default(),
     });
     scene

@@ -18,12 +18,14 @@ pub mod obj;
 pub mod rib;
 pub mod texture;
 pub mod types;
+pub mod visibility;
 
 #[cfg(test)]
 mod test_support;
 
 pub use classic::*;
 pub use types::*;
+pub use visibility::{ClipPlane, ClipSpace, Exposure, Sides};
 
 use std::path::Path;
 

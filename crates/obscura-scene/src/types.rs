@@ -10,6 +10,7 @@ use obscura_sdk::{ParamList, Rgb};
 
 use crate::classic::{BezierPatch, Blobby, Curves, NuPatch, Points};
 use crate::texture::{SurfaceMaps, TextureDesc};
+use crate::visibility::{ClipPlane, Exposure, Sides};
 
 /// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
 /// least one. Matrices act on column vectors (`p' = M·p`).
@@ -303,6 +304,8 @@ pub struct Object {
     pub source: String,
     /// Its names for ground truth (ID AOVs, the `.ids.json` sidecar).
     pub identity: Identity,
+    /// Which sides camera rays see (RIB `Sides`, `Orientation`; both for glTF and OBJ).
+    pub sides: Sides,
 }
 
 /// The names an object carries into the ID AOVs: several instances may share one object name (a glTF
@@ -517,6 +520,10 @@ pub struct Scene {
     /// Seconds of animation the file holds (glTF animations); `None` for a still scene. An animated
     /// scene is posed per frame by its reader ([`crate::gltf_scene::load_gltf_at`]).
     pub animation_seconds: Option<f32>,
+    /// `ClippingPlane`s: camera rays do not see geometry on their positive sides.
+    pub clip_planes: Vec<ClipPlane>,
+    /// `Exposure gain gamma`, applied to the colour of every display.
+    pub exposure: Exposure,
 }
 
 impl Scene {
@@ -539,6 +546,8 @@ impl Scene {
             auto_light: false,
             warnings: Vec::new(),
             animation_seconds: None,
+            clip_planes: Vec::new(),
+            exposure: Exposure::default(),
         }
     }
 }

@@ -152,6 +152,22 @@ impl MeshBvh {
         t_min: f32,
         t_lim: f32,
     ) -> Option<(f32, u32, f32, f32)> {
+        self.closest_accepted(kernel, origin, direction, t_min, t_lim, |_, _| true)
+    }
+
+    /// [`MeshBvh::closest`] among the hits `accept(t, det)` takes (`det` of
+    /// [`TriRay::intersect_det`]: positive on the triangle's front); a refused hit is passed and the
+    /// traversal goes on to the next. With an `accept` that is always true this is `closest` itself.
+    #[inline(always)]
+    pub(super) fn closest_accepted<K: BoxKernel, F: Fn(f32, f32) -> bool>(
+        &self,
+        kernel: K,
+        origin: Vec3A,
+        direction: Vec3A,
+        t_min: f32,
+        t_lim: f32,
+        accept: F,
+    ) -> Option<(f32, u32, f32, f32)> {
         let box_ray = kernel.prepare(origin, direction, t_min);
         let mut visitor = MeshClosest {
             bvh: self,
@@ -159,6 +175,7 @@ impl MeshBvh {
             t_min,
             lim: t_lim,
             best: None,
+            accept,
         };
         traverse(&self.tree, kernel, &box_ray, t_lim, &mut visitor);
         visitor.best
@@ -187,23 +204,25 @@ impl MeshBvh {
     }
 }
 
-struct MeshClosest<'a> {
+struct MeshClosest<'a, F> {
     bvh: &'a MeshBvh,
     ray: TriRay,
     t_min: f32,
     /// Exclusive upper limit: the ray's `t_max`, then just above the best `t` (so ties still count).
     lim: f32,
     best: Option<(f32, u32, f32, f32)>,
+    /// Which hits count (`(t, det)`).
+    accept: F,
 }
 
-impl LeafVisitor for MeshClosest<'_> {
+impl<F: Fn(f32, f32) -> bool> LeafVisitor for MeshClosest<'_, F> {
     #[inline(always)]
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
         let range = first..first + count;
         for (tri, &id) in self.bvh.tris[range.clone()].iter().zip(&self.bvh.tri_ids[range]) {
-            if let Some((t, u, v)) = self.ray.intersect(tri, self.t_min, self.lim) {
+            if let Some((t, u, v, det)) = self.ray.intersect_det(tri, self.t_min, self.lim) {
                 // `t < lim` already means `t <= best t`.
-                if self.best.is_none_or(|b| t < b.0 || id < b.1) {
+                if self.best.is_none_or(|b| t < b.0 || id < b.1) && (self.accept)(t, det) {
                     self.best = Some((t, id, u, v));
                     self.lim = t.next_up();
                     *t_far = t;

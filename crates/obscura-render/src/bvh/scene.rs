@@ -2,6 +2,11 @@
 //! of [`Instance`]s, each placing a [`MeshBvh`] by a [`Motion`] over the shutter; world rays are
 //! moved into object space (direction not renormalised, so `t` carries over) and traced there.
 //!
+//! Camera rays may see less than other rays: one-sided instances show them one side, clipping
+//! planes hide half-spaces ([`SceneAccel::with_camera_visibility`]). Such hits are refused inside
+//! the leaf test, so the traversal goes on to the next hit; a scene with neither traces camera rays
+//! exactly as every other ray.
+//!
 //! # Bounds of a moving instance
 //!
 //! The top-level box of a moving instance is conservative for [`Motion`]'s interpolation (scale and
@@ -32,6 +37,7 @@ use super::tree::{Aabb, Tree};
 use super::triangle::SceneHit;
 use crate::motion::{Motion, interpolate};
 use crate::ray::{Hit, Ray, Tracer, TriangleMesh};
+use obscura_scene::Sides;
 
 /// Most instances in a top-level leaf: an instance visit costs a whole mesh traversal, so split fully.
 const INSTANCE_LEAF_SIZE: usize = 1;
@@ -72,6 +78,20 @@ pub struct SceneAccel {
     /// Instance index of each top-level leaf entry.
     top_ids: Vec<u32>,
     triangle_count: usize,
+    /// What camera rays may not see (see [`SceneAccel::with_camera_visibility`]).
+    camera: CameraVisibility,
+}
+
+/// What camera rays may not see: one-sided instances' backs and clipped half-spaces.
+#[derive(Debug, Clone, Default)]
+struct CameraVisibility {
+    /// Per instance; missing entries see both sides.
+    sides: Vec<Sides>,
+    /// World-space planes `(n, c)`: a point `p` with `n·p > c` is clipped.
+    clip_planes: Vec<(Vec3A, f32)>,
+    /// True when any instance is one-sided or any plane clips: camera rays then take the filtered
+    /// traversal; otherwise they take exactly the traversal of every other ray.
+    any: bool,
 }
 
 impl SceneAccel {
@@ -110,7 +130,31 @@ impl SceneAccel {
             top,
             top_ids,
             triangle_count,
+            camera: CameraVisibility::default(),
         }
+    }
+
+    /// Sets what camera rays ([`Tracer::intersect_camera`]) may not see: `sides[i]` says which sides
+    /// of instance `i` they see — [`Sides::Front`] only where the ray meets a triangle from the side
+    /// `(v₁ − v₀)×(v₂ − v₀)` points to (in object space, so a mirroring transform keeps the side),
+    /// [`Sides::Back`] only the other side — and each plane `(point, normal)` (world space) hides
+    /// what lies on the side its normal points to. A hit camera rays may not see is passed: the ray
+    /// goes on to the next. Other rays ([`Tracer::intersect`], [`Tracer::occluded`]) see everything.
+    /// Planes that are not finite or have a zero normal are ignored.
+    #[must_use]
+    pub fn with_camera_visibility(mut self, sides: Vec<Sides>, clip_planes: &[(Vec3A, Vec3A)]) -> Self {
+        let clip_planes: Vec<(Vec3A, f32)> = clip_planes
+            .iter()
+            .filter(|(p, n)| p.is_finite() && n.is_finite() && *n != Vec3A::ZERO)
+            .map(|&(p, n)| (n, n.dot(p)))
+            .collect();
+        let any = !clip_planes.is_empty() || sides.iter().any(|s| *s != Sides::Both);
+        self.camera = CameraVisibility {
+            sides,
+            clip_planes,
+            any,
+        };
+        self
     }
 
     /// The number of triangles that can be hit, summed over instances (a mesh placed twice counts
@@ -147,7 +191,7 @@ impl SceneAccel {
             return unsafe { self.closest_avx2(k, ray) };
         }
         let _ = scalar_only;
-        self.closest(ScalarKernel, ray)
+        self.closest::<_, false>(ScalarKernel, ray)
     }
 
     /// True when anything is hit, with the AVX2 kernel unless `scalar_only`.
@@ -164,7 +208,7 @@ impl SceneAccel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
-        self.closest(k, ray)
+        self.closest::<_, false>(k, ray)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -187,10 +231,11 @@ impl SceneAccel {
         ))
     }
 
+    /// The nearest hit; with `CAMERA`, the nearest a camera ray sees.
     #[inline(always)]
-    fn closest<K: BoxKernel>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
+    fn closest<K: BoxKernel, const CAMERA: bool>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
         let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
-        let mut visitor = SceneClosest {
+        let mut visitor = SceneClosest::<K, CAMERA> {
             accel: self,
             kernel,
             ray,
@@ -199,6 +244,26 @@ impl SceneAccel {
         };
         traverse(&self.top, kernel, &box_ray, ray.t_max, &mut visitor);
         visitor.best
+    }
+
+    /// The nearest hit a camera ray sees, with the AVX2 kernel unless `scalar_only`.
+    pub(super) fn closest_camera_dispatch(&self, ray: &Ray, scalar_only: bool) -> Option<SceneHit> {
+        if !self.camera.any {
+            return self.closest_dispatch(ray, scalar_only);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if !scalar_only && let Some(k) = avx2::Avx2Kernel::detect() {
+            // SAFETY: the token from `detect` proves the CPU supports AVX2 and FMA.
+            return unsafe { self.closest_camera_avx2(k, ray) };
+        }
+        let _ = scalar_only;
+        self.closest::<_, true>(ScalarKernel, ray)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn closest_camera_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
+        self.closest::<_, true>(k, ray)
     }
 
     #[inline(always)]
@@ -223,7 +288,9 @@ impl SceneAccel {
     }
 }
 
-struct SceneClosest<'a, K> {
+/// The nearest-hit visitor; with `CAMERA`, one-sided instances and clipping planes refuse hits
+/// (camera rays), otherwise every hit counts.
+struct SceneClosest<'a, K, const CAMERA: bool> {
     accel: &'a SceneAccel,
     kernel: K,
     ray: &'a Ray,
@@ -231,7 +298,39 @@ struct SceneClosest<'a, K> {
     best: Option<SceneHit>,
 }
 
-impl<K: BoxKernel> LeafVisitor for SceneClosest<'_, K> {
+impl<K: BoxKernel, const CAMERA: bool> SceneClosest<'_, K, CAMERA> {
+    /// The nearest hit on `mesh` (instance `instance`, ray `o + t·d` in its object space) below the
+    /// current limit that this visitor's rays see.
+    #[inline(always)]
+    fn mesh_hit(&self, instance: u32, mesh: usize, o: Vec3A, d: Vec3A) -> Option<(f32, u32, f32, f32)> {
+        let (ray, bvh) = (self.ray, &self.accel.meshes[mesh]);
+        if !CAMERA {
+            return bvh.closest(self.kernel, o, d, ray.t_min, self.lim);
+        }
+        let planes = &self.accel.camera.clip_planes;
+        let sides = (self.accel.camera.sides.get(instance as usize))
+            .copied()
+            .unwrap_or_default();
+        if sides == Sides::Both && planes.is_empty() {
+            return bvh.closest(self.kernel, o, d, ray.t_min, self.lim);
+        }
+        // `t` is the same along the object-space and the world-space ray.
+        let visible = |t: f32, det: f32| {
+            let facing = match sides {
+                Sides::Both => true,
+                Sides::Front => det > 0.0,
+                Sides::Back => det < 0.0,
+            };
+            facing && {
+                let p = ray.at(t);
+                planes.iter().all(|&(n, c)| n.dot(p) <= c)
+            }
+        };
+        bvh.closest_accepted(self.kernel, o, d, ray.t_min, self.lim, visible)
+    }
+}
+
+impl<K: BoxKernel, const CAMERA: bool> LeafVisitor for SceneClosest<'_, K, CAMERA> {
     #[inline(always)]
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
         let ray = self.ray;
@@ -239,8 +338,7 @@ impl<K: BoxKernel> LeafVisitor for SceneClosest<'_, K> {
             let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
                 continue;
             };
-            if let Some((t, primitive, u, v)) =
-                self.accel.meshes[mesh].closest(self.kernel, o, d, ray.t_min, self.lim)
+            if let Some((t, primitive, u, v)) = self.mesh_hit(instance, mesh, o, d)
                 && self.best.is_none_or(|b| t < b.t || instance < b.instance)
             {
                 self.best = Some(SceneHit {
@@ -286,6 +384,11 @@ impl<K: BoxKernel> LeafVisitor for SceneAny<'_, K> {
 impl Tracer for SceneAccel {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
         self.closest_dispatch(ray, false).map(|h| self.make_hit(ray, h))
+    }
+
+    fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_camera_dispatch(ray, false)
+            .map(|h| self.make_hit(ray, h))
     }
 
     fn occluded(&self, ray: &Ray) -> bool {

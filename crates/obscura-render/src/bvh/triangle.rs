@@ -1,4 +1,4 @@
-//! Triangles: the watertight, two-sided ray/triangle test ([`TriRay`]), which triangles are skipped
+//! Triangles: the watertight ray/triangle test ([`TriRay`], two-sided, with the facing it found), which triangles are skipped
 //! ([`triangle_vertices`]), and the hit record ([`SceneHit`]) that becomes a world-space [`Hit`].
 
 use glam::{Affine3A, Mat3A, Vec3A};
@@ -49,6 +49,20 @@ impl TriRay {
     /// `(1 - u - v)·v0 + u·v1 + v·v2`.
     #[inline(always)]
     pub(super) fn intersect(&self, tri: &[Vec3A; 3], t_min: f32, t_max: f32) -> Option<(f32, f32, f32)> {
+        self.intersect_det(tri, t_min, t_max)
+            .map(|(t, u, v, _)| (t, u, v))
+    }
+
+    /// [`TriRay::intersect`] with the determinant `det` of the test: `det > 0` exactly when the ray
+    /// meets the triangle's front, the side `(v1 − v0)×(v2 − v0)` points to (`D·n < 0`); the sign
+    /// is decided by the same exact edge functions as the hit itself, so it never disagrees with it.
+    #[inline(always)]
+    pub(super) fn intersect_det(
+        &self,
+        tri: &[Vec3A; 3],
+        t_min: f32,
+        t_max: f32,
+    ) -> Option<(f32, f32, f32, f32)> {
         let a = self.shear * (tri[0] - self.origin);
         let b = self.shear * (tri[1] - self.origin);
         let c = self.shear * (tri[2] - self.origin);
@@ -76,7 +90,7 @@ impl TriRay {
         if t > t_min && t < t_max {
             // Divide rather than multiply by 1/det: for triangles near the bottom of the f32 range
             // det can be denormal and 1/det infinite, and 0·∞ would make the barycentrics NaN.
-            Some((t, e1 / det, e2 / det))
+            Some((t, e1 / det, e2 / det, det))
         } else {
             None
         }

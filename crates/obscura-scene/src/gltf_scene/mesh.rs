@@ -37,6 +37,7 @@ impl Loader<'_> {
                     mesh.index(),
                     prim.index()
                 ),
+                sides: Default::default(),
                 identity: Identity {
                     object: mesh.name().unwrap_or_default().to_string(),
                     instance: node.name().unwrap_or_default().to_string(),

@@ -301,6 +301,7 @@ fn model_object(
         material,
         micropolygon_length: 1.0,
         source: format!("{file}: object \"{}\"", model.name),
+        sides: Default::default(),
         identity: Identity {
             object: model.name.clone(),
             instance: model.name.clone(),

@@ -22,6 +22,7 @@ impl Reader {
             material: self.current_material(),
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
+            sides: self.current_sides(),
             identity: Identity {
                 object: self.identifier.clone(),
                 instance: self.identifier.clone(),

@@ -7,7 +7,10 @@
 //! `ReadArchive`; and classic RenderMan Interface scenes: `Color`, `Opacity`, the standard `Surface`
 //! and `LightSource` shaders (mapped to physically based materials and lights), `Basis`, `Patch`,
 //! `PatchMesh`, `NuPatch`, `Hyperboloid`, `Paraboloid`, `Curves`, `Points`, `Blobby`,
-//! `Geometry "teapot"`, retained objects, `Procedural "DelayedReadArchive"` and `SolidBegin`.
+//! `Geometry "teapot"`, retained objects, `Procedural "DelayedReadArchive"` and `SolidBegin`; and
+//! the RI camera model (`camera.rs`): `FrameAspectRatio`, `Perspective`, `DepthOfField`, `Exposure`,
+//! `ClippingPlane`, coordinate systems, and the orientation attributes `Sides`, `Orientation`,
+//! `ReverseOrientation`.
 //!
 //! # Transforms
 //!
@@ -302,10 +305,10 @@ const REQUESTS: [Request; 77] = {
         known("Exposure", Options, Reader::exposure),
         known("CoordinateSystem", Anywhere, Reader::coordinate_system),
         known("CoordSysTransform", Anywhere, Reader::coord_sys_transform),
-        known("ClippingPlane", Anywhere, Reader::without_effect),
-        known("Sides", Anywhere, Reader::without_effect),
-        known("Orientation", Anywhere, Reader::without_effect),
-        known("ReverseOrientation", Anywhere, Reader::without_effect),
+        known("ClippingPlane", Anywhere, Reader::clipping_plane),
+        known("Sides", Anywhere, Reader::sides),
+        known("Orientation", Anywhere, Reader::orientation),
+        known("ReverseOrientation", Anywhere, Reader::reverse_orientation),
         known("MotionBegin", Anywhere, Reader::motion_begin),
         known("MotionEnd", Anywhere, Reader::motion_end),
         known("AttributeBegin", Anywhere, |rd, r| {
@@ -379,6 +382,8 @@ struct Reader {
     micropolygon_length: f32,
     /// The current `Attribute "identifier" "name"` (empty before one).
     identifier: String,
+    /// The current `Sides` and orientation.
+    facing: camera::Facing,
     /// The open attribute and transform blocks, innermost last.
     blocks: Vec<Block>,
     /// The open motion block.
@@ -439,6 +444,7 @@ impl Reader {
             material: 0,
             micropolygon_length: 1.0,
             identifier: String::new(),
+            facing: camera::Facing::default(),
             blocks: Vec::new(),
             motion: None,
             world: None,

@@ -108,6 +108,8 @@ impl Reader {
         for mut o in objects {
             o.transform = compose(&ctm, &o.transform);
             o.material = material;
+            // Sides and orientation are attributes: an instance takes those current where it is placed.
+            o.sides = self.current_sides();
             o.identity.instance.clone_from(&self.identifier);
             o.source = format!("{} (object \"{handle}\" of {})", r.at(), o.source);
             self.scene.objects.push(o);

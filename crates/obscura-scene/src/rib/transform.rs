@@ -78,7 +78,7 @@ pub(super) enum Op {
 /// Which kind of block an `…Begin` opened.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum BlockKind {
-    /// `AttributeBegin`: restores the transform, the material and the dicing.
+    /// `AttributeBegin`: restores the transform, the material, the dicing, the sides and orientation.
     Attribute,
     /// `TransformBegin`: restores the transform only.
     Transform,
@@ -109,6 +109,7 @@ pub(super) struct Block {
     pub(super) micropolygon_length: f32,
     pub(super) classic: super::classic_shaders::ClassicAttributes,
     pub(super) identifier: String,
+    pub(super) facing: super::camera::Facing,
     pub(super) file: String,
     pub(super) line: u32,
 }
@@ -171,6 +172,7 @@ impl Reader {
             micropolygon_length: self.micropolygon_length,
             classic: self.classic.clone(),
             identifier: self.identifier.clone(),
+            facing: self.facing,
             file: r.file.to_string(),
             line: r.line,
         });
@@ -197,6 +199,7 @@ impl Reader {
             self.micropolygon_length = b.micropolygon_length;
             self.classic = b.classic;
             self.identifier = b.identifier;
+            self.facing = b.facing;
         }
         Ok(())
     }

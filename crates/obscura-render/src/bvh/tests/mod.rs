@@ -4,6 +4,7 @@
 mod mesh;
 mod scene;
 mod triangle;
+mod visibility;
 
 use glam::Vec3A;
 use proptest::prelude::*;
