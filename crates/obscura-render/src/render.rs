@@ -256,7 +256,7 @@ pub fn prepare(
     )?;
     let mut info = Vec::new();
     if let Some((min, max)) = scene.auto_camera {
-        let camera = auto_camera_for(&stage, min, max, &mut info);
+        let camera = auto_camera_for(&stage, min, max, scene.auto_interior.as_ref(), &mut info);
         stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, &camera)?;
     }
     if scene.auto_light {
@@ -345,7 +345,13 @@ pub fn prepare(
 /// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
 /// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
 /// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
-fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<String>) -> CameraDesc {
+fn auto_camera_for(
+    stage: &CameraStage,
+    min: Vec3,
+    max: Vec3,
+    interior: Option<&obscura_scene::interior::Interior>,
+    info: &mut Vec<String>,
+) -> CameraDesc {
     use obscura_scene::framing::{AutoView, auto_camera};
     use obscura_sdk::DicingHint;
     let props = stage.properties();
@@ -363,7 +369,13 @@ fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<Str
     let mut camera = stage.camera().clone();
     let w = camera.screen_window();
     let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
-    let auto = auto_camera(min, max, view, if aspect.is_finite() { aspect } else { 1.0 });
+    let auto = auto_camera(
+        min,
+        max,
+        view,
+        if aspect.is_finite() { aspect } else { 1.0 },
+        interior,
+    );
     camera.world_to_camera = vec![obscura_sdk::MotionSample {
         time: camera.shutter.0,
         world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),

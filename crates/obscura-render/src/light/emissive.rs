@@ -19,7 +19,6 @@ use glam::{Affine3A, Vec3A};
 use obscura_host::distribution::Distribution1D;
 use obscura_scene::Material;
 
-use crate::material::Bsdf;
 use crate::material::textured::Texturing;
 use crate::ray::{Hit, TriangleMesh};
 
@@ -200,8 +199,7 @@ impl EmissiveTriangles {
             edges: [t.e1, t.e2],
         };
         let (material, index) = scene_materials(t.instance);
-        let surface = texturing.surface(&hit, material, index, wi, n, 0.0, false);
-        let radiance = Bsdf::new(&surface.material, surface.normal).emission() + surface.emission;
+        let radiance = texturing.emission(&hit, material, index);
         Some(EmitterSample {
             wi,
             dist,
