@@ -298,7 +298,9 @@ pub fn trace_path_cone(
             // An emitter light sampling also aims at: weighted against it after a BSDF sample.
             let w = match (
                 bsdf_pdf,
-                scene.emissive.pdf(hit.instance, hit.t * dir_len, d, n_g),
+                scene
+                    .emissive
+                    .pdf(hit.instance, hit.primitive, hit.t * dir_len, d, n_g),
             ) {
                 (Some(p), Some(light_pdf)) => power_heuristic(p, light_pdf),
                 _ => 1.0,

@@ -20,8 +20,8 @@
 //! centre eye that meet nothing: an atrium's opening lets the default sky and key light in; a closed
 //! room (none escape) needs a light of its own inside ([`crate::framing`] adds one).
 //!
-//! The rays are tested against every triangle (objects whose world bounds a ray misses are skipped):
-//! a few hundred rays, once per file read without a camera.
+//! The rays are tested against the triangles in runs of 64 consecutive ones, a run skipped when the
+//! ray misses its bounds: a few hundred rays, once per file read without a camera.
 
 use glam::{Mat4, Vec3};
 
@@ -29,6 +29,9 @@ use crate::types::{Object, Shape};
 
 /// Directions per probe.
 const DIRECTIONS: usize = 64;
+
+/// Triangles per bounded run ([`Triangles`]).
+const CHUNK: usize = 64;
 
 /// Share of directions that must meet a front face for a point to be inside.
 const INSIDE: f32 = 0.5;
@@ -53,7 +56,8 @@ pub struct Interior {
     pub key: Option<Vec3>,
 }
 
-/// World-space triangles of a scene, grouped by object with each group's bounds.
+/// World-space triangles of a scene in runs of up to [`CHUNK`] consecutive triangles of one object,
+/// each run with its bounds.
 struct Triangles {
     groups: Vec<(Vec3, Vec3, Vec<[Vec3; 3]>)>,
 }
@@ -87,9 +91,18 @@ impl Triangles {
                         tri.iter().all(|x| x.is_finite()).then_some(tri)
                     })
                     .collect();
-                let lo = tris.iter().flatten().fold(Vec3::INFINITY, |a, &b| a.min(b));
-                let hi = tris.iter().flatten().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
-                (!tris.is_empty()).then_some((lo, hi, tris))
+                Some(tris)
+            })
+            .flat_map(|tris| {
+                // Runs of consecutive triangles (files keep neighbours together), each with its
+                // bounds, so a ray skips most of a large mesh.
+                tris.chunks(CHUNK)
+                    .map(|c| {
+                        let lo = c.iter().flatten().fold(Vec3::INFINITY, |a, &b| a.min(b));
+                        let hi = c.iter().flatten().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+                        (lo, hi, c.to_vec())
+                    })
+                    .collect::<Vec<_>>()
             })
             .collect();
         Triangles { groups }

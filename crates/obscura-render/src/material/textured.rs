@@ -249,6 +249,26 @@ impl Texturing {
         }
     }
 
+    /// True when material `index` emits nothing anywhere on triangle `primitive` of instance
+    /// `instance`: it has an emissive map, and the map is black over the triangle's texture
+    /// coordinates ([`Texture::is_black_over`] of their box after the slot's transform). Light
+    /// sampling leaves such triangles out (a helmet's emissive map is black but for its lamps).
+    #[must_use]
+    pub fn emission_is_black(&self, index: u32, instance: u32, primitive: u32) -> bool {
+        let black = || -> Option<bool> {
+            let slot = self.maps.get(&index)?.emissive?;
+            let texture = self.textures.get(slot.texture as usize)?.as_ref()?;
+            let attrs = self.attributes.get(instance as usize)?.as_ref()?;
+            let tri = *attrs.triangles.get(primitive as usize)?;
+            let (_, corners) = attrs.uv(slot.uv_set as usize, tri, (0.0, 0.0))?;
+            let corners = corners.map(|c| Footprint::point(c).transformed(&slot.transform).center);
+            let lo = corners[0].min(corners[1]).min(corners[2]);
+            let hi = corners[0].max(corners[1]).max(corners[2]);
+            Some(texture.is_black_over(lo, hi))
+        };
+        black().unwrap_or(false)
+    }
+
     /// The probability that the surface is there at `hit` (material index `index`): 1 for opaque
     /// materials without reading anything, else the base colour's alpha (factor, map, vertex colour)
     /// times the opacity map, through the material's alpha mode — [`SurfacePoint::opacity`] for a
@@ -278,7 +298,7 @@ impl Texturing {
     /// with shading normal `n_s` (facing the viewer) by a cone of radius `cone_radius` (world units)
     /// at the hit. `primary` is true for the camera ray's hit: its lookups are filtered over the
     /// footprint's ellipse (EWA); later hits, whose cones have widened, over a circle of the same
-    /// area (trilinear), as renderers do for indirect rays.
+    /// area on the nearest mip level ([`Texture::bilinear_at`]), as renderers do for indirect rays.
     #[must_use]
     #[allow(clippy::too_many_arguments)]
     pub fn surface(
@@ -339,7 +359,7 @@ impl Texturing {
                 TextureLookup::Footprint if primary => texture.filter(&footprint),
                 TextureLookup::Footprint => {
                     let r = (footprint.a.length() * footprint.b.length()).sqrt();
-                    texture.trilinear(footprint.center, r)
+                    texture.bilinear_at(footprint.center, r)
                 }
                 TextureLookup::Point => texture.nearest(footprint.center),
                 TextureLookup::Mean => texture.texel(usize::MAX, 0, 0),

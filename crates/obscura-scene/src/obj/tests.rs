@@ -482,3 +482,20 @@ fn obj_texture_maps_and_coordinates_are_read_with_t_flipped() {
     assert_eq!(maps.alpha, crate::texture::AlphaMode::Blend);
     assert!(maps.diffuse_only);
 }
+
+#[test]
+fn a_map_kd_without_kd_shows_the_texture_as_it_is() {
+    // Game-map exporters (Cube 2's writeobj) write map_Kd alone: the texture is the colour, not
+    // 0.18 of it; a material with neither keeps the 0.18 grey.
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        &dir,
+        "m.mtl",
+        "newmtl tex\nmap_Kd wall.png\nnewmtl bare\nKs 0 0 0\nmap_d a.png\n",
+    );
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl tex\nf 1/1 2/2 3/3\nusemtl bare\nf 1/1 3/3 2/2\n";
+    let scene = load_obj(&write(&dir, "m.obj", obj), camera()).unwrap();
+    let factor = |i: usize| scene.material_maps[&scene.objects[i].material].base_color_factor;
+    assert_eq!(factor(0), [1.0; 4]);
+    assert_eq!(factor(1), [0.18, 0.18, 0.18, 1.0]);
+}
