@@ -293,27 +293,36 @@ pub fn auto_camera(
         }
     };
     let eye = centre + toward_eye * distance;
-    // RenderMan camera space: +Z forward, +Y up, +X right (`right = forward × up` in world).
-    let world_to_camera = Mat4::from_cols(
-        right.extend(0.0),
-        cam_up.extend(0.0),
-        forward.extend(0.0),
-        eye.extend(1.0),
-    )
-    .inverse();
-    let what = match view {
-        AutoView::Perspective { fov } => format!("perspective ({fov:.0}°)"),
-        AutoView::Orthographic => "orthographic".to_string(),
-        AutoView::Wide { fov } => format!("wide ({fov:.0}°)"),
-    };
+    let what = describe(view);
     AutoCamera {
-        world_to_camera,
+        world_to_camera: look_along(eye, right, cam_up, forward),
         screen_window: window,
         distance,
         description: format!(
             "automatic camera for a {what} view: {side} view of the bounds ({:.3} × {:.3} × {:.3}) from {:.3} away",
             ext.x, ext.y, ext.z, distance
         ),
+    }
+}
+
+/// The world-to-camera transform of a camera at `eye` with world-space unit axes `right`, `up` and
+/// `forward` (RenderMan camera space: +Z forward, +Y up, +X right; `right = forward × up`).
+fn look_along(eye: Vec3, right: Vec3, up: Vec3, forward: Vec3) -> Mat4 {
+    Mat4::from_cols(
+        right.extend(0.0),
+        up.extend(0.0),
+        forward.extend(0.0),
+        eye.extend(1.0),
+    )
+    .inverse()
+}
+
+/// The view's kind for the info line: "perspective (45°)", "orthographic", "wide (180°)".
+fn describe(view: AutoView) -> String {
+    match view {
+        AutoView::Perspective { fov } => format!("perspective ({fov:.0}°)"),
+        AutoView::Orthographic => "orthographic".to_string(),
+        AutoView::Wide { fov } => format!("wide ({fov:.0}°)"),
     }
 }
 
@@ -328,19 +337,8 @@ fn interior_camera(inside: &Interior, view: AutoView, ext: Vec3, radius: f32) ->
     };
     let forward = inside.along;
     let right = forward.cross(Vec3::Y).normalize();
-    let up = right.cross(forward);
-    let world_to_camera = Mat4::from_cols(
-        right.extend(0.0),
-        up.extend(0.0),
-        forward.extend(0.0),
-        eye.extend(1.0),
-    )
-    .inverse();
-    let what = match view {
-        AutoView::Perspective { fov } => format!("perspective ({fov:.0}°)"),
-        AutoView::Orthographic => "orthographic".to_string(),
-        AutoView::Wide { fov } => format!("wide ({fov:.0}°)"),
-    };
+    let world_to_camera = look_along(eye, right, right.cross(forward), forward);
+    let what = describe(view);
     let axis = if forward.x != 0.0 { "+X" } else { "+Z" };
     AutoCamera {
         world_to_camera,

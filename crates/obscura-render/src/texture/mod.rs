@@ -316,9 +316,7 @@ impl Texture {
         if !c.is_finite() {
             return Vec4::ZERO;
         }
-        let top = (self.levels.len() - 1) as f32;
-        let lod = top + (TENT_TEXELS_PER_RADIUS * radius).log2();
-        let lod = if lod.is_nan() { 0.0 } else { lod.clamp(0.0, top) };
+        let lod = self.tent_lod(radius);
         let l0 = lod.floor() as usize;
         let f = lod - l0 as f32;
         let v0 = self.levels[l0].bilinear(c, self.wrap);
@@ -337,10 +335,15 @@ impl Texture {
         if !c.is_finite() {
             return Vec4::ZERO;
         }
+        self.levels[self.tent_lod(radius).round() as usize].bilinear(c, self.wrap)
+    }
+
+    /// The (fractional) mip level where a texel is [`TENT_TEXELS_PER_RADIUS`] footprint radii of
+    /// `radius` (texture units), within the pyramid; 0 for a radius that is not a number.
+    fn tent_lod(&self, radius: f32) -> f32 {
         let top = (self.levels.len() - 1) as f32;
         let lod = top + (TENT_TEXELS_PER_RADIUS * radius).log2();
-        let lod = if lod.is_nan() { 0.0 } else { lod.clamp(0.0, top) };
-        self.levels[lod.round() as usize].bilinear(c, self.wrap)
+        if lod.is_nan() { 0.0 } else { lod.clamp(0.0, top) }
     }
 
     /// True when every texel the box `lo..hi` (texture coordinates) can read is black (RGB 0), judged
@@ -404,7 +407,7 @@ impl Texture {
             // so a thin, tilted ellipse costs its own area rather than its bounding box's.
             let (b, c) = (qb * dy, qc * dy * dy - 1.0);
             let disc = b * b - 4.0 * qa * c;
-            if !(disc > 0.0) {
+            if disc.is_nan() || disc <= 0.0 {
                 continue;
             }
             let root = disc.sqrt();
