@@ -2,9 +2,11 @@
 //! object, and where a camera stands inside it.
 //!
 //! **The test.** From a point `p`, rays go out along 64 directions spread evenly over the sphere (a
-//! Fibonacci lattice). A ray's first hit is *front-facing* when the triangle's winding normal
-//! `(p₁ − p₀) × (p₂ − p₀)` points back at `p` (glTF's and OBJ's counter-clockwise front faces). `p` is
-//! **inside** the geometry when at least half the directions meet a front face: walls, floor and
+//! Fibonacci lattice). A ray's first hit is *front-facing* when the triangle's normal points back
+//! at `p`: the file's vertex normals where it gives them (they survive a mirrored or flipped
+//! winding), else the winding normal `(p₁ − p₀) × (p₂ − p₀)` (glTF's and OBJ's counter-clockwise
+//! front faces). `p` is **inside** the geometry when at least half the directions meet a front
+//! face: walls, floor and
 //! ceiling all face into a room, while from the centre of a closed object (a helmet, a duck) every
 //! ray meets the back of its shell, and from outside most rays meet nothing. An atrium open to the
 //! sky stays inside (its floor and walls are more than half the sphere).
@@ -56,10 +58,13 @@ pub struct Interior {
     pub key: Option<Vec3>,
 }
 
+/// One world-space triangle and the direction its front faces.
+type Facing = ([Vec3; 3], Vec3);
+
 /// World-space triangles of a scene in runs of up to [`CHUNK`] consecutive triangles of one object,
 /// each run with its bounds.
 struct Triangles {
-    groups: Vec<(Vec3, Vec3, Vec<[Vec3; 3]>)>,
+    groups: Vec<(Vec3, Vec3, Vec<Facing>)>,
 }
 
 /// The first hit along a ray: distance and whether the triangle faces the ray's origin.
@@ -80,7 +85,9 @@ impl Triangles {
                 };
                 let m = o.transform.samples.first().map_or(Mat4::IDENTITY, |s| s.1);
                 let p: Vec<Vec3> = mesh.positions.iter().map(|&v| m.transform_point3(v)).collect();
-                let tris: Vec<[Vec3; 3]> = (mesh.triangles.iter())
+                let normal_matrix = m.inverse().transpose();
+                let normals = mesh.normals.as_ref().filter(|n| n.len() == p.len());
+                let tris: Vec<Facing> = (mesh.triangles.iter())
                     .filter_map(|t| {
                         let v = [
                             p.get(t[0] as usize)?,
@@ -88,7 +95,14 @@ impl Triangles {
                             p.get(t[2] as usize)?,
                         ];
                         let tri = [*v[0], *v[1], *v[2]];
-                        tri.iter().all(|x| x.is_finite()).then_some(tri)
+                        // The file's normals when it has them (they survive a flipped winding),
+                        // else the counter-clockwise winding.
+                        let front = match normals {
+                            Some(n) => normal_matrix
+                                .transform_vector3(n[t[0] as usize] + n[t[1] as usize] + n[t[2] as usize]),
+                            None => (tri[1] - tri[0]).cross(tri[2] - tri[0]),
+                        };
+                        (tri.iter().all(|x| x.is_finite()) && front.is_finite()).then_some((tri, front))
                     })
                     .collect();
                 Some(tris)
@@ -98,8 +112,9 @@ impl Triangles {
                 // bounds, so a ray skips most of a large mesh.
                 tris.chunks(CHUNK)
                     .map(|c| {
-                        let lo = c.iter().flatten().fold(Vec3::INFINITY, |a, &b| a.min(b));
-                        let hi = c.iter().flatten().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
+                        let points = || c.iter().flat_map(|(tri, _)| tri);
+                        let lo = points().fold(Vec3::INFINITY, |a, &b| a.min(b));
+                        let hi = points().fold(Vec3::NEG_INFINITY, |a, &b| a.max(b));
                         (lo, hi, c.to_vec())
                     })
                     .collect::<Vec<_>>()
@@ -120,7 +135,7 @@ impl Triangles {
             if near > far || best.is_some_and(|b| near > b.t) {
                 continue;
             }
-            for [p0, p1, p2] in tris {
+            for ([p0, p1, p2], facing) in tris {
                 let (e1, e2) = (*p1 - *p0, *p2 - *p0);
                 let q = d.cross(e2);
                 let det = e1.dot(q);
@@ -139,8 +154,10 @@ impl Triangles {
                 }
                 let t = e2.dot(r) / det;
                 if t > 1e-6 && best.is_none_or(|b| t < b.t) {
-                    // det = −d·(e1 × e2): positive when the winding normal faces the origin.
-                    best = Some(Hit { t, front: det > 0.0 });
+                    best = Some(Hit {
+                        t,
+                        front: facing.dot(d) < 0.0,
+                    });
                 }
             }
         }
@@ -280,6 +297,25 @@ mod tests {
         assert_eq!(hall.key, None);
         // The same box wound outward is a closed object: from its centre every ray meets a back face.
         assert_eq!(probe(&[room(min, max, false, false)], min, max), None);
+    }
+
+    #[test]
+    fn the_files_normals_decide_over_a_flipped_winding() {
+        let (min, max) = (Vec3::new(-3.0, 0.0, -2.0), Vec3::new(3.0, 3.0, 2.0));
+        // Wound outward, as an object, but every vertex normal points in at the centre: a room.
+        let mut hall = room(min, max, false, false);
+        let Shape::Mesh(mesh) = &mut hall.shape else {
+            unreachable!()
+        };
+        let centre = 0.5 * (min + max);
+        mesh.normals = Some(mesh.positions.iter().map(|&p| (centre - p).normalize()).collect());
+        assert!(probe(&[hall.clone()], min, max).is_some());
+        // The same normals pointing out: an object again.
+        let Shape::Mesh(mesh) = &mut hall.shape else {
+            unreachable!()
+        };
+        mesh.normals = mesh.normals.take().map(|n| n.into_iter().map(|v| -v).collect());
+        assert_eq!(probe(&[hall], min, max), None);
     }
 
     #[test]

@@ -218,7 +218,8 @@ fn obj_gets_the_default_sky_and_key_light() {
 
 #[test]
 fn a_closed_room_without_lights_gets_a_lamp_inside() {
-    // The cube of CUBE stretched to a 4 × 2.5 × 3 room, each face wound the other way: it faces in.
+    // The cube of CUBE stretched to a 4 × 2.5 × 3 room, each face wound the other way and its
+    // normals turned: it faces in.
     let room: String = CUBE
         .lines()
         .map(|l| match l.split_whitespace().collect::<Vec<_>>().as_slice() {
@@ -229,6 +230,10 @@ fn a_closed_room_without_lights_gets_a_lamp_inside() {
                 3.0 * z.parse::<f32>().unwrap()
             ),
             ["f", a, b, c, d] => format!("f {d} {c} {b} {a}"),
+            ["vn", x, y, z] => {
+                let n = |c: &str| -c.parse::<f32>().unwrap();
+                format!("vn {} {} {}", n(x), n(y), n(z))
+            }
             _ => l.to_string(),
         })
         .collect::<Vec<_>>()
