@@ -79,6 +79,26 @@ fn an_unknown_aov_is_named_with_the_known_ones() {
 }
 
 #[test]
+fn aov_all_writes_the_texture_aovs_beside_the_ground_truth() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "render", "--format", "24x16", "--spp", "1", "-q", "--aov", "all", "-o", "all.exr",
+    ];
+    let out = obscura(&args, dir.path());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let exr = dir.path().join("all.exr");
+    for name in [
+        "objectId", "cameraZ", "albedo.R", "albedo.G", "albedo.B", "uv.X", "uv.Y",
+    ] {
+        assert_eq!(channel(&exr, name).len(), 24 * 16, "{name}");
+    }
+    // The built-in scene's surfaces are coloured: the albedo of the hit pixels is not black.
+    let ids = channel(&exr, "objectId");
+    let albedo = channel(&exr, "albedo.R");
+    assert!(ids.iter().zip(&albedo).any(|(&id, &a)| id > 0.0 && a > 0.0));
+}
+
+#[test]
 fn a_still_render_with_ground_truth_writes_ids_and_camera_sidecars() {
     let dir = tempfile::tempdir().unwrap();
     let out = obscura(

@@ -207,7 +207,10 @@ fn an_obj_scene_renders_with_the_projection_from_the_command_line() {
     ] {
         obj.push_str(&format!("v {x} {y} {z}\n"));
     }
-    obj.push_str("f 1 2 3 4\nf 5 8 7 6\nf 1 5 6 2\nf 2 6 7 3\nf 3 7 8 4\nf 5 1 4 8\n");
+    // Counter-clockwise seen from outside (OBJ's front faces): a closed object. Wound the other way
+    // its faces would face in, and a file without a camera whose faces face in around its centre is
+    // framed from inside, as a room.
+    obj.push_str("f 4 3 2 1\nf 6 7 8 5\nf 2 6 5 1\nf 3 7 6 2\nf 4 8 7 3\nf 8 4 1 5\n");
     std::fs::write(dir.path().join("cube.obj"), obj).unwrap();
     let r = obscura(
         &[

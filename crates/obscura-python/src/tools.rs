@@ -99,19 +99,23 @@ pub fn check<'py>(
 }
 
 /// The AOVs `render` returns: name and components.
-const AOVS: [(&str, usize); 6] = [
+const AOVS: [(&str, usize); 8] = [
     ("beauty", 3),
     ("alpha", 1),
     ("z", 1),
     ("N", 3),
     ("P", 3),
     ("cameraDirection", 3),
+    ("albedo", 3),
+    ("uv", 2),
 ];
 
 /// Renders a scene (RIB, glTF, OBJ; None for the built-in one) and returns its AOVs as numpy arrays
 /// over the crop window: `beauty` (H×W×3, linear, premultiplied), `alpha`, `z` (the projection's
-/// deep metric, inf where nothing was hit), `N`, `P` (world space), `cameraDirection` (H×W×3), and
-/// `stats`. `camera` replaces the scene's camera (its projection, parameters, format and options;
+/// deep metric, inf where nothing was hit), `N`, `P` (world space), `cameraDirection` (H×W×3),
+/// `albedo` (H×W×3: the footprint-filtered base colour at the first hit, linear), `uv` (H×W×2: the
+/// first texture coordinate set as stored in the file), and `stats`.
+/// `camera` replaces the scene's camera (its projection, parameters, format and options;
 /// the scene's camera transform is kept unless the camera has its own `world_to_camera`). `aovs`
 /// selects AOVs (default all). `progress(done_tiles, total_tiles)` is called from the calling
 /// thread about ten times a second; Ctrl-C (KeyboardInterrupt) stops the render and raises.
@@ -243,6 +247,8 @@ pub fn render<'py>(
                         "z" => s[i] = v.z,
                         "N" => s[i..i + 3].copy_from_slice(&v3(v.n)),
                         "P" => s[i..i + 3].copy_from_slice(&v3(v.p)),
+                        "albedo" => s[i..i + 3].copy_from_slice(&[v.albedo.r, v.albedo.g, v.albedo.b]),
+                        "uv" => s[i..i + 2].copy_from_slice(&[v.uv.x, v.uv.y]),
                         _ => s[i..i + 3].copy_from_slice(&v3(v.camera_direction)),
                     }
                 }

@@ -172,6 +172,9 @@ def test_render_returns_aovs_and_reports_progress():
     cam = obscura.Camera("PxrPerspective", fov=60, format=(48, 32))
     out = obscura.render(None, camera=cam, spp=2, progress=lambda d, t: calls.append((d, t)))
     assert out["beauty"].shape == (32, 48, 3) and out["z"].shape == (32, 48)
+    # The texture AOVs come with the rest: the built-in scene's untextured colours, no coordinates.
+    assert out["albedo"].shape == (32, 48, 3) and out["uv"].shape == (32, 48, 2)
+    assert out["albedo"].max() > 0 and np.isfinite(out["albedo"]).all() and np.isfinite(out["uv"]).all()
     assert out["alpha"].max() == pytest.approx(1.0) and np.isfinite(out["beauty"]).all()
     assert calls and calls[-1][0] == calls[-1][1] > 0
     only = obscura.render(None, camera=cam, spp=1, aovs=["alpha"])

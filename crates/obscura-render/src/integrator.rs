@@ -304,7 +304,9 @@ pub fn trace_path_cone(
             // An emitter light sampling also aims at: weighted against it after a BSDF sample.
             let w = match (
                 bsdf_pdf,
-                scene.emissive.pdf(hit.instance, hit.t * dir_len, d, n_g),
+                scene
+                    .emissive
+                    .pdf(hit.instance, hit.primitive, hit.t * dir_len, d, n_g),
             ) {
                 (Some(p), Some(light_pdf)) => power_heuristic(p, light_pdf),
                 _ => 1.0,
@@ -427,20 +429,8 @@ pub fn trace_path_cone(
 }
 
 /// The surface opacity of `hit` (1 unless its material is MASK or BLEND).
-fn opacity(scene: &ShadingScene, ray: &Ray, hit: &Hit) -> f32 {
-    let d = ray.direction.normalize_or_zero();
-    scene
-        .texturing
-        .surface(
-            hit,
-            scene.material(hit.instance),
-            scene.material_index(hit.instance),
-            d,
-            hit.geometric_normal,
-            0.0,
-            false,
-        )
-        .opacity
+fn opacity(scene: &ShadingScene, hit: &Hit) -> f32 {
+    scene.texturing.opacity(hit, scene.material_index(hit.instance))
 }
 
 /// The first hit along `ray` from `hit` on that is there: a cut-out (opacity 0) is passed, a
@@ -456,7 +446,7 @@ fn pass_cutouts(
     passes: &mut u32,
 ) -> Option<Hit> {
     loop {
-        let o = opacity(scene, ray, &hit);
+        let o = opacity(scene, &hit);
         if o >= 1.0 || *passes >= MAX_PASS_THROUGH || (o > 0.0 && rng.next_f32() < o) {
             return Some(hit);
         }

@@ -262,7 +262,7 @@ pub fn prepare(
     )?;
     let mut info = Vec::new();
     if let Some((min, max)) = scene.auto_camera {
-        let camera = auto_camera_for(&stage, min, max, &mut info);
+        let camera = auto_camera_for(&stage, min, max, scene.auto_interior.as_ref(), &mut info);
         stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, &camera)?;
     }
     if scene.auto_light {
@@ -353,25 +353,38 @@ pub fn prepare(
 /// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
 /// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
 /// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
-fn auto_camera_for(stage: &CameraStage, min: Vec3, max: Vec3, info: &mut Vec<String>) -> CameraDesc {
+fn auto_camera_for(
+    stage: &CameraStage,
+    min: Vec3,
+    max: Vec3,
+    interior: Option<&obscura_scene::interior::Interior>,
+    info: &mut Vec<String>,
+) -> CameraDesc {
     use obscura_scene::framing::{AutoView, auto_camera};
     use obscura_sdk::DicingHint;
     let props = stage.properties();
     let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
+    let mut camera = stage.camera().clone();
+    let w = camera.screen_window();
+    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
+    let aspect = if aspect.is_finite() && aspect > 0.0 {
+        aspect
+    } else {
+        1.0
+    };
     let view = match (props.dicing_hint, fov) {
         (DicingHint::Orthographic, _) => AutoView::Orthographic,
+        // FieldOfView spans the shorter side; a spherical mapping's angle grows with screen
+        // distance, so the longer side sees that times the aspect (a 2:1 lat-long: 360°).
         (DicingHint::Spherical, f) => AutoView::Wide {
-            fov: f.unwrap_or(360.0).min(360.0),
+            fov: f.map_or(360.0, |f| f * aspect.max(1.0 / aspect)).min(360.0),
         },
         (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
         (_, f) => AutoView::Perspective {
             fov: f.unwrap_or(45.0),
         },
     };
-    let mut camera = stage.camera().clone();
-    let w = camera.screen_window();
-    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
-    let auto = auto_camera(min, max, view, if aspect.is_finite() { aspect } else { 1.0 });
+    let auto = auto_camera(min, max, view, aspect, interior);
     camera.world_to_camera = vec![obscura_sdk::MotionSample {
         time: camera.shutter.0,
         world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),

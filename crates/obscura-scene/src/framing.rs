@@ -7,6 +7,7 @@
 use glam::{Mat4, Vec3, Vec4};
 use obscura_sdk::{Matrix4, MotionSample, ParamValue, Rgb, ScreenWindow};
 
+use crate::interior::Interior;
 use crate::types::{Light, Scene};
 
 /// The vertical field of view, in degrees, used to frame a scene that has no camera of its own.
@@ -91,6 +92,7 @@ pub(crate) fn set_fov(scene: &mut Scene, fov_deg: f32, origin: String) {
 pub(crate) fn frame_scene(scene: &mut Scene, bounds: Option<(Vec3, Vec3)>, file: &str) {
     let (min, max) = bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0)));
     scene.auto_camera = Some((min, max));
+    scene.auto_interior = bounds.and_then(|_| crate::interior::probe(&scene.objects, min, max));
     set_world_to_camera(scene, frame_bounds(min, max, FRAMING_FOV_DEG));
     scene.projection = "PxrPerspective".into();
     set_fov(
@@ -124,7 +126,11 @@ pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, _file: &str) {
             map: None,
             transform: Mat4::IDENTITY,
         });
-        let z = DEFAULT_KEY_DIRECTION.normalize();
+        let interior = scene.auto_interior;
+        let z = interior
+            .and_then(|i| i.key)
+            .unwrap_or(DEFAULT_KEY_DIRECTION)
+            .normalize();
         let x = z.any_orthonormal_vector();
         let y = z.cross(x);
         scene.lights.push(Light::Distant {
@@ -134,9 +140,28 @@ pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, _file: &str) {
             angle_extent: 5.0,
             transform: Mat4::from_cols(x.extend(0.0), y.extend(0.0), z.extend(0.0), Vec4::W),
         });
+        // A closed interior lets neither in: a lamp under its ceiling shows the room.
+        if let (Some(i), Some((min, max))) = (interior, scene.auto_camera)
+            && i.open_above == 0.0
+        {
+            let ext = max - min;
+            let radius = (0.04 * ext.x.min(ext.z)).max(1e-3);
+            let at = Vec3::new(i.centre_eye.x, min.y + 0.8 * ext.y, i.centre_eye.z);
+            scene.lights.push(Light::Sphere {
+                color: Rgb::WHITE,
+                intensity: ROOM_LAMP_RADIANCE,
+                exposure: 0.0,
+                transform: Mat4::from_translation(at) * Mat4::from_scale(Vec3::splat(2.0 * radius)),
+            });
+        }
         scene.auto_light = true;
     }
 }
+
+/// Radiance of the lamp a closed interior gets: a sphere of radius `r` = 4 % of the room's
+/// narrower side gives irradiance `π·L·(r/d)²`, so `L = 156` gives π (a white wall's radiance 1)
+/// at half that side's width, `d = 12.5 r`.
+const ROOM_LAMP_RADIANCE: f32 = 156.25;
 
 /// What the automatic camera is framing for: the projection's kind, from its dicing hint and field
 /// of view.
@@ -193,8 +218,19 @@ fn target_angle(view: AutoView) -> f32 {
 ///   corner's offset from the centre along the camera's right, up and forward axes.
 /// - **Orthographic.** The camera stands `2R` away and the screen window is `±R` in y and `±R·a`
 ///   in x (`a` the frame aspect ≥ 1, else the other way round).
+/// - **Interiors.** When `interior` is given (the geometry is closed around the bounds' centre:
+///   [`crate::interior::probe`]), a perspective or wide view stands inside, looking along the long
+///   horizontal side with +Y up: a panorama that sees all around (360°) at the centre eye, any
+///   other view (perspective, fisheye) at the end eye, so the space recedes in front of it. An
+///   orthographic view frames the bounds from outside as above.
 #[must_use]
-pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCamera {
+pub fn auto_camera(
+    min: Vec3,
+    max: Vec3,
+    view: AutoView,
+    aspect: f32,
+    interior: Option<&Interior>,
+) -> AutoCamera {
     let (min, max) = if min.is_finite() && max.is_finite() && min.cmple(max).all() {
         (min, max)
     } else {
@@ -203,6 +239,9 @@ pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCam
     let centre = 0.5 * (min + max);
     let ext = max - min;
     let radius = (0.5 * ext.length()).max(1e-3);
+    if let Some(inside) = interior.filter(|_| view != AutoView::Orthographic) {
+        return interior_camera(inside, view, ext, radius);
+    }
     let mut sides = [(ext.x, 0usize), (ext.y, 1), (ext.z, 2)];
     sides.sort_by(|a, b| a.0.total_cmp(&b.0));
     let flat = sides[0].0 < 0.5 * sides[1].0;
@@ -254,26 +293,61 @@ pub fn auto_camera(min: Vec3, max: Vec3, view: AutoView, aspect: f32) -> AutoCam
         }
     };
     let eye = centre + toward_eye * distance;
-    // RenderMan camera space: +Z forward, +Y up, +X right (`right = forward × up` in world).
-    let world_to_camera = Mat4::from_cols(
-        right.extend(0.0),
-        cam_up.extend(0.0),
-        forward.extend(0.0),
-        eye.extend(1.0),
-    )
-    .inverse();
-    let what = match view {
-        AutoView::Perspective { fov } => format!("perspective ({fov:.0}°)"),
-        AutoView::Orthographic => "orthographic".to_string(),
-        AutoView::Wide { fov } => format!("wide ({fov:.0}°)"),
-    };
+    let what = describe(view);
     AutoCamera {
-        world_to_camera,
+        world_to_camera: look_along(eye, right, cam_up, forward),
         screen_window: window,
         distance,
         description: format!(
             "automatic camera for a {what} view: {side} view of the bounds ({:.3} × {:.3} × {:.3}) from {:.3} away",
             ext.x, ext.y, ext.z, distance
+        ),
+    }
+}
+
+/// The world-to-camera transform of a camera at `eye` with world-space unit axes `right`, `up` and
+/// `forward` (RenderMan camera space: +Z forward, +Y up, +X right; `right = forward × up`).
+fn look_along(eye: Vec3, right: Vec3, up: Vec3, forward: Vec3) -> Mat4 {
+    Mat4::from_cols(
+        right.extend(0.0),
+        up.extend(0.0),
+        forward.extend(0.0),
+        eye.extend(1.0),
+    )
+    .inverse()
+}
+
+/// The view's kind for the info line: "perspective (45°)", "orthographic", "wide (180°)".
+fn describe(view: AutoView) -> String {
+    match view {
+        AutoView::Perspective { fov } => format!("perspective ({fov:.0}°)"),
+        AutoView::Orthographic => "orthographic".to_string(),
+        AutoView::Wide { fov } => format!("wide ({fov:.0}°)"),
+    }
+}
+
+/// The automatic camera of [`auto_camera`] inside `inside` (bounds of extent `ext` and radius
+/// `radius`).
+fn interior_camera(inside: &Interior, view: AutoView, ext: Vec3, radius: f32) -> AutoCamera {
+    let all_around = matches!(view, AutoView::Wide { fov } if fov >= 300.0);
+    let (eye, place) = if all_around {
+        (inside.centre_eye, "at the centre")
+    } else {
+        (inside.end_eye, "toward one end")
+    };
+    let forward = inside.along;
+    let right = forward.cross(Vec3::Y).normalize();
+    let world_to_camera = look_along(eye, right, right.cross(forward), forward);
+    let what = describe(view);
+    let axis = if forward.x != 0.0 { "+X" } else { "+Z" };
+    AutoCamera {
+        world_to_camera,
+        screen_window: None,
+        distance: radius,
+        description: format!(
+            "automatic camera for a {what} view: inside an interior (the bounds {:.3} × {:.3} × {:.3} face inward around their centre), \
+             standing {place} at ({:.3}, {:.3}, {:.3}) looking along {axis}",
+            ext.x, ext.y, ext.z, eye.x, eye.y, eye.z
         ),
     }
 }
@@ -311,7 +385,7 @@ mod tests {
     fn a_flat_asset_lying_down_is_seen_from_above_and_whole() {
         // A rug: 4 × 0.05 × 2. Looking down −Y, the rug's front (+Z) at the bottom of the image.
         let (min, max) = (Vec3::new(-2.0, 0.0, -1.0), Vec3::new(2.0, 0.05, 1.0));
-        let cam = auto_camera(min, max, AutoView::Perspective { fov: 45.0 }, 1.5);
+        let cam = auto_camera(min, max, AutoView::Perspective { fov: 45.0 }, 1.5, None);
         let forward = cam.world_to_camera.inverse().transform_vector3(Vec3::Z);
         assert!((forward - Vec3::NEG_Y).length() < 1e-5, "{forward}");
         let front = cam.world_to_camera.transform_point3(Vec3::new(0.0, 0.0, 1.0));
@@ -324,10 +398,49 @@ mod tests {
     }
 
     #[test]
+    fn an_interior_gets_a_camera_inside_looking_along_its_length() {
+        let (min, max) = (Vec3::new(-6.0, 0.0, -2.0), Vec3::new(6.0, 3.0, 2.0));
+        let inside = Interior {
+            centre_eye: Vec3::new(0.0, 1.2, 0.0),
+            end_eye: Vec3::new(-4.8, 1.2, 0.0),
+            along: Vec3::X,
+            open_above: 0.0,
+            key: None,
+        };
+        let eye_and_forward = |view| {
+            let cam = auto_camera(min, max, view, 1.5, Some(&inside));
+            let to_world = cam.world_to_camera.inverse();
+            (
+                to_world.transform_point3(Vec3::ZERO),
+                to_world.transform_vector3(Vec3::Z),
+                to_world.transform_vector3(Vec3::Y),
+                cam.description,
+            )
+        };
+        // Perspective and fisheye stand at the end eye, a full panorama at the centre; all look
+        // along +X with +Y up.
+        for (view, eye) in [
+            (AutoView::Perspective { fov: 40.0 }, inside.end_eye),
+            (AutoView::Wide { fov: 180.0 }, inside.end_eye),
+            (AutoView::Wide { fov: 360.0 }, inside.centre_eye),
+        ] {
+            let (at, forward, up, what) = eye_and_forward(view);
+            assert!((at - eye).length() < 1e-5, "{view:?}: {at}");
+            assert!((forward - Vec3::X).length() < 1e-5 && (up - Vec3::Y).length() < 1e-5);
+            assert!(what.contains("inside an interior"), "{what}");
+        }
+        // An orthographic view still frames the bounds from outside.
+        let ortho = auto_camera(min, max, AutoView::Orthographic, 1.5, Some(&inside));
+        for c in corners(ortho.world_to_camera, min, max) {
+            assert!(c.z > 0.0, "{c}");
+        }
+    }
+
+    #[test]
     fn a_wide_view_stands_closer_and_an_orthographic_one_fits_its_window() {
         let (min, max) = (Vec3::splat(-1.0), Vec3::splat(1.0));
         let dist = |v| {
-            let m: Mat4 = auto_camera(min, max, v, 1.0).world_to_camera;
+            let m: Mat4 = auto_camera(min, max, v, 1.0, None).world_to_camera;
             m.inverse().transform_point3(Vec3::ZERO).length()
         };
         let persp = dist(AutoView::Perspective { fov: 45.0 });
@@ -336,14 +449,14 @@ mod tests {
         // The cube's corners fit 140° of a fisheye: the nearest corner offsets give
         // d = max(max(|x|, |y|)/tan 70° − z) over the corners.
         assert!(fisheye > 1.0 && fisheye < 2.0, "{fisheye}");
-        let wide = auto_camera(min, max, AutoView::Wide { fov: 180.0 }, 1.0);
+        let wide = auto_camera(min, max, AutoView::Wide { fov: 180.0 }, 1.0, None);
         let t = 70f32.to_radians().tan();
         let worst = corners(wide.world_to_camera, min, max)
             .iter()
             .map(|c| (c.x / c.z).abs().max((c.y / c.z).abs()))
             .fold(0.0f32, f32::max);
         assert!(worst <= t * (1.0 + 1e-5) && worst > 0.99 * t, "{worst} vs {t}");
-        let ortho = auto_camera(min, max, AutoView::Orthographic, 2.0);
+        let ortho = auto_camera(min, max, AutoView::Orthographic, 2.0, None);
         let w = ortho.screen_window.unwrap();
         assert!((w.top - 3f32.sqrt()).abs() < 1e-5 && (w.right - 2.0 * 3f32.sqrt()).abs() < 1e-5);
         for c in corners(ortho.world_to_camera, min, max) {

@@ -14,6 +14,7 @@
 pub mod classic;
 pub mod framing;
 pub mod gltf_scene;
+pub mod interior;
 pub mod obj;
 pub mod rib;
 pub mod texture;

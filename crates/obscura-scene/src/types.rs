@@ -513,6 +513,9 @@ pub struct Scene {
     /// The world bounds `(min, max)` the scene's camera was framed on when the file has no camera of
     /// its own: the renderer frames them again for the projection it renders through.
     pub auto_camera: Option<(Vec3, Vec3)>,
+    /// Where an automatic camera stands when the geometry is closed around the bounds' centre (a
+    /// room, an atrium): [`crate::interior::probe`] of the bounds, `None` for an object.
+    pub auto_interior: Option<crate::interior::Interior>,
     /// True when the file has no light and the default sky and key light were added.
     pub auto_light: bool,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
@@ -543,6 +546,7 @@ impl Scene {
             textures: Vec::new(),
             material_maps: BTreeMap::new(),
             auto_camera: None,
+            auto_interior: None,
             auto_light: false,
             warnings: Vec::new(),
             animation_seconds: None,

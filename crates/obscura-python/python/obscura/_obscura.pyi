@@ -219,6 +219,6 @@ def render(
     progress: Optional[Callable[[int, int], Any]] = None,
 ) -> Dict[str, Any]:
     """Renders a scene (RIB, glTF, OBJ; None for the built-in one) through ``camera`` (default the
-    scene's) and returns ``beauty`` (H×W×3), ``alpha``, ``z``, ``N``, ``P``, ``cameraDirection`` and
-    ``stats``. ``progress(done, total)`` is called with tile counts; Ctrl-C raises
+    scene's) and returns ``beauty`` (H×W×3), ``alpha``, ``z``, ``N``, ``P``, ``cameraDirection``,
+    ``albedo`` (H×W×3), ``uv`` (H×W×2) and ``stats``. ``progress(done, total)`` is called with tile counts; Ctrl-C raises
     KeyboardInterrupt."""

@@ -10,6 +10,12 @@
 //! would find (the emission texture looked up there), so the two strategies see the same integrand
 //! and are weighted by the power heuristic.
 //!
+//! **Black triangles.** A triangle whose emissive map is black over all its texture coordinates
+//! ([`Texturing::emission_is_black`]) is left out of the distribution: light samples go where light
+//! is (a helmet's emissive map is black but for its lamps) and no lookup is spent on the rest. A ray
+//! that hits a left-out triangle counts its emission with weight 1, so a texel the test misjudged
+//! is still counted, once.
+//!
 //! **What is left to BSDF rays alone.** Moving instances (the sampled point would be at shutter
 //! open while the ray has its own time) and emitters with alpha cut-outs or blending (a light sample
 //! through a hole would count light that is not there): their emission keeps weight 1 when hit, as
@@ -19,7 +25,6 @@ use glam::{Affine3A, Vec3A};
 use obscura_host::distribution::Distribution1D;
 use obscura_scene::Material;
 
-use crate::material::Bsdf;
 use crate::material::textured::Texturing;
 use crate::ray::{Hit, TriangleMesh};
 
@@ -45,6 +50,8 @@ pub struct EmissiveTriangles {
     area: f32,
     /// Per instance: whether its triangles are sampled.
     sampled: Vec<bool>,
+    /// Per instance, when some of its triangles are left out (black under the emissive map): which.
+    left_out: Vec<Option<Vec<bool>>>,
 }
 
 /// One point sampled on an emissive triangle, seen from a shading point.
@@ -82,6 +89,7 @@ impl EmissiveTriangles {
     pub fn new(instances: &[EmitterCandidate<'_>], texturing: &Texturing) -> Self {
         let mut triangles = Vec::new();
         let mut sampled = vec![false; instances.len()];
+        let mut left_out = vec![None; instances.len()];
         for (i, c) in instances.iter().enumerate() {
             let emits = match c.material {
                 Material::Constant { color } => {
@@ -109,6 +117,10 @@ impl EmissiveTriangles {
                 if !(area > 0.0 && area.is_finite()) {
                     continue;
                 }
+                if texturing.emission_is_black(c.material_index, i as u32, k as u32) {
+                    left_out[i].get_or_insert_with(|| vec![false; c.mesh.triangles.len()])[k] = true;
+                    continue;
+                }
                 triangles.push(Triangle {
                     p0: q[0],
                     e1,
@@ -134,6 +146,7 @@ impl EmissiveTriangles {
             pick,
             area: total as f32,
             sampled,
+            left_out,
         }
     }
 
@@ -150,11 +163,17 @@ impl EmissiveTriangles {
     }
 
     /// The solid-angle density with which [`EmissiveTriangles::sample`] would pick the point a ray
-    /// hit on `instance` at distance `dist` with unit direction `d` and unit geometric normal `n`;
-    /// `None` when that instance is not sampled (its emission then has weight 1).
+    /// hit on triangle `primitive` of `instance` at distance `dist` with unit direction `d` and unit
+    /// geometric normal `n`; `None` when that triangle is not sampled (its emission then has weight
+    /// 1, so a triangle left out as black is still counted in full by the rays that hit it).
     #[must_use]
-    pub fn pdf(&self, instance: u32, dist: f32, d: Vec3A, n: Vec3A) -> Option<f32> {
+    pub fn pdf(&self, instance: u32, primitive: u32, dist: f32, d: Vec3A, n: Vec3A) -> Option<f32> {
         if !self.sampled.get(instance as usize).copied().unwrap_or(false) {
+            return None;
+        }
+        if let Some(Some(out)) = self.left_out.get(instance as usize)
+            && out.get(primitive as usize).copied().unwrap_or(false)
+        {
             return None;
         }
         let cos = n.dot(d).abs();
@@ -200,8 +219,7 @@ impl EmissiveTriangles {
             edges: [t.e1, t.e2],
         };
         let (material, index) = scene_materials(t.instance);
-        let surface = texturing.surface(&hit, material, index, wi, n, 0.0, false);
-        let radiance = Bsdf::new(&surface.material, surface.normal).emission() + surface.emission;
+        let radiance = texturing.emission(&hit, material, index);
         Some(EmitterSample {
             wi,
             dist,

@@ -197,11 +197,108 @@ impl Texturing {
         })
     }
 
+    /// Slot `slot` looked up at `hit`'s texture coordinates without a footprint (level 0, bilinear or
+    /// a sampler's NEAREST): what a light sample or a cut-out test reads, both at points a camera
+    /// never saw through a cone.
+    fn point_texel(&self, hit: &Hit, slot: Option<TextureSlot>) -> Option<Vec4> {
+        let slot = slot?;
+        let texture = self.textures.get(slot.texture as usize)?.as_ref()?;
+        let attrs = self.attributes.get(hit.instance as usize)?.as_ref()?;
+        let tri = *attrs.triangles.get(hit.primitive as usize)?;
+        let (uv, _) = attrs.uv(slot.uv_set as usize, tri, hit.uv)?;
+        let c = Footprint::point(uv).transformed(&slot.transform).center;
+        Some(match self.lookup {
+            TextureLookup::Footprint => texture.filter(&Footprint::point(c)),
+            TextureLookup::Point => texture.nearest(c),
+            TextureLookup::Mean => texture.texel(usize::MAX, 0, 0),
+        })
+    }
+
+    /// The linear RGBA vertex colour at `hit`, when material maps `maps` use vertex colours.
+    fn vertex_color(&self, hit: &Hit, maps: &SurfaceMaps) -> Option<Vec4> {
+        if !maps.vertex_colors {
+            return None;
+        }
+        let attrs = self.attributes.get(hit.instance as usize)?.as_ref()?;
+        let t = attrs.triangles.get(hit.primitive as usize)?;
+        let c = attrs.colors.as_ref()?;
+        let (b1, b2) = hit.uv;
+        Some(c[t[0] as usize] * (1.0 - b1 - b2) + c[t[1] as usize] * b1 + c[t[2] as usize] * b2)
+    }
+
+    /// The radiance a surface emits at `hit`, for a point sampled on an emitter (light sampling): the
+    /// emissive factor times the emissive map, or an untextured `PxrConstant`'s colour — what
+    /// [`Texturing::surface`] and the BSDF give a ray without a footprint. A light sample is taken at
+    /// every path vertex, so it reads the emissive map alone, not the base colour,
+    /// metallic–roughness and normal maps a full surface needs.
+    #[must_use]
+    pub fn emission(&self, hit: &Hit, material: Material, index: Option<u32>) -> Vec3A {
+        let Some(maps) = index.and_then(|i| self.maps.get(&i)) else {
+            return match material {
+                Material::Constant { color } => super::color(color),
+                _ => Vec3A::ZERO,
+            };
+        };
+        let emission = super::color(maps.emissive_factor);
+        if emission == Vec3A::ZERO {
+            return emission;
+        }
+        match self.point_texel(hit, maps.emissive) {
+            Some(t) => emission * Vec3A::new(t.x, t.y, t.z),
+            None => emission,
+        }
+    }
+
+    /// True when material `index` emits nothing anywhere on triangle `primitive` of instance
+    /// `instance`: it has an emissive map, and the map is black over the triangle's texture
+    /// coordinates ([`Texture::is_black_over`] of their box after the slot's transform). Light
+    /// sampling leaves such triangles out (a helmet's emissive map is black but for its lamps).
+    #[must_use]
+    pub fn emission_is_black(&self, index: u32, instance: u32, primitive: u32) -> bool {
+        let black = || -> Option<bool> {
+            let slot = self.maps.get(&index)?.emissive?;
+            let texture = self.textures.get(slot.texture as usize)?.as_ref()?;
+            let attrs = self.attributes.get(instance as usize)?.as_ref()?;
+            let tri = *attrs.triangles.get(primitive as usize)?;
+            let (_, corners) = attrs.uv(slot.uv_set as usize, tri, (0.0, 0.0))?;
+            let corners = corners.map(|c| Footprint::point(c).transformed(&slot.transform).center);
+            let lo = corners[0].min(corners[1]).min(corners[2]);
+            let hi = corners[0].max(corners[1]).max(corners[2]);
+            Some(texture.is_black_over(lo, hi))
+        };
+        black().unwrap_or(false)
+    }
+
+    /// The probability that the surface is there at `hit` (material index `index`): 1 for opaque
+    /// materials without reading anything, else the base colour's alpha (factor, map, vertex colour)
+    /// times the opacity map, through the material's alpha mode — [`SurfacePoint::opacity`] for a
+    /// ray without a footprint. Every hit of a scene with cut-outs is tested, shadow rays' too.
+    #[must_use]
+    pub fn opacity(&self, hit: &Hit, index: Option<u32>) -> f32 {
+        let Some(maps) = index.and_then(|i| self.maps.get(&i)) else {
+            return 1.0;
+        };
+        if maps.alpha == AlphaMode::Opaque {
+            return 1.0;
+        }
+        let mut alpha = maps.base_color_factor[3];
+        if let Some(t) = self.point_texel(hit, maps.base_color) {
+            alpha *= t.w;
+        }
+        if let Some(c) = self.vertex_color(hit, maps) {
+            alpha *= c.w;
+        }
+        if let Some(t) = self.point_texel(hit, maps.opacity) {
+            alpha *= t.x;
+        }
+        alpha_coverage(maps.alpha, alpha)
+    }
+
     /// The surface at `hit` for a material `material` (index `index`), seen along unit `direction`
     /// with shading normal `n_s` (facing the viewer) by a cone of radius `cone_radius` (world units)
     /// at the hit. `primary` is true for the camera ray's hit: its lookups are filtered over the
     /// footprint's ellipse (EWA); later hits, whose cones have widened, over a circle of the same
-    /// area (trilinear), as renderers do for indirect rays.
+    /// area on the nearest mip level ([`Texture::bilinear_at`]), as renderers do for indirect rays.
     #[must_use]
     #[allow(clippy::too_many_arguments)]
     pub fn surface(
@@ -262,7 +359,7 @@ impl Texturing {
                 TextureLookup::Footprint if primary => texture.filter(&footprint),
                 TextureLookup::Footprint => {
                     let r = (footprint.a.length() * footprint.b.length()).sqrt();
-                    texture.trilinear(footprint.center, r)
+                    texture.bilinear_at(footprint.center, r)
                 }
                 TextureLookup::Point => texture.nearest(footprint.center),
                 TextureLookup::Mean => texture.texel(usize::MAX, 0, 0),
@@ -272,12 +369,8 @@ impl Texturing {
         if let Some(t) = lookup(maps.base_color) {
             base *= t;
         }
-        if maps.vertex_colors
-            && let (Some(a), Some(t)) = (attrs, tri)
-            && let Some(c) = &a.colors
-        {
-            let (b1, b2) = hit.uv;
-            base *= c[t[0] as usize] * (1.0 - b1 - b2) + c[t[1] as usize] * b1 + c[t[2] as usize] * b2;
+        if let Some(c) = self.vertex_color(hit, maps) {
+            base *= c;
         }
         let (mut metallic, mut roughness) = (maps.metallic, maps.roughness);
         if let Some(t) = lookup(maps.metallic_roughness) {
@@ -330,25 +423,31 @@ impl Texturing {
         if let Some(t) = lookup(maps.opacity) {
             base.w *= t.x;
         }
-        let opacity = match maps.alpha {
-            AlphaMode::Opaque => 1.0,
-            AlphaMode::Mask(cutoff) => {
-                if base.w >= cutoff {
-                    1.0
-                } else {
-                    0.0
-                }
-            }
-            AlphaMode::Blend => unit(base.w),
-        };
         SurfacePoint {
             material,
             normal,
             emission,
             albedo: Vec3A::from(rgb).max(Vec3A::ZERO),
             uv: uv0,
-            opacity,
+            opacity: alpha_coverage(maps.alpha, base.w),
         }
+    }
+}
+
+/// The probability that a surface of alpha `alpha` is there under `mode`: 1 when opaque, 0 or 1
+/// against a MASK's cutoff, the alpha itself (in `[0, 1]`) when blended.
+fn alpha_coverage(mode: AlphaMode, alpha: f32) -> f32 {
+    match mode {
+        AlphaMode::Opaque => 1.0,
+        AlphaMode::Mask(cutoff) => {
+            if alpha >= cutoff {
+                1.0
+            } else {
+                0.0
+            }
+        }
+        AlphaMode::Blend if alpha.is_finite() => alpha.clamp(0.0, 1.0),
+        AlphaMode::Blend => 0.0,
     }
 }
 

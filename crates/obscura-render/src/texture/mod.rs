@@ -20,7 +20,7 @@
 //!   inside the ellipse widened by one texel (the reconstruction term); every texel centre with
 //!   `Q < 1` is weighted by `exp(−2 Q)` (tabulated in 128 steps) and the weights normalised.
 //!
-//! A footprint whose axes differ by less than 1.5× is filtered trilinearly instead: bilinear on
+//! A footprint whose axes differ by less than 2× is filtered trilinearly instead: bilinear on
 //! the two levels around `ℓ = L − 1 + log₂(1.22·√(ab))`, where a texel is 1.22 footprint radii and the
 //! bilinear tent spreads like the Gaussian (σ = 0.41 texel = r/2); EWA costs several times more for a
 //! result within a few per cent.
@@ -67,9 +67,17 @@ impl Level {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (x0, y0) = (x0 as i64, y0 as i64);
-        let t = |dx: i64, dy: i64| self.texel(x0 + dx, y0 + dy, wrap);
-        let top = t(0, 0).lerp(t(1, 0), fx);
-        let bottom = t(0, 1).lerp(t(1, 1), fx);
+        // Each row and column index wrapped once, not once per texel.
+        let (xa, xb) = (
+            wrap_index(x0, self.width, wrap.0),
+            wrap_index(x0 + 1, self.width, wrap.0),
+        );
+        let w = self.width as usize;
+        let ya = wrap_index(y0, self.height, wrap.1) * w;
+        let yb = wrap_index(y0 + 1, self.height, wrap.1) * w;
+        let t = |i: usize| self.texels.get(i);
+        let top = t(ya + xa).lerp(t(ya + xb), fx);
+        let bottom = t(yb + xa).lerp(t(yb + xb), fx);
         top.lerp(bottom, fy)
     }
 
@@ -122,8 +130,8 @@ fn box_weights(from: u32, to: u32) -> Vec<Vec<(usize, f32)>> {
 }
 
 /// Footprints whose axes differ by less than this ratio are filtered trilinearly, at a quarter of
-/// EWA's cost and within a few per cent of its result.
-const ISOTROPIC: f32 = 1.5;
+/// EWA's cost and within a few per cent of its result (a surface seen within 60° of head-on).
+const ISOTROPIC: f32 = 2.0;
 
 /// The texel size, in footprint radii, at which a bilinear tent (σ ≈ 0.41 texel) spreads like the
 /// footprint's Gaussian (σ = r/2).
@@ -302,15 +310,13 @@ impl Texture {
     /// The texture filtered trilinearly over a round footprint of radius `radius` (texture units)
     /// at `c`: bilinear on the two levels where a texel is about 1.22 radii, so the tent's spread
     /// matches the footprint's Gaussian (σ = r/2 against 0.41 texel). What [`Texture::filter`] does
-    /// for near-circular footprints, and what secondary rays use whatever the footprint's shape.
+    /// for near-circular footprints.
     #[must_use]
     pub fn trilinear(&self, c: Vec2, radius: f32) -> Vec4 {
         if !c.is_finite() {
             return Vec4::ZERO;
         }
-        let top = (self.levels.len() - 1) as f32;
-        let lod = top + (TENT_TEXELS_PER_RADIUS * radius).log2();
-        let lod = if lod.is_nan() { 0.0 } else { lod.clamp(0.0, top) };
+        let lod = self.tent_lod(radius);
         let l0 = lod.floor() as usize;
         let f = lod - l0 as f32;
         let v0 = self.levels[l0].bilinear(c, self.wrap);
@@ -318,6 +324,57 @@ impl Texture {
             return v0;
         }
         v0.lerp(self.levels[l0 + 1].bilinear(c, self.wrap), f)
+    }
+
+    /// The texture over a round footprint of radius `radius` (texture units) at `c`, on one level:
+    /// bilinear on the level nearest to [`Texture::trilinear`]'s (rounded, not blended). What
+    /// secondary rays read: their cones are already wide, and the level's half-step of blur is far
+    /// below what a bounce averages over, at half trilinear's texel reads.
+    #[must_use]
+    pub fn bilinear_at(&self, c: Vec2, radius: f32) -> Vec4 {
+        if !c.is_finite() {
+            return Vec4::ZERO;
+        }
+        self.levels[self.tent_lod(radius).round() as usize].bilinear(c, self.wrap)
+    }
+
+    /// The (fractional) mip level where a texel is [`TENT_TEXELS_PER_RADIUS`] footprint radii of
+    /// `radius` (texture units), within the pyramid; 0 for a radius that is not a number.
+    fn tent_lod(&self, radius: f32) -> f32 {
+        let top = (self.levels.len() - 1) as f32;
+        let lod = top + (TENT_TEXELS_PER_RADIUS * radius).log2();
+        if lod.is_nan() { 0.0 } else { lod.clamp(0.0, top) }
+    }
+
+    /// True when every texel the box `lo..hi` (texture coordinates) can read is black (RGB 0), judged
+    /// on the level where the box, grown by one level-0 texel for bilinear reconstruction, spans at
+    /// most 8 texels (a coarser texel is the average of the finer ones it covers, so it is black
+    /// only where they all are, up to 8-bit rounding). False for a box that is not finite or spans
+    /// more than the level can check.
+    #[must_use]
+    pub fn is_black_over(&self, lo: Vec2, hi: Vec2) -> bool {
+        let base = &self.levels[0];
+        let size0 = Vec2::new(base.width as f32, base.height as f32);
+        let (lo, hi) = (lo - size0.recip(), hi + size0.recip());
+        if !(lo.is_finite() && hi.is_finite()) {
+            return false;
+        }
+        let span = ((hi - lo) * size0).max_element();
+        let top = self.levels.len() - 1;
+        let level = ((span / 8.0).log2().ceil().max(0.0) as usize).min(top);
+        let l = &self.levels[level];
+        let size = Vec2::new(l.width as f32, l.height as f32);
+        let (x0, y0) = ((lo.x * size.x).floor() as i64, (lo.y * size.y).floor() as i64);
+        let (x1, y1) = ((hi.x * size.x).floor() as i64, (hi.y * size.y).floor() as i64);
+        if x1 - x0 > 16 || y1 - y0 > 16 {
+            return false;
+        }
+        (y0..=y1).all(|y| {
+            (x0..=x1).all(|x| {
+                let t = l.texel(x, y, self.wrap);
+                t.x <= 0.0 && t.y <= 0.0 && t.z <= 0.0
+            })
+        })
     }
 
     /// EWA over level `level` (see the module documentation).
@@ -340,19 +397,32 @@ impl Texture {
         let half_y = 2.0 * (qa * det).sqrt() / det;
         // Bound the work for footprints the level cannot hold (a miscomputed huge ellipse).
         let (half_x, half_y) = (half_x.min(size.x.max(8.0)), half_y.min(size.y.max(8.0)));
-        let (x0, x1) = ((s.x - half_x).ceil() as i64, (s.x + half_x).floor() as i64);
         let (y0, y1) = ((s.y - half_y).ceil() as i64, (s.y + half_y).floor() as i64);
         let mut sum = Vec4::ZERO;
         let mut weight = 0.0f32;
+        let w = l.width as usize;
         for y in y0..=y1 {
             let dy = y as f32 - s.y;
+            // The row's texels inside the ellipse: A·dx² + B·dy·dx + C·dy² < 1 between the roots,
+            // so a thin, tilted ellipse costs its own area rather than its bounding box's.
+            let (b, c) = (qb * dy, qc * dy * dy - 1.0);
+            let disc = b * b - 4.0 * qa * c;
+            if disc.is_nan() || disc <= 0.0 {
+                continue;
+            }
+            let root = disc.sqrt();
+            let lo = (-b - root) / (2.0 * qa);
+            let hi = (-b + root) / (2.0 * qa);
+            let x0 = ((s.x + lo.max(-half_x)).ceil()) as i64;
+            let x1 = ((s.x + hi.min(half_x)).floor()) as i64;
+            let row = wrap_index(y, l.height, self.wrap.1) * w;
             for x in x0..=x1 {
                 let dx = x as f32 - s.x;
                 let q = qa * dx * dx + qb * dx * dy + qc * dy * dy;
                 if q < 1.0 {
-                    let w = gaussian(q);
-                    sum += l.texel(x, y, self.wrap) * w;
-                    weight += w;
+                    let g = gaussian(q);
+                    sum += l.texels.get(row + wrap_index(x, l.width, self.wrap.0)) * g;
+                    weight += g;
                 }
             }
         }

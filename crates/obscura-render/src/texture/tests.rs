@@ -132,3 +132,33 @@ fn a_texture_transform_moves_the_centre_and_scales_the_axes() {
     assert_eq!(t.a, Vec2::new(0.2, 0.0));
     assert!((t.b - Vec2::new(0.0, 0.6)).length() < 1e-6);
 }
+
+#[test]
+fn a_box_is_black_only_where_no_lookup_can_reach_a_lit_texel() {
+    // 256² black with one lit texel at (200, 40); texel centres at (i + ½)/256.
+    let img = image(256, 256, |x, y| {
+        let v = if (x, y) == (200, 40) { 1.0 } else { 0.0 };
+        [v, v, v, 1.0]
+    });
+    let tex = Texture::new(img, (Wrap::Repeat, Wrap::Repeat), false);
+    let at = |x: f32, y: f32| Vec2::new(x, y) / 256.0;
+    // Far from it, on level 0 and on coarse levels (a box of 100 texels is judged on level 4).
+    assert!(tex.is_black_over(at(10.0, 10.0), at(20.0, 20.0)));
+    assert!(tex.is_black_over(at(10.0, 100.0), at(110.0, 200.0)));
+    // Containing it, or within the one texel a bilinear lookup reaches beyond the box.
+    assert!(!tex.is_black_over(at(190.0, 30.0), at(210.0, 50.0)));
+    assert!(!tex.is_black_over(at(201.2, 40.2), at(202.0, 40.8)));
+    // A lit texel is found on a coarse level too: its average is not 0.
+    assert!(!tex.is_black_over(at(100.0, 0.0), at(230.0, 120.0)));
+    // Repeat wrapping: a box left of 0 reads the right edge.
+    let edge = image(
+        16,
+        16,
+        |x, _| if x == 15 { [1.0; 4] } else { [0.0, 0.0, 0.0, 1.0] },
+    );
+    let tex = Texture::new(edge, (Wrap::Repeat, Wrap::Repeat), false);
+    assert!(!tex.is_black_over(Vec2::new(-0.02, 0.4), Vec2::new(0.01, 0.5)));
+    assert!(tex.is_black_over(Vec2::new(0.3, 0.4), Vec2::new(0.5, 0.5)));
+    // Not finite: never black.
+    assert!(!tex.is_black_over(Vec2::splat(f32::NAN), Vec2::ONE));
+}

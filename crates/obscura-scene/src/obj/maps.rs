@@ -109,8 +109,9 @@ fn slot(
 }
 
 /// The maps of one MTL material (index `index` in the scene) when it names any texture, else
-/// `None`. Factors: `Kd` (0.18 grey when absent; 1 when only `map_Kd` gives the colour would be the
-/// other reading, but the MTL specification multiplies the map by `Kd`), `Ks` as the specular colour,
+/// `None`. Factors: `Kd` (the map is multiplied by it, as the MTL specification says; absent, 1
+/// when `map_Kd` gives the colour, as Blender's importer reads it, else 0.18 grey), `Ks` as the
+/// specular colour,
 /// `Ke` as emission (1 when only `map_Ke` is given), `d` as alpha (BLEND below 1 or with `map_d`).
 pub(super) fn material_maps(
     scene: &mut Scene,
@@ -137,7 +138,8 @@ pub(super) fn material_maps(
         return None;
     }
     let colour = |c: [f32; 3]| c.map(|x| if x.is_finite() { x.max(0.0) } else { 0.0 });
-    let kd = m.diffuse.map(colour).unwrap_or([0.18; 3]);
+    let absent = if m.diffuse_texture.is_some() { 1.0 } else { 0.18 };
+    let kd = m.diffuse.map(colour).unwrap_or([absent; 3]);
     let ks = m.specular.map(colour).unwrap_or([0.0; 3]);
     let ke = m.emissive.map(colour);
     let d = m

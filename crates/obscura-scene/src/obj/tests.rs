@@ -216,6 +216,53 @@ fn obj_gets_the_default_sky_and_key_light() {
     assert!(scene.auto_light && scene.auto_camera.is_some());
 }
 
+#[test]
+fn a_closed_room_without_lights_gets_a_lamp_inside() {
+    // The cube of CUBE stretched to a 4 × 2.5 × 3 room, each face wound the other way and its
+    // normals turned: it faces in.
+    let room: String = CUBE
+        .lines()
+        .map(|l| match l.split_whitespace().collect::<Vec<_>>().as_slice() {
+            ["v", x, y, z] => format!(
+                "v {} {} {}",
+                4.0 * x.parse::<f32>().unwrap(),
+                2.5 * y.parse::<f32>().unwrap(),
+                3.0 * z.parse::<f32>().unwrap()
+            ),
+            ["f", a, b, c, d] => format!("f {d} {c} {b} {a}"),
+            ["vn", x, y, z] => {
+                let n = |c: &str| -c.parse::<f32>().unwrap();
+                format!("vn {} {} {}", n(x), n(y), n(z))
+            }
+            _ => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let dir = tempfile::tempdir().unwrap();
+    write(&dir, "cube.mtl", MTL);
+    let scene = load_obj(&write(&dir, "room.obj", &room), camera()).unwrap();
+    let inside = scene.auto_interior.expect("a room facing in is an interior");
+    assert_eq!(inside.open_above, 0.0);
+    let [
+        Light::Dome { .. },
+        Light::Distant { .. },
+        Light::Sphere {
+            transform, intensity, ..
+        },
+    ] = scene.lights.as_slice()
+    else {
+        panic!("{:?}", scene.lights);
+    };
+    // Under the ceiling (80 % of 2.5) over the centre eye, 4 % of the 3-unit side in radius.
+    let at = transform.transform_point3(glam::Vec3::ZERO);
+    assert!((at - glam::Vec3::new(2.0, 2.0, 1.5)).length() < 1e-5, "{at}");
+    let diameter = transform.transform_vector3(glam::Vec3::X).length();
+    assert!((diameter - 0.24).abs() < 1e-5 && *intensity > 100.0, "{diameter}");
+    // The cube wound outward (CUBE itself) is an object: no interior, no lamp
+    // (obj_gets_the_default_sky_and_key_light).
+    assert!(load_cube(Some(MTL)).auto_interior.is_none());
+}
+
 fn error_of(obj: &str, mtl: Option<&str>) -> String {
     let dir = tempfile::tempdir().unwrap();
     if let Some(mtl) = mtl {
@@ -439,4 +486,21 @@ fn obj_texture_maps_and_coordinates_are_read_with_t_flipped() {
     assert!(maps.normal.is_some() && maps.opacity.is_some());
     assert_eq!(maps.alpha, crate::texture::AlphaMode::Blend);
     assert!(maps.diffuse_only);
+}
+
+#[test]
+fn a_map_kd_without_kd_shows_the_texture_as_it_is() {
+    // Game-map exporters (Cube 2's writeobj) write map_Kd alone: the texture is the colour, not
+    // 0.18 of it; a material with neither keeps the 0.18 grey.
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        &dir,
+        "m.mtl",
+        "newmtl tex\nmap_Kd wall.png\nnewmtl bare\nKs 0 0 0\nmap_d a.png\n",
+    );
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nusemtl tex\nf 1/1 2/2 3/3\nusemtl bare\nf 1/1 3/3 2/2\n";
+    let scene = load_obj(&write(&dir, "m.obj", obj), camera()).unwrap();
+    let factor = |i: usize| scene.material_maps[&scene.objects[i].material].base_color_factor;
+    assert_eq!(factor(0), [1.0; 4]);
+    assert_eq!(factor(1), [0.18, 0.18, 0.18, 1.0]);
 }

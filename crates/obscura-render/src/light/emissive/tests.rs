@@ -178,5 +178,5 @@ fn moving_emitters_and_non_emitters_are_not_sampled() {
     ];
     let e = EmissiveTriangles::new(&candidates, &Texturing::default());
     assert!(e.is_empty());
-    assert_eq!(e.pdf(0, 1.0, Vec3A::Y, Vec3A::Y), None);
+    assert_eq!(e.pdf(0, 0, 1.0, Vec3A::Y, Vec3A::Y), None);
 }
