@@ -67,6 +67,7 @@ mod options;
 mod patch;
 mod pattern;
 mod request;
+mod searchpath;
 mod shading;
 mod teapot;
 mod transform;
@@ -419,6 +420,8 @@ struct Reader {
     retained: objects::Retained,
     /// `Pattern` handles read so far.
     patterns: pattern::Patterns,
+    /// `Option "searchpath"`.
+    search: searchpath::SearchPaths,
 }
 
 /// An `ArchiveBegin` block being read.
@@ -459,6 +462,7 @@ impl Reader {
             classic_state: classic_shaders::ClassicState::default(),
             retained: objects::Retained::default(),
             patterns: pattern::Patterns::new(),
+            search: searchpath::SearchPaths::default(),
         }
     }
 
@@ -659,7 +663,9 @@ impl Reader {
         if let Some(commands) = self.inline_archives.get(file.as_str()).cloned() {
             return self.run_commands(&commands, r.file, r.base, r.depth + 1);
         }
-        let path = r.resolve(file);
+        let path = self
+            .find_file(searchpath::Kind::Archive, r, file)
+            .unwrap_or_else(|| r.resolve(file));
         let bytes =
             read_rib_bytes(&path).map_err(|e| r.err(format!("ReadArchive \"{}\": {e}", path.display())))?;
         let name = path.display().to_string();
