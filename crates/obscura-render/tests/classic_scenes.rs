@@ -129,10 +129,16 @@ fn paintedplastic_paints_the_patch_with_its_texels_in_the_ris_orientation() {
 #[test]
 fn a_tex_file_that_is_not_an_image_is_a_located_warning_and_plastic() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("pixar.tex"), b"not a TIFF: Pixar's own texture format").unwrap();
+    std::fs::write(
+        dir.path().join("pixar.tex"),
+        b"not a TIFF: Pixar's own texture format",
+    )
+    .unwrap();
     let (albedo, warnings) = painted_albedo(
         dir.path(),
-        &painted_patch("Color [0.5 0.25 1]\nSurface \"paintedplastic\" \"Kd\" [1] \"texturename\" \"pixar.tex\""),
+        &painted_patch(
+            "Color [0.5 0.25 1]\nSurface \"paintedplastic\" \"Kd\" [1] \"texturename\" \"pixar.tex\"",
+        ),
     );
     assert_eq!(warnings.len(), 1, "{warnings:?}");
     assert!(

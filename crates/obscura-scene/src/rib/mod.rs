@@ -36,7 +36,8 @@
 //! Errors ([`RibError`]) stop the reading and name the file, the line of the request and what was
 //! expected. Unknown requests, unknown parameters and unsupported attributes, hiders, lights, Bxdfs and
 //! subdivision tags are skipped with a warning `file:line: …` in [`Scene::warnings`]. Relative paths
-//! (`ReadArchive`, `Display`, `lightColorMap`) resolve against the directory of the file that names them.
+//! (`ReadArchive`, `Display`, `lightColorMap`, textures) resolve against the directory of the file that
+//! names them; `ReadArchive` and classic textures look through `Option "searchpath"` first.
 //!
 //! [`Matrix4`]: obscura_sdk::Matrix4
 //! [`Object::transform`]: crate::types::Object::transform

@@ -335,7 +335,9 @@ fn paintedplastic_without_its_texture_file_warns_where_and_stays_plastic() {
         .find(|w| w.contains("grid.tif"))
         .unwrap_or_else(|| panic!("{:?}", scene.warnings));
     assert!(
-        warning.starts_with("t.rib:2: Surface \"paintedplastic\": texture \"grid.tif\" not found (looked in /base)"),
+        warning.starts_with(
+            "t.rib:2: Surface \"paintedplastic\": texture \"grid.tif\" not found (looked in /base)"
+        ),
         "{warning}"
     );
     assert!(scene.textures.is_empty() && scene.material_maps.is_empty());
@@ -362,7 +364,10 @@ fn paintedplastic_finds_its_texture_through_the_searchpath_and_paints_the_diffus
         scene.textures[0].source,
         ImageSource::File(dir.path().join("maps").join("grid.tif"))
     );
-    assert_eq!(scene.textures[0].used_by, "t.rib:4: Surface \"paintedplastic\" \"texturename\"");
+    assert_eq!(
+        scene.textures[0].used_by,
+        "t.rib:4: Surface \"paintedplastic\" \"texturename\""
+    );
     let (a, b, c) = (
         scene.objects[0].material,
         scene.objects[1].material,
@@ -383,6 +388,14 @@ fn paintedplastic_finds_its_texture_through_the_searchpath_and_paints_the_diffus
     // (s, 1 − t) coordinates are read back at (s, t).
     assert_eq!(slot.transform, [1.0, 0.0, 0.0, 0.0, -1.0, 1.0]);
     assert!(!scene.material_maps.contains_key(&c));
+    // A sphere has no texture coordinates: said once.
+    let no_st: Vec<_> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("texture coordinates"))
+        .collect();
+    assert_eq!(no_st.len(), 1, "{:?}", scene.warnings);
+    assert!(no_st[0].starts_with("t.rib:5: Sphere: "), "{no_st:?}");
 }
 
 #[test]
@@ -406,15 +419,26 @@ fn patch_meshes_carry_their_texture_coordinates() {
     };
     assert_eq!(
         st(0),
-        vec![[0.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.5, 1.0], [0.5, 0.0, 1.0, 0.0, 0.5, 1.0, 1.0, 1.0]]
+        vec![
+            [0.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.5, 1.0],
+            [0.5, 0.0, 1.0, 0.0, 0.5, 1.0, 1.0, 1.0]
+        ]
     );
     assert_eq!(
         st(1),
-        vec![[0.0, 0.0, 2.0, 0.0, 0.0, 1.0, 2.0, 1.0], [2.0, 0.0, 4.0, 0.0, 2.0, 1.0, 4.0, 1.0]]
+        vec![
+            [0.0, 0.0, 2.0, 0.0, 0.0, 1.0, 2.0, 1.0],
+            [2.0, 0.0, 4.0, 0.0, 2.0, 1.0, 4.0, 1.0]
+        ]
     );
     // Periodic in u: three patches, the last closing on the first corner.
     assert_eq!(st(2).len(), 3);
     assert_eq!(st(2)[2], [2.0, 0.0, 0.0, 0.0, 2.0, 1.0, 0.0, 1.0]);
-    let e = fail("WorldBegin\nPatch \"bilinear\" \"P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"st\" [0 0 1 0 0 1]\nWorldEnd\n");
-    assert!(e.starts_with("t.rib:2: ") && e.contains("4 finite (s, t) pairs expected"), "{e}");
+    let e = fail(
+        "WorldBegin\nPatch \"bilinear\" \"P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"st\" [0 0 1 0 0 1]\nWorldEnd\n",
+    );
+    assert!(
+        e.starts_with("t.rib:2: ") && e.contains("4 finite (s, t) pairs expected"),
+        "{e}"
+    );
 }
