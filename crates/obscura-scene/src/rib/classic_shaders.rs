@@ -499,9 +499,14 @@ impl Reader {
         let light = match kind {
             "ambientlight" => Light::Ambient { color, intensity },
             "distantlight" | "spotlight" if axis == Vec3::ZERO => {
-                return Err(r.err(format!(
-                    "LightSource \"{kind}\": \"from\" and \"to\" are the same point; the light has no direction"
-                )));
+                // The spec's shader normalises a zero vector: its light goes nowhere.
+                self.warn(
+                    r,
+                    format!(
+                        "LightSource \"{kind}\": \"from\" and \"to\" are the same point, so the light has no direction; left out"
+                    ),
+                );
+                return Ok(());
             }
             "distantlight" => Light::Distant {
                 color,

@@ -442,3 +442,18 @@ fn patch_meshes_carry_their_texture_coordinates() {
         "{e}"
     );
 }
+
+#[test]
+fn a_distant_light_without_a_direction_is_left_out_with_a_warning() {
+    // `"to" [0 0 0]` with the default `"from"`: the spec's shader would light along a zero vector.
+    let scene = ok(
+        "WorldBegin\nLightSource \"distantlight\" 1 \"to\" [1 0 0]\nLightSource \"distantlight\" 2 \"to\" [0 0 0]\nSphere 1 -1 1 360\nWorldEnd\n",
+    );
+    assert_eq!(scene.lights.len(), 1);
+    assert!(
+        scene.warnings.iter().any(|w| w
+            .starts_with("t.rib:3: LightSource \"distantlight\": \"from\" and \"to\" are the same point")),
+        "{:?}",
+        scene.warnings
+    );
+}
