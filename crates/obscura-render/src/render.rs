@@ -422,6 +422,9 @@ pub(crate) fn camera_motion(
     Ok(Motion::new(&camera_to_world))
 }
 
+/// A diced object: its triangles and, for primitives that carry them, each vertex's `(s, t)`.
+type Diced = (TriangleMesh, Option<Vec<Vec2>>);
+
 /// Every object of `scene` diced (in parallel) at the rate the projection's DicingHint and FieldOfView
 /// ask for, seen from the camera at shutter open.
 ///
@@ -432,9 +435,9 @@ fn dice_objects(
     props: &Properties,
     world_to_camera_open: Affine3A,
     max_triangles: u64,
-) -> Result<Vec<(TriangleMesh, Option<Vec<Vec2>>)>, RenderError> {
+) -> Result<Vec<Diced>, RenderError> {
     let budget = TriangleBudget::new(max_triangles);
-    let diced: Vec<Result<(TriangleMesh, Option<Vec<Vec2>>), RenderError>> = scene
+    let diced: Vec<Result<Diced, RenderError>> = scene
         .objects
         .par_iter()
         .map(|o| {
