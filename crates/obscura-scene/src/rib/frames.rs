@@ -23,7 +23,7 @@ use std::path::PathBuf;
 
 use super::lex::{BinaryAt, Value};
 use super::request::Req;
-use super::transform::{Ctm, Op};
+use super::transform::{BlockKind, Ctm, Op};
 use super::{Reader, RibError, classic_shaders, pattern, searchpath};
 use crate::types::{Object, Scene};
 
@@ -189,7 +189,9 @@ impl Reader {
         if let Some(at) = &self.world {
             return Err(r.err(format!("WorldBegin: the world block was already begun at {at}")));
         }
-        if let Some(b) = self.blocks.last() {
+        // Exporters of the time (MTOR, Houdini) wrap the camera's motion and the world in one
+        // TransformBegin/TransformEnd, which RenderMan accepts: only attribute blocks must be closed.
+        if let Some(b) = self.blocks.iter().rev().find(|b| b.kind != BlockKind::Transform) {
             return Err(r.err(format!(
                 "WorldBegin inside {} (at {}:{}): close it first",
                 b.kind.begin(),
@@ -197,6 +199,7 @@ impl Reader {
                 b.line
             )));
         }
+        self.world_blocks = self.blocks.len();
         self.before_world = Some(self.save());
         self.settle_camera(r)?;
         self.store_camera_transform();
@@ -223,7 +226,7 @@ impl Reader {
     /// `WorldEnd`: every attribute and transform block must be closed; the world becomes an image and
     /// the options return to what they were at `WorldBegin`.
     pub(super) fn world_end(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        if let Some(b) = self.blocks.last() {
+        if let Some(b) = self.blocks[self.world_blocks.min(self.blocks.len())..].last() {
             return Err(r.err(format!(
                 "WorldEnd: {} at {}:{} has no matching {}",
                 b.kind.begin(),

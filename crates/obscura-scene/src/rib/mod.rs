@@ -387,6 +387,8 @@ struct Reader {
     motion: Option<MotionBlock>,
     /// `file:line` of `WorldBegin` once read.
     world: Option<String>,
+    /// How many blocks were open at `WorldBegin` (transform blocks may enclose a world).
+    world_blocks: usize,
     /// `Declare`d names → full declarations (`fov` → `float fov`).
     declared: HashMap<String, String>,
     /// Attributes already warned about (each is warned about once).
@@ -446,6 +448,7 @@ impl Reader {
             blocks: Vec::new(),
             motion: None,
             world: None,
+            world_blocks: 0,
             declared: HashMap::new(),
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),

@@ -337,9 +337,10 @@ impl Reader {
             _ => Err(r.err(format!("PatchMesh: {what} must be a positive integer"))),
         };
         let (nu, nv) = (count(nu, "nu")?, count(nv, "nv")?);
+        // `wrap`/`nowrap` are the RenderMan Interface's older names (RI_WRAP, RI_NOWRAP in ri.h).
         let wrap = |w: &str| match w {
-            "periodic" => Ok(true),
-            "nonperiodic" => Ok(false),
+            "periodic" | "wrap" => Ok(true),
+            "nonperiodic" | "nowrap" => Ok(false),
             other => Err(r.err(format!(
                 "PatchMesh: wrap \"{other}\" is not \"periodic\" or \"nonperiodic\""
             ))),

@@ -457,3 +457,25 @@ fn a_distant_light_without_a_direction_is_left_out_with_a_warning() {
         scene.warnings
     );
 }
+
+#[test]
+fn older_wrap_names_and_empty_points_are_read() {
+    // RI_WRAP/RI_NOWRAP spell periodic/nonperiodic in older scenes; a particle frame without
+    // particles writes `Points "P" []`.
+    let scene = ok(
+        "WorldBegin\nPatchMesh \"bilinear\" 3 \"wrap\" 2 \"nowrap\" \"P\" [0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0]\nPoints \"P\" []\nWorldEnd\n",
+    );
+    let Shape::Patches(p) = &scene.objects[0].shape else {
+        panic!("patches");
+    };
+    assert_eq!(p.len(), 3, "periodic in u: as many patches as points");
+    assert_eq!(scene.objects.len(), 1);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w == "t.rib:3: Points: \"P\" is empty; nothing to draw"),
+        "{:?}",
+        scene.warnings
+    );
+}

@@ -239,3 +239,31 @@ fn objects_defined_in_a_world_are_freed_at_its_end() {
     assert_eq!(e.line, 12, "{e}");
     assert!(e.message.contains("\"inner\""), "{e}");
 }
+
+#[test]
+fn a_transform_block_may_enclose_the_camera_and_the_world() {
+    // As MTOR and Houdini wrote them: the camera's motion and the world inside one transform block.
+    let f = frames(
+        "FrameBegin 1\nTransformBegin\nTranslate 0 0 5\nWorldBegin\nTransformBegin\nSphere 1 -1 1 360\nTransformEnd\nWorldEnd\nTransformEnd\nFrameEnd\n",
+    );
+    assert_eq!(f.len(), 1);
+    assert_eq!(f[0].scene.objects.len(), 1);
+    let at = |text: &str| {
+        parse_bytes_frames(text.as_bytes(), "t.rib", Path::new(HERE))
+            .unwrap_err()
+            .to_string()
+    };
+    // Attribute blocks still may not, and the world may not close a block begun before it.
+    assert!(
+        at("AttributeBegin\nWorldBegin\nWorldEnd\nAttributeEnd\n")
+            .starts_with("t.rib:2: WorldBegin inside AttributeBegin (at t.rib:1)")
+    );
+    assert_eq!(
+        at("TransformBegin\nWorldBegin\nTransformEnd\nWorldEnd\n"),
+        "t.rib:3: TransformEnd inside the world would close the TransformBegin at t.rib:1, begun before WorldBegin"
+    );
+    assert!(
+        at("TransformBegin\nWorldBegin\nTransformBegin\nWorldEnd\n")
+            .starts_with("t.rib:4: WorldEnd: TransformBegin at t.rib:3")
+    );
+}
