@@ -150,3 +150,21 @@ fn a_tex_file_that_is_not_an_image_is_a_located_warning_and_plastic() {
         assert!((a[0] - 0.5).abs() < 1e-6 && (a[1] - 0.25).abs() < 1e-6 && (a[2] - 1.0).abs() < 1e-6);
     }
 }
+
+#[test]
+fn classic_lights_cast_no_shadows_unless_bmrts_attribute_asks() {
+    // The spec's distantlight has no shadow() call: a scene closed by a star-field sphere (as the
+    // RenderMan Companion's planets are) is still lit. BMRT's Attribute "light" "shadows" "on" gives
+    // the light shadows, and then the sphere blocks it.
+    let scene = |attribute: &str| {
+        format!(
+            "{CAMERA}WorldBegin\n{attribute}LightSource \"distantlight\" 1 \"intensity\" [0.8] \"from\" [0 0 0] \"to\" [0 0 1]\n\
+             Surface \"matte\" \"Kd\" [0.5]\nSphere 50 -50 50 360\nPolygon \"P\" [-5 -5 5  5 -5 5  5 5 5  -5 5 5]\nWorldEnd\n"
+        )
+    };
+    // Kd·I·cos θ = 0.4 direct, plus what the lit inside of the sphere reflects onto the square.
+    let lit = centre(&scene(""));
+    assert!(lit[0] > 0.4 && lit[0] < 0.6, "{lit:?}");
+    let shadowed = centre(&scene("Attribute \"light\" \"shadows\" \"on\"\n"));
+    assert!(shadowed[0] < 1e-6, "{shadowed:?}");
+}

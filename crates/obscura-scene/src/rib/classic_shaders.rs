@@ -18,6 +18,11 @@
 //! | `pointlight` | [`Light::Point`] at `from` |
 //! | `spotlight` | [`Light::Spot`] at `from` along `to − from`: `coneangle`, `conedeltaangle` (radians, as in RIB), `beamdistribution`; the spec's attenuation `cosᵇ α · smoothstep(cos(cone), cos(cone − delta), cos α) / d²` |
 //!
+//! The spec's `distantlight`, `pointlight` and `spotlight` cast no shadows (their shaders call no
+//! `shadow()`; a classic renderer shadows only through shadow-map lights), so their lights have
+//! `enable_shadows` off — a scene inside a star-field sphere stays lit — unless BMRT's
+//! `Attribute "light" "shadows" "on"` stands when they are declared.
+//!
 //! # Surfaces
 //!
 //! The classic `specular()` lobe is Blinn's `(N·H)ⁿ` with `n = 8/roughness` (Aqsis, BMRT and PRMan;
@@ -82,6 +87,8 @@ pub(super) struct ClassicAttributes {
     pub(super) surface: Option<ClassicSurface>,
     /// `Basis`.
     pub(super) basis: Basis,
+    /// `Attribute "light" "shadows" "on"` (BMRT's): classic lights declared under it cast shadows.
+    pub(super) light_shadows: bool,
 }
 
 impl Default for ClassicAttributes {
@@ -91,6 +98,7 @@ impl Default for ClassicAttributes {
             opacity: Rgb::WHITE,
             surface: None,
             basis: Basis::default(),
+            light_shadows: false,
         }
     }
 }
@@ -379,6 +387,23 @@ impl Reader {
         Some(k)
     }
 
+    /// `Attribute "light" "shadows" "on"|"off"`: whether the classic lights declared from here on
+    /// (in this attribute block) cast shadows.
+    pub(super) fn light_attribute(&mut self, r: &Req<'_>, rest: &[Value]) -> Result<(), RibError> {
+        let list = self.params(r, rest, &["string shadows"], false)?;
+        match get_string(&list, "shadows") {
+            Some("on") => self.classic.light_shadows = true,
+            Some("off") => self.classic.light_shadows = false,
+            Some(other) => {
+                return Err(r.err(format!(
+                    "Attribute \"light\" \"shadows\": expected \"on\" or \"off\", got \"{other}\""
+                )));
+            }
+            None => {}
+        }
+        Ok(())
+    }
+
     /// `Displacement`, `Atmosphere`, `Interior`, `Exterior`, `Imager`, `Deformation`: warned about by
     /// the shader's name and left out.
     pub(super) fn other_shader(&mut self, r: &Req<'_>) -> Result<(), RibError> {
@@ -491,10 +516,12 @@ impl Reader {
         let to = point(&list, "to", Vec3::Z);
         let world_from = m.transform_point3(from);
         let axis = (m.transform_point3(to) - world_from).normalize_or_zero();
+        let enable_shadows = self.classic.light_shadows;
         let emitter = PointEmitter {
             color,
             intensity: PI * intensity,
             position: world_from,
+            enable_shadows,
         };
         let light = match kind {
             "ambientlight" => Light::Ambient { color, intensity },
@@ -513,6 +540,7 @@ impl Reader {
                 intensity: PI * intensity,
                 exposure: 0.0,
                 angle_extent: 0.0,
+                enable_shadows,
                 transform: rotation_to_z(axis),
             },
             "pointlight" => Light::Point(emitter),

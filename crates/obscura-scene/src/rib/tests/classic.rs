@@ -479,3 +479,26 @@ fn older_wrap_names_and_empty_points_are_read() {
         scene.warnings
     );
 }
+
+#[test]
+fn classic_lights_cast_shadows_only_under_bmrts_light_attribute() {
+    let scene = ok(
+        "WorldBegin\nLightSource \"pointlight\" 1\nAttributeBegin\nAttribute \"light\" \"shadows\" \"on\"\n\
+         LightSource \"spotlight\" 2\nLightSource \"distantlight\" 3\nAttributeEnd\nLightSource \"distantlight\" 4\n\
+         Light \"PxrDistantLight\" \"d\"\nLight \"PxrDistantLight\" \"e\" \"int enableShadows\" [0]\nWorldEnd\n",
+    );
+    let shadows: Vec<bool> = scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            Light::Point(p) | Light::Spot { emitter: p, .. } => p.enable_shadows,
+            Light::Distant { enable_shadows, .. } => *enable_shadows,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(shadows, [false, true, true, false, true, false]);
+    assert!(
+        fail("WorldBegin\nAttribute \"light\" \"shadows\" \"yes\"\nWorldEnd\n")
+            .starts_with("t.rib:2: Attribute \"light\" \"shadows\": expected \"on\" or \"off\"")
+    );
+}
