@@ -9,7 +9,8 @@ clock limit and 2 GiB of address space (prlimit --as). Every outcome is one of:
 
   rendered   exit 0 and every image written holds more than one colour
   flat       exit 0 but an image is black or one flat colour
-  located    a clean error naming the file and line (or a binary request/byte) or a missing file
+  located    a clean error naming the file and line (or a binary request/byte), or a missing file
+             or directory
   error      a clean error that names no place
   crash      a panic, a signal, or running out of memory
   timeout    more than 60 s
@@ -74,7 +75,9 @@ def is_flat(img):
     return bool(np.all(spread <= 1e-3 * max(1.0, float(np.abs(finite).max()))))
 
 
-LOCATED = re.compile(r"error: .+?(:\d+: |: request \d+ at byte \d+: |: byte \d+: |cannot read|no such file|not found)", re.I)
+LOCATED = re.compile(
+    r"error: .+?(:\d+: |: request \d+ at byte \d+: |: byte \d+: |cannot read|no such file|not found|does not exist)", re.I
+)
 
 
 def run_one(obscura, scene):
