@@ -131,9 +131,35 @@ impl RibError {
     }
 }
 
-/// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name).
+/// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name). A
+/// path `archive.zip!member` names a member of a zip file, as RenderMan reads them (RenderMan for
+/// Maya writes its geometry caches so).
 fn read_rib_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    let text = path.to_string_lossy();
+    let bytes = match text.find(".zip!") {
+        Some(at) => {
+            let (zip, member) = (Path::new(&text[..at + 4]), &text[at + 5..]);
+            let file = std::fs::File::open(zip)
+                .map_err(|e| format!("cannot read the zip file {}: {e}", zip.display()))?;
+            let mut archive = zip::ZipArchive::new(file)
+                .map_err(|e| format!("{} is not a zip file that can be read: {e}", zip.display()))?;
+            let mut entry = archive.by_name(member).map_err(|e| {
+                format!(
+                    "cannot read \"{member}\" from the zip file {}: {e}",
+                    zip.display()
+                )
+            })?;
+            let mut out = Vec::new();
+            std::io::Read::read_to_end(&mut entry, &mut out).map_err(|e| {
+                format!(
+                    "cannot read \"{member}\" from the zip file {}: {e}",
+                    zip.display()
+                )
+            })?;
+            out
+        }
+        None => std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?,
+    };
     decompress(bytes)
 }
 
@@ -277,7 +303,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 77] = {
+const REQUESTS: [Request; 78] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -363,6 +389,7 @@ const REQUESTS: [Request; 77] = {
         known("ObjectEnd", Anywhere, Reader::object_end),
         known("ObjectInstance", World, Reader::object_instance),
         known("Procedural", World, Reader::procedural),
+        known("Procedural2", World, Reader::procedural2),
         known("SolidBegin", World, Reader::solid),
         known("SolidEnd", World, Reader::solid),
         known("Blobby", World, Reader::blobby),
