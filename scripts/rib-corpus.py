@@ -9,10 +9,14 @@ clock limit and 2 GiB of address space (prlimit --as). Every outcome is one of:
 
   rendered   exit 0 and every image written holds more than one colour
   flat       exit 0 but an image is black or one flat colour
-  located    a clean error naming the file and line (or a binary request/byte) or a missing file
+  located    a clean error naming the file and line (or a binary request/byte), or a missing file
+             or directory
   error      a clean error that names no place
   crash      a panic, a signal, or running out of memory
   timeout    more than 60 s
+
+A scene whose bytes (gzip decompressed) equal an earlier one's, in this or an earlier DIR, counts
+once: collections copy each other's examples.
 
 Needs numpy, opencv-python-headless and OpenEXR (PyPI) to look at the images. Prints one line per scene and a
 summary; --csv writes the table.
@@ -20,6 +24,7 @@ summary; --csv writes the table.
 
 import argparse
 import csv
+import hashlib
 import os
 import re
 import resource
@@ -70,7 +75,9 @@ def is_flat(img):
     return bool(np.all(spread <= 1e-3 * max(1.0, float(np.abs(finite).max()))))
 
 
-LOCATED = re.compile(r"error: .+?(:\d+: |: request \d+ at byte \d+: |: byte \d+: |cannot read|no such file|not found)", re.I)
+LOCATED = re.compile(
+    r"error: .+?(:\d+: |: request \d+ at byte \d+: |: byte \d+: |cannot read|no such file|not found|does not exist)", re.I
+)
 
 
 def run_one(obscura, scene):
@@ -101,8 +108,11 @@ def run_one(obscura, scene):
     return "rendered", seconds, ", ".join(os.path.basename(p) for p in images[:3])
 
 
-def complete_scenes(root):
-    for d, _, files in os.walk(root):
+def complete_scenes(root, seen):
+    """Every complete scene under `root` whose bytes (decompressed) were not seen before: collections
+    copy each other's examples, and a scene counts once."""
+    for d, dirs, files in os.walk(root):
+        dirs.sort()
         for f in sorted(files):
             if not f.lower().endswith((".rib", ".ribz", ".rib.gz")):
                 continue
@@ -116,7 +126,9 @@ def complete_scenes(root):
                     data = gzip.decompress(data)
             except Exception:  # noqa: BLE001
                 continue
-            if b"WorldBegin" in data:
+            digest = hashlib.sha256(data).digest()
+            if b"WorldBegin" in data and digest not in seen:
+                seen.add(digest)
                 yield p
 
 
@@ -131,10 +143,11 @@ def main():
     obscura = os.path.abspath(a.obscura)
     work = tempfile.mkdtemp(prefix="rib-corpus-")
     scenes = []
+    seen = set()
     for i, d in enumerate(a.dirs):
         copy = os.path.join(work, f"{i}-{os.path.basename(os.path.abspath(d))}")
         shutil.copytree(d, copy, symlinks=True)
-        scenes += [(os.path.relpath(s, copy), s, d) for s in complete_scenes(copy)]
+        scenes += [(os.path.relpath(s, copy), s, d) for s in complete_scenes(copy, seen)]
     rows = []
     with ThreadPoolExecutor(max_workers=a.jobs) as pool:
         for (rel, path, d), (cls, secs, msg) in zip(scenes, pool.map(lambda s: run_one(obscura, s[1]), scenes)):

@@ -341,7 +341,7 @@ pub fn trace_path_cone(
                     t_max,
                     time: ray.time,
                 };
-                if t_max > eps && !shadow_blocked(scene, tracer, &shadow, cutouts, rng) {
+                if t_max > eps && !(ls.shadows && shadow_blocked(scene, tracer, &shadow, cutouts, rng)) {
                     let w = if ls.mis {
                         power_heuristic(ls.pdf, pdf_b)
                     } else {

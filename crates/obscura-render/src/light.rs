@@ -102,6 +102,9 @@ pub struct LightSample {
     /// True when BSDF sampling can also find this light, so the sample is MIS-weighted; false for
     /// delta-like lights (narrow distant lights).
     pub mis: bool,
+    /// True when surfaces between the point and the light block it (a shadow ray is traced); false
+    /// for lights with `enable_shadows` off (the classic RenderMan lights).
+    pub shadows: bool,
 }
 
 /// An area light found along a ray by [`Lights::intersect_area`].
@@ -258,6 +261,8 @@ struct Distant {
     one_minus_cos: f32,
     solid_angle: f32,
     mis: bool,
+    /// `enable_shadows`.
+    shadows: bool,
 }
 
 impl Distant {
@@ -394,6 +399,15 @@ impl Emitter {
         }
     }
 
+    /// False for a light whose `enable_shadows` is off: nothing blocks it.
+    fn casts_shadows(&self) -> bool {
+        match self {
+            Emitter::Distant(d) => d.shadows,
+            Emitter::Point(p) => p.shadows,
+            Emitter::Dome(_) | Emitter::Rect(_) | Emitter::Sphere(_) => true,
+        }
+    }
+
     /// The ray parameter of the nearest hit with `t_min < t < t_max` along `o + t·d` for an area
     /// light (rect or sphere); `None` for infinite lights.
     fn intersect_area(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
@@ -473,6 +487,7 @@ impl Lights {
                     strength: strength(p.color, p.intensity, 0.0),
                     position: Vec3A::from(p.position),
                     spot: None,
+                    shadows: p.enable_shadows,
                 })
             }
             Light::Spot {
@@ -497,6 +512,7 @@ impl Lights {
                     strength: strength(p.color, p.intensity, 0.0),
                     position: Vec3A::from(p.position),
                     spot: Some(beam),
+                    shadows: p.enable_shadows,
                 })
             }
             Light::Distant {
@@ -504,6 +520,7 @@ impl Lights {
                 intensity,
                 exposure,
                 angle_extent,
+                enable_shadows,
                 transform,
             } => {
                 let s = strength(*c, *intensity, *exposure);
@@ -527,6 +544,7 @@ impl Lights {
                     one_minus_cos,
                     solid_angle: TAU * one_minus_cos,
                     mis: extent >= DISTANT_MIS_MIN_DEGREES,
+                    shadows: *enable_shadows,
                 })
             }
             Light::Rect {
@@ -632,6 +650,7 @@ impl Lights {
                         radiance: d.strength,
                         pdf: select,
                         mis: false,
+                        shadows: true,
                     }
                 } else {
                     let (local, _, _) = sample_cone(u, d.one_minus_cos);
@@ -645,6 +664,7 @@ impl Lights {
                             radiance: d.strength / d.solid_angle,
                             pdf: select / d.solid_angle,
                             mis: false,
+                            shadows: true,
                         }
                     }
                 }
@@ -667,6 +687,7 @@ impl Lights {
                     radiance: r.strength,
                     pdf,
                     mis: true,
+                    shadows: true,
                 }
             }
             Emitter::Sphere(s) => {
@@ -689,6 +710,7 @@ impl Lights {
                     radiance: s.strength,
                     pdf,
                     mis: true,
+                    shadows: true,
                 }
             }
             Emitter::Point(l) => {
@@ -699,13 +721,18 @@ impl Lights {
                     radiance,
                     pdf: select,
                     mis: false,
+                    shadows: true,
                 }
             }
         };
         if n != Vec3A::ZERO && sample.wi.dot(n) <= 0.0 {
             return None;
         }
-        if self.blocked_by_area(p, sample.wi, sample.dist, index) {
+        let sample = LightSample {
+            shadows: self.emitters[index].casts_shadows(),
+            ..sample
+        };
+        if sample.shadows && self.blocked_by_area(p, sample.wi, sample.dist, index) {
             return None;
         }
         (sample.pdf > 0.0 && sample.pdf.is_finite() && sample.radiance.is_finite()).then_some(sample)
@@ -720,6 +747,7 @@ impl Lights {
             radiance,
             pdf,
             mis: true,
+            shadows: true,
         })
     }
 

@@ -28,7 +28,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use glam::{Affine3A, Mat4, Vec3, Vec3A};
+use glam::{Affine3A, Mat4, Vec2, Vec3, Vec3A};
 use obscura_host::driver::Properties;
 use obscura_host::sampler::Sampler;
 use obscura_host::{Batch, CameraDesc, CameraStage, ContractReport, HostError, PixelRect};
@@ -38,7 +38,7 @@ use rayon::prelude::*;
 
 use crate::bvh::{Instance, SceneAccel};
 use crate::deep::{DeepImage, DeepSample};
-use crate::dice::{DiceError, DicingContext, TriangleBudget, dice};
+use crate::dice::{DiceError, DicingContext, TriangleBudget, dice_with_st};
 use crate::film::{Film, FilmTile, SampleValues};
 use crate::filter::{Filter, FilterError};
 use crate::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
@@ -277,7 +277,10 @@ pub fn prepare(
     let shutter = scene.camera.shutter;
     let camera_to_world = camera_motion(stage.environment().world_to_camera(), shutter)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
-    let meshes = dice_objects(scene, &props, world_to_camera_open, opts.max_triangles)?;
+    let (meshes, diced_st): (Vec<TriangleMesh>, Vec<Option<Vec<Vec2>>>) =
+        dice_objects(scene, &props, world_to_camera_open, opts.max_triangles)?
+            .into_iter()
+            .unzip();
     let instances: Vec<Instance> = scene
         .objects
         .iter()
@@ -298,8 +301,12 @@ pub fn prepare(
         scene
             .objects
             .iter()
-            .map(|o| match &o.shape {
+            .zip(meshes.iter().zip(diced_st))
+            .map(|(o, (mesh, st))| match &o.shape {
                 obscura_scene::Shape::Mesh(m) => SurfaceAttributes::of_mesh(m).map(Arc::new),
+                _ if scene.material_maps.contains_key(&o.material) => st
+                    .and_then(|st| SurfaceAttributes::of_diced(mesh, &st))
+                    .map(Arc::new),
                 _ => None,
             })
             .collect(),
@@ -464,6 +471,9 @@ fn clip_planes(scene: &Scene, camera_to_world: &Motion) -> Vec<(Vec3A, Vec3A)> {
         .collect()
 }
 
+/// A diced object: its triangles and, for primitives that carry them, each vertex's `(s, t)`.
+type Diced = (TriangleMesh, Option<Vec<Vec2>>);
+
 /// Every object of `scene` diced (in parallel) at the rate the projection's DicingHint and FieldOfView
 /// ask for, seen from the camera at shutter open.
 ///
@@ -474,15 +484,15 @@ fn dice_objects(
     props: &Properties,
     world_to_camera_open: Affine3A,
     max_triangles: u64,
-) -> Result<Vec<TriangleMesh>, RenderError> {
+) -> Result<Vec<Diced>, RenderError> {
     let budget = TriangleBudget::new(max_triangles);
-    let diced: Vec<Result<TriangleMesh, RenderError>> = scene
+    let diced: Vec<Result<Diced, RenderError>> = scene
         .objects
         .par_iter()
         .map(|o| {
             if budget.exhausted() {
                 // Another primitive has already gone over: this one's own message would mislead.
-                return Ok(TriangleMesh::default());
+                return Ok((TriangleMesh::default(), None));
             }
             let object_to_world = o.transform.samples.first().map(|s| s.1).unwrap_or(Mat4::IDENTITY);
             let ctx = DicingContext {
@@ -497,9 +507,9 @@ fn dice_objects(
                 source_location: o.source.clone(),
                 error,
             };
-            let mesh = dice(&o.shape, &ctx).map_err(located)?;
+            let (mesh, st) = dice_with_st(&o.shape, &ctx).map_err(located)?;
             budget.take(mesh.len() as u64).map_err(located)?;
-            Ok(mesh)
+            Ok((mesh, st))
         })
         .collect();
     diced.into_iter().collect()

@@ -55,3 +55,116 @@ fn a_matte_surface_under_a_distant_light_has_the_classic_brightness() {
         assert!((c[1] - 0.5 * want).abs() < 0.01 * want, "{c:?}");
     }
 }
+
+/// The texels of the painted texture, 8-bit codes, row by row from the top.
+const TEXELS: [[[u8; 3]; 4]; 2] = [
+    [[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]],
+    [[10, 20, 30], [128, 128, 128], [200, 100, 50], [0, 0, 0]],
+];
+
+/// Renders `rib` (read as `dir/t.rib`) at 16×8 with point lookups (the nearest texel, unfiltered):
+/// the albedo of every pixel, and the renderer's texture warnings.
+fn painted_albedo(dir: &Path, rib: &str) -> (Vec<[f32; 3]>, Vec<String>) {
+    use obscura_render::material::textured::TextureLookup;
+    let scene = parse_str(rib, &dir.join("t.rib").display().to_string(), dir).expect("reads");
+    let opts = RenderOptions {
+        samples_per_pixel: Some(4),
+        texture_lookup: TextureLookup::Point,
+        ..RenderOptions::default()
+    };
+    let prepared = prepare(&scene, &mut builtin_registry(), dir, &opts).expect("prepares");
+    let warnings = prepared.texture_warnings().to_vec();
+    let out = prepared.render(&opts, &|_, _| {}, &AtomicBool::new(false));
+    let albedo = (0..8)
+        .flat_map(|y| (0..16).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let a = out.film.pixel(x, y).albedo;
+            [a.r, a.g, a.b]
+        })
+        .collect();
+    (albedo, warnings)
+}
+
+/// An orthographic camera over x ∈ [−2, 2], y ∈ [−1, 1] looking at a bilinear patch that fills it:
+/// its (u, v) = (0, 0) corner at the top left, u to the right, v down.
+fn painted_patch(surface: &str) -> String {
+    format!(
+        "Format 16 8 1\nPixelFilter \"box\" 1 1\nProjection \"orthographic\"\nScreenWindow -2 2 -1 1\n\
+         WorldBegin\nLightSource \"ambientlight\" 1\n{surface}\n\
+         Patch \"bilinear\" \"P\" [-2 1 5  2 1 5  -2 -1 5  2 -1 5]\nWorldEnd\n"
+    )
+}
+
+#[test]
+fn paintedplastic_paints_the_patch_with_its_texels_in_the_ris_orientation() {
+    // RISpec §4.2 and §7.1: a patch's default texture coordinates are s = u, t = v, and t = 0 is the
+    // texture's first (top) row; texture() reads the values as stored. The file is a TIFF named
+    // `.tex`, as RenderMan's txmake writes them.
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbImage::from_fn(4, 2, |x, y| image::Rgb(TEXELS[y as usize][x as usize]));
+    img.save_with_format(dir.path().join("texels.tex"), image::ImageFormat::Tiff)
+        .unwrap();
+    let (albedo, warnings) = painted_albedo(
+        dir.path(),
+        &painted_patch("Surface \"paintedplastic\" \"Kd\" [1] \"texturename\" \"texels.tex\""),
+    );
+    assert!(warnings.is_empty(), "{warnings:?}");
+    for y in 0..8 {
+        for x in 0..16 {
+            let (col, row) = (x / 4, y / 4);
+            let want = TEXELS[row][col].map(|c| f32::from(c) / 255.0);
+            let got = albedo[y * 16 + x];
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() < 1e-5,
+                    "pixel ({x}, {y}) channel {c}: {} instead of texel ({col}, {row}) = {}",
+                    got[c],
+                    want[c]
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn a_tex_file_that_is_not_an_image_is_a_located_warning_and_plastic() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("pixar.tex"),
+        b"not a TIFF: Pixar's own texture format",
+    )
+    .unwrap();
+    let (albedo, warnings) = painted_albedo(
+        dir.path(),
+        &painted_patch(
+            "Color [0.5 0.25 1]\nSurface \"paintedplastic\" \"Kd\" [1] \"texturename\" \"pixar.tex\"",
+        ),
+    );
+    assert_eq!(warnings.len(), 1, "{warnings:?}");
+    assert!(
+        warnings[0].contains("t.rib:8: Surface \"paintedplastic\"") && warnings[0].contains("pixar.tex"),
+        "{warnings:?}"
+    );
+    // The factor alone: Kd·Cs.
+    for a in albedo {
+        assert!((a[0] - 0.5).abs() < 1e-6 && (a[1] - 0.25).abs() < 1e-6 && (a[2] - 1.0).abs() < 1e-6);
+    }
+}
+
+#[test]
+fn classic_lights_cast_no_shadows_unless_bmrts_attribute_asks() {
+    // The spec's distantlight has no shadow() call: a scene closed by a star-field sphere (as the
+    // RenderMan Companion's planets are) is still lit. BMRT's Attribute "light" "shadows" "on" gives
+    // the light shadows, and then the sphere blocks it.
+    let scene = |attribute: &str| {
+        format!(
+            "{CAMERA}WorldBegin\n{attribute}LightSource \"distantlight\" 1 \"intensity\" [0.8] \"from\" [0 0 0] \"to\" [0 0 1]\n\
+             Surface \"matte\" \"Kd\" [0.5]\nSphere 50 -50 50 360\nPolygon \"P\" [-5 -5 5  5 -5 5  5 5 5  -5 5 5]\nWorldEnd\n"
+        )
+    };
+    // Kd·I·cos θ = 0.4 direct, plus what the lit inside of the sphere reflects onto the square.
+    let lit = centre(&scene(""));
+    assert!(lit[0] > 0.4 && lit[0] < 0.6, "{lit:?}");
+    let shadowed = centre(&scene("Attribute \"light\" \"shadows\" \"on\"\n"));
+    assert!(shadowed[0] < 1e-6, "{shadowed:?}");
+}

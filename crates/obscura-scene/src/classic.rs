@@ -3,7 +3,7 @@
 //! Bézier form), NURBS patches, curves and points. The renderer dices them by the projection's
 //! dicing hint like the quadrics.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// One bicubic Bézier patch: `P(u, v) = Σᵢ Σⱼ Bᵢ(u) Bⱼ(v) points[4j + i]`, `Bᵢ` the cubic Bernstein
 /// polynomials; `u` runs fastest through `points`, as in RIB.
@@ -11,6 +11,38 @@ use glam::Vec3;
 pub struct BezierPatch {
     /// The 16 control points, object space, `u` fastest.
     pub points: [Vec3; 16],
+    /// The texture coordinates `(s, t)` at the corners `(u, v)` = (0, 0), (1, 0), (0, 1), (1, 1), in
+    /// the RenderMan Interface's convention (`t = 0` is a texture's top row); inside the patch they
+    /// are interpolated bilinearly, as the RI interpolates `varying` values. A lone patch has
+    /// `s = u`, `t = v` ([`BezierPatch::UNIT_ST`]); a patch of a `PatchMesh` the part of `[0, 1]²`
+    /// it covers in the whole mesh, or the mesh's own `"st"`.
+    pub st: [Vec2; 4],
+}
+
+impl BezierPatch {
+    /// `s = u`, `t = v`: the RI's default texture coordinates.
+    pub const UNIT_ST: [Vec2; 4] = [
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(0.0, 1.0),
+        Vec2::new(1.0, 1.0),
+    ];
+
+    /// A patch with the default texture coordinates.
+    #[must_use]
+    pub fn new(points: [Vec3; 16]) -> Self {
+        BezierPatch {
+            points,
+            st: Self::UNIT_ST,
+        }
+    }
+
+    /// The texture coordinates at `(u, v)`: the corners' interpolated bilinearly.
+    #[must_use]
+    pub fn st_at(&self, u: f32, v: f32) -> Vec2 {
+        let [a, b, c, d] = self.st;
+        a.lerp(b, u).lerp(c.lerp(d, u), v)
+    }
 }
 
 /// One parametric direction of a [`NuPatch`].

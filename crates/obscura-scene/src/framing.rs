@@ -138,6 +138,7 @@ pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, _file: &str) {
             intensity: 2.2,
             exposure: 0.0,
             angle_extent: 5.0,
+            enable_shadows: true,
             transform: Mat4::from_cols(x.extend(0.0), y.extend(0.0), z.extend(0.0), Vec4::W),
         });
         // A closed interior lets neither in: a lamp under its ceiling shows the room.

@@ -276,6 +276,7 @@ mod tests {
             micropolygon_length: 1.0,
             source: "test".into(),
             identity: Identity::default(),
+            sides: Default::default(),
         }
     }
 

@@ -226,6 +226,9 @@ pub enum Light {
         exposure: f32,
         /// Apparent angular diameter, degrees (RenderMan default 0.53).
         angle_extent: f32,
+        /// `enableShadows`: whether surfaces between a point and the light shadow it (RenderMan's
+        /// default 1; off for the classic `distantlight`, whose shader has no shadows).
+        enable_shadows: bool,
         /// Light-to-world.
         transform: Mat4,
     },
@@ -287,6 +290,9 @@ pub struct PointEmitter {
     pub intensity: f32,
     /// World-space position.
     pub position: Vec3,
+    /// Whether surfaces between a point and the light shadow it: off for the classic shaders (the
+    /// RI's `pointlight` and `spotlight` have no shadows) unless `Attribute "light" "shadows" "on"`.
+    pub enable_shadows: bool,
 }
 
 /// One piece of geometry in the world.

@@ -11,7 +11,7 @@ use super::tree::{Aabb, Node, NodePair, Tree};
 /// Bins per axis of the binned SAH.
 const BINS: usize = 16;
 /// Cost of one traversal step relative to one primitive test, for the SAH.
-const TRAVERSAL_COST: f32 = 1.0;
+const TRAVERSAL_COST: f64 = 1.0;
 /// Below this depth the SAH chooses splits; from it on, median splits bound the depth (see
 /// [`STACK_SIZE`](super::traverse::STACK_SIZE)).
 const SAH_DEPTH_LIMIT: u32 = 40;
@@ -35,6 +35,20 @@ impl Bin {
 fn bin_index(x: f32) -> usize {
     // `as` saturates and maps NaN to 0, so any input gives a valid bin.
     (x as usize).min(BINS - 1)
+}
+
+/// Half the extent `hi − lo`, as `hi/2 − lo/2`: finite for any finite corners, where `hi − lo`
+/// overflows to ∞ once the box spans more than `f32::MAX` (geometry near ±3·10³⁸). Binning scales by
+/// this and measures positions as [`half_offset`], so the bins cover such boxes too.
+#[inline]
+fn half_extent(b: &Aabb) -> Vec3A {
+    b.hi * 0.5 - b.lo * 0.5
+}
+
+/// Half the offset of `x` from `lo` (see [`half_extent`]).
+#[inline]
+fn half_offset(x: f32, lo: f32) -> f32 {
+    x * 0.5 - lo * 0.5
 }
 
 /// Nodes with at most this many primitives get an exact SAH (sort and sweep each axis) instead of
@@ -110,7 +124,7 @@ impl Builder<'_> {
         if n <= 1 {
             return None;
         }
-        let extent = span.centroids.hi - span.centroids.lo;
+        let extent = half_extent(&span.centroids);
         if span.depth >= SAH_DEPTH_LIMIT || extent.max_element() <= 0.0 {
             return (n > self.max_leaf).then(|| self.median_split(refs, span));
         }
@@ -124,9 +138,9 @@ impl Builder<'_> {
             + if parent_area > 0.0 {
                 cost / parent_area
             } else {
-                n as f32
+                n as f64
             };
-        if n <= self.max_leaf && n as f32 <= split_cost {
+        if n <= self.max_leaf && n as f64 <= split_cost {
             return None;
         }
         let mid = match split {
@@ -135,7 +149,8 @@ impl Builder<'_> {
                 at
             }
             Split::Bin { axis, bin, lo, scale } => {
-                let goes_left = |r: u32| bin_index((self.centroids[r as usize][axis] - lo) * scale) < bin;
+                let goes_left =
+                    |r: u32| bin_index(half_offset(self.centroids[r as usize][axis], lo) * scale) < bin;
                 let (mut i, mut j) = (0, n);
                 while i < j {
                     if goes_left(refs[i]) {
@@ -170,27 +185,27 @@ impl Builder<'_> {
     }
 
     /// Exact SAH over the sorted centroids of a small node: `(cost, split)`.
-    fn sweep(&self, refs: &[u32]) -> Option<(f32, Split)> {
+    fn sweep(&self, refs: &[u32]) -> Option<(f64, Split)> {
         let n = refs.len();
         let mut keyed = [(0.0f32, 0u32); SWEEP_MAX];
         let keyed = &mut keyed[..n];
-        let mut best: Option<(f32, Split)> = None;
+        let mut best: Option<(f64, Split)> = None;
         for axis in 0..3 {
             for (k, &r) in keyed.iter_mut().zip(refs) {
                 *k = (self.centroids[r as usize][axis], r);
             }
             // The same order as `sort`: by centroid, ties by index.
             keyed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let mut right = [0.0f32; SWEEP_MAX];
+            let mut right = [0.0f64; SWEEP_MAX];
             let mut acc = Aabb::EMPTY;
             for i in (1..n).rev() {
                 acc.grow(&self.boxes[keyed[i].1 as usize]);
-                right[i] = acc.half_area() * (n - i) as f32;
+                right[i] = acc.half_area() * (n - i) as f64;
             }
             let mut acc = Aabb::EMPTY;
             for i in 1..n {
                 acc.grow(&self.boxes[keyed[i - 1].1 as usize]);
-                let cost = acc.half_area() * i as f32 + right[i];
+                let cost = acc.half_area() * i as f64 + right[i];
                 if best.as_ref().is_none_or(|b| cost < b.0) {
                     best = Some((cost, Split::Sorted { axis, at: i }));
                 }
@@ -200,13 +215,13 @@ impl Builder<'_> {
     }
 
     /// Binned SAH (16 bins per axis over the centroid bounds): `(cost, split)`.
-    fn binned(&self, refs: &[u32], span: &Span) -> Option<(f32, Split)> {
+    fn binned(&self, refs: &[u32], span: &Span) -> Option<(f64, Split)> {
         let cb = &span.centroids;
         // Axes with zero extent get an infinite scale; 0·∞ = NaN lands in bin 0, so they offer no split.
-        let scale = Vec3A::splat(BINS as f32) / (cb.hi - cb.lo);
+        let scale = Vec3A::splat(BINS as f32) / half_extent(cb);
         let mut bins = [[Bin::EMPTY; BINS]; 3];
         for &r in refs {
-            let b = (self.centroids[r as usize] - cb.lo) * scale;
+            let b = (self.centroids[r as usize] * 0.5 - cb.lo * 0.5) * scale;
             let bx = &self.boxes[r as usize];
             for (axis_bins, coord) in bins.iter_mut().zip([b.x, b.y, b.z]) {
                 let bin = &mut axis_bins[bin_index(coord)];
@@ -214,15 +229,15 @@ impl Builder<'_> {
                 bin.count += 1;
             }
         }
-        let mut best: Option<(f32, Split)> = None;
+        let mut best: Option<(f64, Split)> = None;
         for (axis, axis_bins) in bins.iter().enumerate() {
-            let mut right = [0.0f32; BINS];
+            let mut right = [0.0f64; BINS];
             let mut right_count = [0u32; BINS];
             let (mut acc, mut count) = (Aabb::EMPTY, 0u32);
             for i in (1..BINS).rev() {
                 acc.grow(&axis_bins[i].bounds);
                 count += axis_bins[i].count;
-                right[i] = acc.half_area() * count as f32;
+                right[i] = acc.half_area() * f64::from(count);
                 right_count[i] = count;
             }
             let (mut acc, mut count) = (Aabb::EMPTY, 0u32);
@@ -232,7 +247,7 @@ impl Builder<'_> {
                 if count == 0 || right_count[i] == 0 {
                     continue;
                 }
-                let cost = acc.half_area() * count as f32 + right[i];
+                let cost = acc.half_area() * f64::from(count) + right[i];
                 if best.as_ref().is_none_or(|b| cost < b.0) {
                     best = Some((
                         cost,
@@ -252,7 +267,7 @@ impl Builder<'_> {
     /// Splits at the median centroid along the widest axis (or by order when all centroids coincide).
     fn median_split(&self, refs: &mut [u32], span: &Span) -> (usize, Span, Span) {
         let mid = refs.len() / 2;
-        let e = span.centroids.hi - span.centroids.lo;
+        let e = half_extent(&span.centroids);
         if e.max_element() > 0.0 {
             let axis = if e.x >= e.y && e.x >= e.z {
                 0
@@ -406,7 +421,7 @@ impl Builder<'_> {
 enum Split {
     /// Sort by centroid along `axis` and cut before position `at`.
     Sorted { axis: usize, at: usize },
-    /// Centroids whose bin along `axis` is below `bin` go left.
+    /// Centroids whose bin along `axis` (`half_offset(c, lo)·scale`) is below `bin` go left.
     Bin {
         axis: usize,
         bin: usize,
@@ -418,9 +433,9 @@ enum Split {
 /// Builds a tree over the primitives listed in `refs` (reordered into leaf order on return).
 pub(super) fn build_tree(boxes: &[Aabb], refs: &mut [u32], max_leaf: usize) -> Tree {
     let centroids: Vec<Vec3A> = if boxes.len() >= PARALLEL_BUILD_MIN {
-        boxes.par_iter().map(|b| (b.lo + b.hi) * 0.5).collect()
+        boxes.par_iter().map(Aabb::centre).collect()
     } else {
-        boxes.iter().map(|b| (b.lo + b.hi) * 0.5).collect()
+        boxes.iter().map(Aabb::centre).collect()
     };
     Builder {
         boxes,

@@ -31,11 +31,19 @@ impl Aabb {
         self.hi = self.hi.max(p);
     }
 
-    /// Half the surface area; zero for an empty box.
+    /// Half the surface area; zero for an empty box. In `f64`: a box reaching toward `f32::MAX`
+    /// (`Sphere 3e38`) has extents and areas `f32` cannot hold, and an infinite area would make every
+    /// split cost the same (∞), so the builder would find none.
     #[inline]
-    pub(super) fn half_area(&self) -> f32 {
-        let e = (self.hi - self.lo).max(Vec3A::ZERO);
+    pub(super) fn half_area(&self) -> f64 {
+        let e = (self.hi.as_dvec3() - self.lo.as_dvec3()).max(glam::DVec3::ZERO);
         e.x * e.y + e.y * e.z + e.z * e.x
+    }
+
+    /// The centre, `lo/2 + hi/2`: unlike `(lo + hi)/2` it cannot overflow for finite corners.
+    #[inline]
+    pub(super) fn centre(&self) -> Vec3A {
+        self.lo * 0.5 + self.hi * 0.5
     }
 
     /// True when both corners are finite (an empty box is not).
@@ -120,6 +128,16 @@ impl Tree {
             lo: Vec3A::from_array(self.root.lo),
             hi: Vec3A::from_array(self.root.hi),
         }
+    }
+
+    /// The most primitives in one leaf.
+    #[cfg(test)]
+    pub(super) fn largest_leaf(&self) -> u32 {
+        std::iter::once(self.root)
+            .chain(self.pairs.iter().flat_map(|p| p.0))
+            .map(|n| n.count)
+            .max()
+            .unwrap_or(0)
     }
 
     /// Depth of the deepest leaf (the root is depth 0).

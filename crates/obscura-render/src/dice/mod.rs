@@ -70,7 +70,7 @@ mod subdivision;
 #[cfg(test)]
 mod tests;
 
-use glam::{Mat4, Vec3};
+use glam::{Mat4, Vec2, Vec3};
 use obscura_scene::Shape;
 use obscura_sdk::{DicingHint, Format, ScreenWindow};
 
@@ -78,7 +78,7 @@ use self::blobby::blobby;
 use self::classic_quadrics::{hyperboloid, paraboloid};
 use self::curves::{curves, points};
 use self::nurbs::nu_patch;
-use self::patch::patches;
+use self::patch::{patches, patches_with_st};
 use self::polygon::pass_through;
 use self::quadric::{cone, cylinder, disk, sphere, torus};
 use self::subdivision::subdivision;
@@ -384,6 +384,11 @@ pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceErro
         Shape::Mesh(mesh) => pass_through(mesh)?,
         Shape::Subdiv(mesh) => subdivision(mesh, ctx)?,
     };
+    finite(mesh)
+}
+
+/// `mesh`, when every vertex and normal is finite.
+fn finite(mesh: TriangleMesh) -> Result<TriangleMesh, DiceError> {
     let finite = mesh.positions.iter().all(|p| p.is_finite())
         && mesh
             .normals
@@ -393,6 +398,27 @@ pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceErro
         Ok(mesh)
     } else {
         Err(DiceError::NonFiniteGeometry)
+    }
+}
+
+/// As [`dice`], with each vertex's texture coordinates `(s, t)` in the RenderMan Interface's
+/// convention (`t = 0` a texture's top row) for the primitives that carry them: patches (`Patch`,
+/// `PatchMesh`, the teapot; see [`obscura_scene::BezierPatch::st`]). `None` for the others (a polygon
+/// mesh's `"st"` travels with the scene mesh itself).
+///
+/// # Errors
+///
+/// As [`dice`].
+pub fn dice_with_st(
+    shape: &Shape,
+    ctx: &DicingContext,
+) -> Result<(TriangleMesh, Option<Vec<Vec2>>), DiceError> {
+    match shape {
+        Shape::Patches(list) => {
+            let (mesh, st) = patches_with_st(list, ctx);
+            Ok((finite(mesh)?, Some(st)))
+        }
+        _ => Ok((dice(shape, ctx)?, None)),
     }
 }
 

@@ -10,8 +10,10 @@
 //! exceed [`MAX_QUADS_PER_PRIMITIVE`](super::MAX_QUADS_PER_PRIMITIVE) quads, every count is scaled
 //! down by the same factor. Vertices lie on the surface (Bernstein form, `f64`), normals are
 //! `∂P/∂u × ∂P/∂v` normalised (at a collapsed edge, the normal a small step inside the patch).
+//! Each vertex also gets its texture coordinates `(s, t)`: the patch's corner values interpolated
+//! bilinearly at the vertex's `(u, v)` in the whole patch (a piece remembers the part it covers).
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec2, Vec3};
 use obscura_scene::BezierPatch;
 
 use super::quadric::{Grid, Rate, tessellate};
@@ -156,28 +158,71 @@ fn counts(p: &[DVec3; 16], ctx: &DicingContext) -> (u32, u32) {
     (rate.segments(au, 0.0), rate.segments(av, 0.0))
 }
 
+/// A piece of a patch: its control points, the part `[u0, u1] × [v0, v1]` of its patch it covers,
+/// the patch's index, and its segment counts.
+struct Piece {
+    points: [DVec3; 16],
+    range: [f64; 4],
+    patch: usize,
+    counts: (u32, u32),
+}
+
 /// Splits `p` until each piece dices into at most [`SPLIT_ABOVE_QUADS`] quads (or the depth runs
 /// out), so the near part of a large patch dices finely and its far part coarsely: each piece is
-/// measured at its own distance. Pushes `(piece, nu, nv)`.
-fn split_to_fit(p: [DVec3; 16], ctx: &DicingContext, depth: u32, out: &mut Vec<([DVec3; 16], (u32, u32))>) {
-    let (nu, nv) = counts(&p, ctx);
+/// measured at its own distance.
+fn split_to_fit(p: Piece, ctx: &DicingContext, depth: u32, out: &mut Vec<Piece>) {
+    let (nu, nv) = counts(&p.points, ctx);
     if u64::from(nu) * u64::from(nv) <= u64::from(SPLIT_ABOVE_QUADS) || depth >= MAX_SPLIT_DEPTH {
-        out.push((p, (nu, nv)));
+        out.push(Piece {
+            counts: (nu, nv),
+            ..p
+        });
         return;
     }
-    let (a, b) = split(&p, nu >= nv);
-    split_to_fit(a, ctx, depth + 1, out);
-    split_to_fit(b, ctx, depth + 1, out);
+    let along_u = nu >= nv;
+    let (a, b) = split(&p.points, along_u);
+    let [u0, u1, v0, v1] = p.range;
+    let (ra, rb) = if along_u {
+        let um = 0.5 * (u0 + u1);
+        ([u0, um, v0, v1], [um, u1, v0, v1])
+    } else {
+        let vm = 0.5 * (v0 + v1);
+        ([u0, u1, v0, vm], [u0, u1, vm, v1])
+    };
+    for (points, range) in [(a, ra), (b, rb)] {
+        let piece = Piece {
+            points,
+            range,
+            patch: p.patch,
+            counts: (0, 0),
+        };
+        split_to_fit(piece, ctx, depth + 1, out);
+    }
 }
 
 /// The patches as one triangle mesh.
 pub(super) fn patches(list: &[BezierPatch], ctx: &DicingContext) -> TriangleMesh {
+    patches_with_st(list, ctx).0
+}
+
+/// The patches as one triangle mesh, and each vertex's texture coordinates `(s, t)`.
+pub(super) fn patches_with_st(list: &[BezierPatch], ctx: &DicingContext) -> (TriangleMesh, Vec<Vec2>) {
     let mut pieces = Vec::new();
-    for p in list.iter().filter(|p| p.points.iter().all(|q| q.is_finite())) {
-        split_to_fit(p.points.map(Vec3::as_dvec3), ctx, 0, &mut pieces);
+    for (k, p) in list
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.points.iter().all(|q| q.is_finite()))
+    {
+        let whole = Piece {
+            points: p.points.map(Vec3::as_dvec3),
+            range: [0.0, 1.0, 0.0, 1.0],
+            patch: k,
+            counts: (0, 0),
+        };
+        split_to_fit(whole, ctx, 0, &mut pieces);
     }
-    let mut counts: Vec<(u32, u32)> = pieces.iter().map(|p| p.1).collect();
-    let (centre, radius) = bounding_sphere(pieces.iter().flat_map(|p| p.0.iter().copied()));
+    let mut counts: Vec<(u32, u32)> = pieces.iter().map(|p| p.counts).collect();
+    let (centre, radius) = bounding_sphere(pieces.iter().flat_map(|p| p.points.iter().copied()));
     fit_all(
         &mut counts,
         super::quad_budget(ctx, centre.as_vec3(), radius as f32),
@@ -186,7 +231,9 @@ pub(super) fn patches(list: &[BezierPatch], ctx: &DicingContext) -> TriangleMesh
         normals: Some(Vec::new()),
         ..TriangleMesh::default()
     };
-    for ((p, _), &(nu, nv)) in pieces.iter().zip(&counts) {
+    let mut st = Vec::new();
+    for (piece, &(nu, nv)) in pieces.iter().zip(&counts) {
+        let p = &piece.points;
         let grid = Grid {
             nu,
             nv,
@@ -196,12 +243,21 @@ pub(super) fn patches(list: &[BezierPatch], ctx: &DicingContext) -> TriangleMesh
             pole1: None,
         };
         let eval = |u: f64, v: f64| evaluate(p, u, v);
-        append(
-            &mut out,
-            tessellate(&grid, |u, v| (eval(u, v).0, surface_normal(eval, u, v))),
-        );
+        let mesh = tessellate(&grid, |u, v| (eval(u, v).0, surface_normal(eval, u, v)));
+        // Without poles or wrapping, the grid's vertices are row by row: (i, j) at j·(nu + 1) + i.
+        debug_assert_eq!(mesh.positions.len(), (nu as usize + 1) * (nv as usize + 1));
+        let [u0, u1, v0, v1] = piece.range;
+        let patch = &list[piece.patch];
+        for j in 0..=nv {
+            let v = v0 + (v1 - v0) * f64::from(j) / f64::from(nv);
+            for i in 0..=nu {
+                let u = u0 + (u1 - u0) * f64::from(i) / f64::from(nu);
+                st.push(patch.st_at(u as f32, v as f32));
+            }
+        }
+        append(&mut out, mesh);
     }
-    out
+    (out, st)
 }
 
 #[cfg(test)]
@@ -225,7 +281,7 @@ mod tests {
             let (i, j) = (k % 4, k / 4);
             Vec3::new(i as f32 / 3.0, j as f32 / 3.0, f[i] + f[j])
         });
-        BezierPatch { points }
+        BezierPatch::new(points)
     }
 
     #[test]
@@ -263,12 +319,10 @@ mod tests {
         // A 40-unit floor from 1 unit in front of the camera to 41 units away: each piece is diced at
         // its own distance, so triangles near the camera are far smaller than those at the back, and
         // the whole stays within what its on-screen coverage allows.
-        let floor = BezierPatch {
-            points: std::array::from_fn(|k| {
-                let (i, j) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
-                Vec3::new(40.0 * i - 20.0, -1.0, 1.0 + 40.0 * j)
-            }),
-        };
+        let floor = BezierPatch::new(std::array::from_fn(|k| {
+            let (i, j) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
+            Vec3::new(40.0 * i - 20.0, -1.0, 1.0 + 40.0 * j)
+        }));
         let ctx = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(160, 120));
         let mesh = patches(&[floor], &ctx);
         let mean_edge = |near: bool| {

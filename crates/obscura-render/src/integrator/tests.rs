@@ -196,6 +196,7 @@ fn distant_light_direct_lighting_is_albedo_over_pi_times_irradiance() {
         intensity: 2.0,
         exposure: 1.0,
         angle_extent: 0.0,
+        enable_shadows: true,
         transform: Mat4::IDENTITY,
     };
     let s = scene(
@@ -410,6 +411,7 @@ fn any_light() -> impl Strategy<Value = Light> {
                 intensity,
                 exposure,
                 angle_extent: angle_extent * 20.0,
+                enable_shadows: true,
                 transform,
             }
         ),

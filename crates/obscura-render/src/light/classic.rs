@@ -22,6 +22,8 @@ pub(super) struct PointLight {
     pub(super) position: Vec3A,
     /// The spot's beam, if any.
     pub(super) spot: Option<SpotBeam>,
+    /// `enable_shadows`: surfaces between a point and the light block it.
+    pub(super) shadows: bool,
 }
 
 /// A spot light's beam.
@@ -112,6 +114,7 @@ mod tests {
             color: Rgb::new(1.0, 0.5, 0.25),
             intensity,
             position: Vec3::new(0.0, 0.0, 2.0),
+            enable_shadows: true,
         }
     }
 
@@ -149,6 +152,7 @@ mod tests {
                 color: Rgb::WHITE,
                 intensity: 1.0,
                 position: Vec3::ZERO,
+                enable_shadows: true,
             },
             direction: Vec3::Z,
             cone_angle: cone,

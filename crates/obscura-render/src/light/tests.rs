@@ -179,6 +179,7 @@ fn distant_light_irradiance_is_intensity_cos() {
             intensity: 3.0,
             exposure: 0.0,
             angle_extent: extent,
+            enable_shadows: true,
             transform,
         }]);
         // The mean of cos over a cone of half-angle θc around the axis: cos θ (1 + cos θc)/2.
@@ -195,6 +196,7 @@ fn distant_light_irradiance_is_intensity_cos() {
         intensity: 1.0,
         exposure: 0.0,
         angle_extent: 0.53,
+        enable_shadows: true,
         transform: Mat4::IDENTITY,
     }]);
     assert_close(
@@ -371,6 +373,7 @@ fn sample_and_lookup_pdfs_agree() {
             intensity: 1.0,
             exposure: 0.0,
             angle_extent: 40.0,
+            enable_shadows: true,
             transform: Mat4::from_rotation_x(2.0),
         },
     ]);
@@ -430,6 +433,7 @@ fn lights_that_cannot_emit_are_dropped() {
             intensity: 1.0,
             exposure: 0.0,
             angle_extent: 0.53,
+            enable_shadows: true,
             transform: Mat4::IDENTITY,
         },
     ]);

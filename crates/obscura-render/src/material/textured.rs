@@ -67,6 +67,19 @@ impl SurfaceAttributes {
         })
     }
 
+    /// The attributes of a diced primitive from its vertices' RenderMan texture coordinates
+    /// `(s, t)` ([`crate::dice::dice_with_st`]): one coordinate set `(s, 1 − t)`, the convention of
+    /// every reader's texture coordinates (a RIB polygon's `"st"` is read the same way). `None`
+    /// unless there is one coordinate per vertex.
+    #[must_use]
+    pub fn of_diced(mesh: &crate::ray::TriangleMesh, st: &[Vec2]) -> Option<Self> {
+        (st.len() == mesh.positions.len()).then(|| SurfaceAttributes {
+            triangles: mesh.triangles.clone(),
+            uvs: vec![st.iter().map(|p| Vec2::new(p.x, 1.0 - p.y)).collect()],
+            colors: None,
+        })
+    }
+
     /// Texture coordinates of set `set` at barycentrics `(b1, b2)` of triangle `tri` with the three
     /// vertex values.
     fn uv(&self, set: usize, tri: [u32; 3], b: (f32, f32)) -> Option<(Vec2, [Vec2; 3])> {

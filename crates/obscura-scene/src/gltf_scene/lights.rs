@@ -158,6 +158,7 @@ impl Loader<'_> {
                     intensity: p.intensity,
                     exposure: 0.0,
                     angle_extent: SUN_ANGLE_EXTENT_DEG,
+                    enable_shadows: true,
                     transform: *world * flip_z(),
                 },
                 PunctualKind::Point | PunctualKind::Spot => {

@@ -47,6 +47,9 @@ pub(super) struct Facing {
     pub(super) inside_out: bool,
 }
 
+/// RenderMan's `RI_INFINITY` as RIB files write it (`1.0e38`); an fstop at or above it is a pinhole.
+const RI_INFINITY: f32 = 1.0e38;
+
 impl Reader {
     /// `FrameAspectRatio a`: the aspect the default screen window follows.
     pub(super) fn frame_aspect_ratio(&mut self, r: &Req<'_>) -> Result<(), RibError> {
@@ -94,6 +97,12 @@ impl Reader {
         }
         let [f_stop, focal_length, focal_distance] =
             r.only_numbers::<3>("fstop focallength focaldistance")?;
+        // RISpec 3.2 §4.1.2: an fstop of RI_INFINITY (1e38 in RIB) is a pinhole camera, whatever the
+        // other two say (files write `DepthOfField 1e38 0 0`).
+        if f_stop >= RI_INFINITY {
+            self.depth_of_field = None;
+            return Ok(());
+        }
         if !(f_stop > 0.0 && focal_length > 0.0 && focal_distance > 0.0) || focal_length.is_infinite() {
             return Err(r.err(format!(
                 "DepthOfField expects a positive fstop, focal length and focal distance, got {f_stop} {focal_length} {focal_distance}"

@@ -18,6 +18,11 @@
 //! | `pointlight` | [`Light::Point`] at `from` |
 //! | `spotlight` | [`Light::Spot`] at `from` along `to − from`: `coneangle`, `conedeltaangle` (radians, as in RIB), `beamdistribution`; the spec's attenuation `cosᵇ α · smoothstep(cos(cone), cos(cone − delta), cos α) / d²` |
 //!
+//! The spec's `distantlight`, `pointlight` and `spotlight` cast no shadows (their shaders call no
+//! `shadow()`; a classic renderer shadows only through shadow-map lights), so their lights have
+//! `enable_shadows` off — a scene inside a star-field sphere stays lit — unless BMRT's
+//! `Attribute "light" "shadows" "on"` stands when they are declared.
+//!
 //! # Surfaces
 //!
 //! The classic `specular()` lobe is Blinn's `(N·H)ⁿ` with `n = 8/roughness` (Aqsis, BMRT and PRMan;
@@ -37,11 +42,28 @@
 //!
 //! Albedos are clamped to `[0, 1]`. `Ka` has no physical counterpart (ambient light arrives through
 //! the diffuse lobe); `Kr` and `texturename` of `shinymetal` (a reflection map) are left out.
-//! `paintedplastic`'s `texturename` is named in a warning: the renderer shades one colour per surface.
 //! `Opacity` and `Os` below 1 render opaque, with a warning.
+//!
+//! # `paintedplastic`'s texture
+//!
+//! `texturename` multiplies the diffuse colour: the spec's shader replaces `Cs` by
+//! `Cs·texture(texturename, s, t)` in the diffuse term and leaves the highlight alone, so the
+//! material becomes [`SurfaceMaps`] with `Kd·Cs` as the base colour factor, the texture as the base
+//! colour and the plastic's `F0` as its specular colour. The file is looked up as RenderMan does: an
+//! absolute name as it is, a relative one in each directory of `Option "searchpath" "texture"`
+//! (relative directories from the RIB file's), then beside the RIB file. Any format the renderer
+//! reads is read by its content: TIFF, PNG, OpenEXR, JPEG, Radiance HDR, and RenderMan's `.tex`/`.tx`
+//! when they are TIFF inside (a `.tex` in Pixar's own format fails to decode, and the renderer's
+//! warning names the `Surface` line and the file). Values are read as they are stored (linear, as a
+//! classic `texture()` call reads them), and the texture repeats. `(s, t)` follows the RI: `s`
+//! across the image, `t = 0` on its top row; the primitives' coordinates reach the renderer as
+//! `(s, 1 − t)` (the convention of every reader's texture coordinates), so the slot flips `t` back.
+//! A file that is not there is a warning naming the `Surface` line and the file, and the surface
+//! renders as plastic.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::f32::consts::PI;
+use std::path::PathBuf;
 
 use glam::{Mat4, Vec3};
 use obscura_sdk::{ParamList, Rgb};
@@ -49,7 +71,9 @@ use obscura_sdk::{ParamList, Rgb};
 use super::lex::Value;
 use super::patch::Basis;
 use super::request::{Req, get_color, get_float, get_floats, get_string};
+use super::searchpath::Kind;
 use super::{Reader, RibError};
+use crate::texture::{ColorSpace, ImageSource, SurfaceMaps, TextureDesc, TextureSlot, Wrap};
 use crate::types::{Light, Material, PointEmitter};
 
 /// The classic shading attributes (saved and restored by attribute blocks).
@@ -63,6 +87,8 @@ pub(super) struct ClassicAttributes {
     pub(super) surface: Option<ClassicSurface>,
     /// `Basis`.
     pub(super) basis: Basis,
+    /// `Attribute "light" "shadows" "on"` (BMRT's): classic lights declared under it cast shadows.
+    pub(super) light_shadows: bool,
 }
 
 impl Default for ClassicAttributes {
@@ -72,6 +98,7 @@ impl Default for ClassicAttributes {
             opacity: Rgb::WHITE,
             surface: None,
             basis: Basis::default(),
+            light_shadows: false,
         }
     }
 }
@@ -83,8 +110,10 @@ pub(super) struct ClassicState {
     pub(super) mapped_warned: bool,
     /// Messages given once per scene (keyed by a short name).
     pub(super) warned: HashSet<String>,
-    /// Materials already in the scene, by their debug text, for reuse.
-    pub(super) materials: std::collections::HashMap<String, u32>,
+    /// Materials already in the scene, by their debug text (and texture), for reuse.
+    pub(super) materials: HashMap<String, u32>,
+    /// `paintedplastic` textures already in the scene, by path.
+    pub(super) textures: HashMap<PathBuf, u32>,
     /// The colour the next primitive's own `"Cs"` gives it (consumed by that primitive).
     pub(super) primitive_color: Option<Rgb>,
 }
@@ -101,6 +130,9 @@ pub(super) enum ClassicSurface {
     },
     /// `plastic` and `paintedplastic`.
     Plastic {
+        /// `paintedplastic`'s `texturename`, when the file was found: its index in the scene's
+        /// textures.
+        texture: Option<u32>,
         /// `Kd`.
         kd: f32,
         /// `Ks`.
@@ -151,7 +183,32 @@ fn scaled(c: Rgb, k: f32) -> Rgb {
     Rgb::new(f(c.r), f(c.g), f(c.b))
 }
 
+/// `paintedplastic`: the plastic's diffuse colour `Kd·Cs` times texture `texture` at `(s, t)`, its
+/// highlight unchanged.
+fn painted(texture: u32, diffuse: Rgb, specular: Rgb, roughness: f32) -> SurfaceMaps {
+    let mut slot = TextureSlot::new(texture);
+    // The primitives' coordinates are (s, 1 − t); the RI's texture() reads (s, t).
+    slot.transform = [1.0, 0.0, 0.0, 0.0, -1.0, 1.0];
+    SurfaceMaps {
+        base_color_factor: [diffuse.r, diffuse.g, diffuse.b, 1.0],
+        base_color: Some(slot),
+        metallic: 0.0,
+        roughness,
+        specular: Some(specular),
+        vertex_colors: false,
+        ..SurfaceMaps::default()
+    }
+}
+
 impl ClassicSurface {
+    /// `paintedplastic`'s texture, when it has one.
+    fn texture(&self) -> Option<u32> {
+        match self {
+            ClassicSurface::Plastic { texture, .. } => *texture,
+            _ => None,
+        }
+    }
+
     /// The physically based material for this surface with colour `cs`.
     pub(super) fn material(&self, cs: Rgb) -> Material {
         match *self {
@@ -169,6 +226,7 @@ impl ClassicSurface {
                 ks,
                 roughness,
                 specular_color,
+                ..
             } => {
                 let n = classic_exponent(roughness);
                 Material::Surface {
@@ -267,6 +325,7 @@ impl Reader {
             "constant" => ClassicSurface::Constant,
             "matte" => ClassicSurface::Matte { kd: f("Kd", 1.0) },
             "plastic" | "paintedplastic" => ClassicSurface::Plastic {
+                texture: None,
                 kd: f("Kd", 0.5),
                 ks: f("Ks", 0.5),
                 roughness: f("roughness", 0.1),
@@ -286,22 +345,62 @@ impl Reader {
                 ClassicSurface::Other
             }
         };
-        if name == "paintedplastic"
+        let mut surface = surface;
+        if let ClassicSurface::Plastic { texture, .. } = &mut surface
+            && name == "paintedplastic"
             && let Some(t) = get_string(&list, "texturename").filter(|t| !t.is_empty())
         {
-            let path = r.resolve(t);
-            self.warn(
-                r,
-                format!(
-                    "Surface \"paintedplastic\": its texture \"{}\" is left out (the renderer shades one colour per surface); drawn as plastic",
-                    path.display()
-                ),
-            );
+            *texture = self.painted_texture(r, t);
         }
         if surface != ClassicSurface::Other {
             self.classic_mapped(r);
         }
         self.classic.surface = Some(surface);
+        Ok(())
+    }
+
+    /// `paintedplastic`'s texture `name`: its index in the scene's textures, added when new; `None`,
+    /// with a warning naming the file and where it was looked for, when no such file exists.
+    fn painted_texture(&mut self, r: &Req<'_>, name: &str) -> Option<u32> {
+        let Some(path) = self.find_file(Kind::Texture, r, name) else {
+            let places = self.search_description(Kind::Texture, r);
+            self.warn(
+                r,
+                format!(
+                    "Surface \"paintedplastic\": texture \"{name}\" not found ({places}); drawn as plastic"
+                ),
+            );
+            return None;
+        };
+        if let Some(&k) = self.classic_state.textures.get(&path) {
+            return Some(k);
+        }
+        let k = self.scene.textures.len() as u32;
+        self.scene.textures.push(TextureDesc {
+            source: ImageSource::File(path.clone()),
+            color_space: ColorSpace::Linear,
+            wrap: (Wrap::Repeat, Wrap::Repeat),
+            nearest: false,
+            used_by: format!("{}: Surface \"paintedplastic\" \"texturename\"", r.at()),
+        });
+        self.classic_state.textures.insert(path, k);
+        Some(k)
+    }
+
+    /// `Attribute "light" "shadows" "on"|"off"`: whether the classic lights declared from here on
+    /// (in this attribute block) cast shadows.
+    pub(super) fn light_attribute(&mut self, r: &Req<'_>, rest: &[Value]) -> Result<(), RibError> {
+        let list = self.params(r, rest, &["string shadows"], false)?;
+        match get_string(&list, "shadows") {
+            Some("on") => self.classic.light_shadows = true,
+            Some("off") => self.classic.light_shadows = false,
+            Some(other) => {
+                return Err(r.err(format!(
+                    "Attribute \"light\" \"shadows\": expected \"on\" or \"off\", got \"{other}\""
+                )));
+            }
+            None => {}
+        }
         Ok(())
     }
 
@@ -364,24 +463,40 @@ impl Reader {
         let own = self.classic_state.primitive_color.take();
         let color = own.or(self.classic.color);
         let cs = color.unwrap_or(Rgb::WHITE);
-        let material = match &self.classic.surface {
-            Some(s) => s.material(cs),
-            None if self.material == 0 && color.is_some() => Material::Diffuse {
-                color: scaled(cs, 1.0),
-            },
+        let (material, texture) = match &self.classic.surface {
+            Some(s) => (s.material(cs), s.texture()),
+            None if self.material == 0 && color.is_some() => (
+                Material::Diffuse {
+                    color: scaled(cs, 1.0),
+                },
+                None,
+            ),
             None => return self.material,
         };
-        self.intern_material(material)
+        self.intern_material(material, texture)
     }
 
-    /// The index of `material` in the scene, adding it when new.
-    fn intern_material(&mut self, material: Material) -> u32 {
-        let key = format!("{material:?}");
+    /// The index of `material` (painted with `texture`, when given) in the scene, adding it when new.
+    fn intern_material(&mut self, material: Material, texture: Option<u32>) -> u32 {
+        let key = format!("{material:?} {texture:?}");
         if let Some(&k) = self.classic_state.materials.get(&key) {
             return k;
         }
         let k = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
+        if let (
+            Some(t),
+            Material::Surface {
+                diffuse,
+                specular,
+                roughness,
+            },
+        ) = (texture, material)
+        {
+            self.scene
+                .material_maps
+                .insert(k, painted(t, diffuse, specular, roughness));
+        }
         self.classic_state.materials.insert(key, k);
         k
     }
@@ -401,23 +516,31 @@ impl Reader {
         let to = point(&list, "to", Vec3::Z);
         let world_from = m.transform_point3(from);
         let axis = (m.transform_point3(to) - world_from).normalize_or_zero();
+        let enable_shadows = self.classic.light_shadows;
         let emitter = PointEmitter {
             color,
             intensity: PI * intensity,
             position: world_from,
+            enable_shadows,
         };
         let light = match kind {
             "ambientlight" => Light::Ambient { color, intensity },
             "distantlight" | "spotlight" if axis == Vec3::ZERO => {
-                return Err(r.err(format!(
-                    "LightSource \"{kind}\": \"from\" and \"to\" are the same point; the light has no direction"
-                )));
+                // The spec's shader normalises a zero vector: its light goes nowhere.
+                self.warn(
+                    r,
+                    format!(
+                        "LightSource \"{kind}\": \"from\" and \"to\" are the same point, so the light has no direction; left out"
+                    ),
+                );
+                return Ok(());
             }
             "distantlight" => Light::Distant {
                 color,
                 intensity: PI * intensity,
                 exposure: 0.0,
                 angle_extent: 0.0,
+                enable_shadows,
                 transform: rotation_to_z(axis),
             },
             "pointlight" => Light::Point(emitter),
@@ -476,6 +599,7 @@ mod tests {
     #[test]
     fn plastic_keeps_kd_ks_roughness_and_specularcolor() {
         let s = ClassicSurface::Plastic {
+            texture: None,
             kd: 0.5,
             ks: 0.5,
             roughness: 0.1,

@@ -133,6 +133,15 @@ impl Reader {
 
     /// `Points "P" [...]` with `"width"` or `"constantwidth"`.
     pub(super) fn points(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        // Particle exporters write a frame without particles as `Points "P" []`: nothing to draw.
+        let empty = |v: &Value| matches!(v, Value::Nums(n) if n.is_empty());
+        if let [Value::Str(p), v, ..] = r.args
+            && p.split_whitespace().last() == Some("P")
+            && empty(v)
+        {
+            self.warn(r, "Points: \"P\" is empty; nothing to draw".into());
+            return Ok(());
+        }
         let list = self.params(r, r.args, &with_primitive_variables(&TABLE), false)?;
         self.primitive_color(r, &list);
         let positions: Vec<Vec3> = get_floats(&list, "P")

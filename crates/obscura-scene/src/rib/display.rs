@@ -7,7 +7,7 @@
 //! | `openexr`, `exr`, `png`, `deepexr`, `tiff` | that format, at the name given |
 //! | `file` | by the name's extension (`.exr`, `.png`, `.tif`); otherwise TIFF at the name given, as RenderMan's `file` driver writes |
 //! | `zfile`, `shadow` | the depth alone (`z`), as a float TIFF at the name given (OpenEXR for `.exr`) |
-//! | `framebuffer`, `it`, `x11`, `windows`, `mplay` | there is no window: OpenEXR at the name with `.exr`, with a note |
+//! | `framebuffer`, `it`, `x11`, `windows`, `mplay` | there is no window: OpenEXR at the name with `.exr` (beside the scene when the name's folders do not exist), with a note |
 //! | any other | TIFF at the name with `.tif` (the name as given when it ends in `.exr`, `.png` or `.tif`), with a warning |
 //!
 //! The mode is `rgb`, `rgba`, `rgbz`, `rgbaz`, `a`, `z`, `az`, or a comma-separated list of AOV names
@@ -78,8 +78,9 @@ fn by_extension(path: &Path) -> Option<DisplayDriver> {
     }
 }
 
-/// Where a `Display` with `driver` and the resolved `path` writes (see the module docs).
-fn target(driver: &str, path: PathBuf) -> Target {
+/// Where a `Display` with `driver` and the resolved `path` writes (see the module docs); `base` is
+/// the scene's directory.
+fn target(driver: &str, path: PathBuf, base: &Path) -> Target {
     let plain = |driver| Target {
         driver,
         path: path.clone(),
@@ -101,6 +102,12 @@ fn target(driver: &str, path: PathBuf) -> Target {
         },
         d if INTERACTIVE.contains(&d) => {
             let exr = with_extension(&path, "exr");
+            // A window's name is a title, often with its exporter's folders (RenderMan for Maya
+            // writes `renderman/scene/images/scene`): when those do not exist, beside the scene.
+            let exr = match (exr.parent(), exr.file_name()) {
+                (Some(dir), Some(name)) if !dir.as_os_str().is_empty() && !dir.is_dir() => base.join(name),
+                _ => exr,
+            };
             Target {
                 note: Some(format!(
                     "Display driver \"{d}\" shows a window, which a batch render has not: written to {} instead",
@@ -158,7 +165,7 @@ impl Reader {
         if file.is_empty() {
             return Err(r.err("Display expects a file name, got \"\""));
         }
-        let target = target(driver, r.resolve(file));
+        let target = target(driver, r.resolve(file), r.base);
         let aovs = if target.depth_only {
             vec![Aov::Z]
         } else {

@@ -8,17 +8,25 @@
 //! options and camera carry over into the next world. A world not closed by the end of the file is
 //! closed there. A file with shadow or bake passes thus gives one image per pass, in file order.
 //!
+//! Both also save the attributes (RISpec §4: every begin–end pair does), and what the world defines
+//! goes with it: `WorldEnd` and `FrameEnd` bring back `Color`, `Opacity`, `Surface`, `Basis`,
+//! `Sides` and the orientation, the current `Bxdf` and identifier as they were at the begin, and free
+//! the retained objects (`ObjectBegin`), patterns and materials defined since; so a frame or a world
+//! never inherits its predecessor's colour or shader, and never refers to a material or texture its
+//! scene does not hold.
+//!
 //! A `LightSource` before `WorldBegin` lives in the space current at the call — camera space after
 //! `Projection` — so it moves with the camera: it is kept with that transform and placed in the world
 //! at `WorldBegin`, once the camera is known, at `world_to_camera⁻¹ · CTM`.
 
+use std::collections::HashMap;
 use std::path::PathBuf;
 
 use super::lex::{BinaryAt, Value};
 use super::request::Req;
-use super::transform::{Ctm, Op};
-use super::{Reader, RibError};
-use crate::types::Scene;
+use super::transform::{BlockKind, Ctm, Op};
+use super::{Reader, RibError, classic_shaders, pattern, searchpath};
+use crate::types::{Object, Scene};
 
 /// One image of a RIB file: the frame it belongs to and the scene of its world.
 #[derive(Debug, Clone, PartialEq)]
@@ -35,8 +43,8 @@ pub struct Frame {
     pub scene: Scene,
 }
 
-/// What `FrameBegin` and `WorldBegin` save: the options (the scene without its world) and the state
-/// that goes with them.
+/// What `FrameBegin` and `WorldBegin` save: the options (the scene without its world), the attributes,
+/// and the definitions that refer into the scene (materials, textures).
 #[derive(Debug, Clone)]
 pub(super) struct Saved {
     scene: Scene,
@@ -46,6 +54,21 @@ pub(super) struct Saved {
     display_origins: Vec<String>,
     frame_aspect: Option<f32>,
     depth_of_field: Option<super::camera::DepthOfField>,
+    /// `Color`, `Opacity`, `Surface`, `Basis`.
+    classic: classic_shaders::ClassicAttributes,
+    identifier: String,
+    /// `Sides`, `Orientation`, `ReverseOrientation`.
+    facing: super::camera::Facing,
+    /// Retained objects by handle.
+    objects: HashMap<String, Vec<Object>>,
+    /// The classic materials interned so far: indices into `scene.materials`.
+    interned: HashMap<String, u32>,
+    /// `Pattern` handles: they hold indices into `scene.textures`.
+    patterns: pattern::Patterns,
+    /// `paintedplastic` textures: indices into `scene.textures`.
+    painted: HashMap<PathBuf, u32>,
+    /// `Option "searchpath"`.
+    search: searchpath::SearchPaths,
 }
 
 /// An open `FrameBegin`: its number, where it is, and the options to restore.
@@ -83,6 +106,14 @@ impl Reader {
             display_origins: self.display_origins.clone(),
             frame_aspect: self.frame_aspect,
             depth_of_field: self.depth_of_field,
+            classic: self.classic.clone(),
+            identifier: self.identifier.clone(),
+            facing: self.facing,
+            objects: self.retained.objects.clone(),
+            interned: self.classic_state.materials.clone(),
+            patterns: self.patterns.clone(),
+            painted: self.classic_state.textures.clone(),
+            search: self.search.clone(),
         }
     }
 
@@ -99,6 +130,14 @@ impl Reader {
         self.display_origins = saved.display_origins;
         self.frame_aspect = saved.frame_aspect;
         self.depth_of_field = saved.depth_of_field;
+        self.classic = saved.classic;
+        self.identifier = saved.identifier;
+        self.facing = saved.facing;
+        self.retained.objects = saved.objects;
+        self.classic_state.materials = saved.interned;
+        self.patterns = saved.patterns;
+        self.classic_state.textures = saved.painted;
+        self.search = saved.search;
     }
 
     /// `FrameBegin n`: saves the options.
@@ -155,7 +194,9 @@ impl Reader {
         if let Some(at) = &self.world {
             return Err(r.err(format!("WorldBegin: the world block was already begun at {at}")));
         }
-        if let Some(b) = self.blocks.last() {
+        // Exporters of the time (MTOR, Houdini) wrap the camera's motion and the world in one
+        // TransformBegin/TransformEnd, which RenderMan accepts: only attribute blocks must be closed.
+        if let Some(b) = self.blocks.iter().rev().find(|b| b.kind != BlockKind::Transform) {
             return Err(r.err(format!(
                 "WorldBegin inside {} (at {}:{}): close it first",
                 b.kind.begin(),
@@ -163,6 +204,7 @@ impl Reader {
                 b.line
             )));
         }
+        self.world_blocks = self.blocks.len();
         self.before_world = Some(self.save());
         self.settle_camera(r)?;
         self.store_camera_transform();
@@ -189,7 +231,7 @@ impl Reader {
     /// `WorldEnd`: every attribute and transform block must be closed; the world becomes an image and
     /// the options return to what they were at `WorldBegin`.
     pub(super) fn world_end(&mut self, r: &Req<'_>) -> Result<(), RibError> {
-        if let Some(b) = self.blocks.last() {
+        if let Some(b) = self.blocks[self.world_blocks.min(self.blocks.len())..].last() {
             return Err(r.err(format!(
                 "WorldEnd: {} at {}:{} has no matching {}",
                 b.kind.begin(),

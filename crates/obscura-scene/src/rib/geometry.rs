@@ -16,10 +16,26 @@ impl Reader {
     /// Adds an object of `shape` with the current transform, material and dicing (to the object
     /// being defined, inside `ObjectBegin`).
     pub(super) fn add_object(&mut self, r: &Req<'_>, shape: Shape) {
+        let material = self.current_material();
+        let has_st = match &shape {
+            Shape::Patches(_) => true,
+            Shape::Mesh(m) => !m.uvs.is_empty(),
+            _ => false,
+        };
+        if !has_st && self.scene.material_maps.contains_key(&material) {
+            self.warn_once(
+                r,
+                &format!("no st {}", r.name),
+                format!(
+                    "{}: the surface's texture needs texture coordinates, which the renderer has for patches and for polygons with \"st\" only; drawn in the surface's colour alone",
+                    r.name
+                ),
+            );
+        }
         let object = Object {
             shape,
             transform: self.ctm.to_motion(),
-            material: self.current_material(),
+            material,
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
             sides: self.current_sides(),

@@ -39,7 +39,8 @@
 //! Errors ([`RibError`]) stop the reading and name the file, the line of the request and what was
 //! expected. Unknown requests, unknown parameters and unsupported attributes, hiders, lights, Bxdfs and
 //! subdivision tags are skipped with a warning `file:line: …` in [`Scene::warnings`]. Relative paths
-//! (`ReadArchive`, `Display`, `lightColorMap`) resolve against the directory of the file that names them.
+//! (`ReadArchive`, `Display`, `lightColorMap`, textures) resolve against the directory of the file that
+//! names them; `ReadArchive` and classic textures look through `Option "searchpath"` first.
 //!
 //! [`Matrix4`]: obscura_sdk::Matrix4
 //! [`Object::transform`]: crate::types::Object::transform
@@ -70,6 +71,7 @@ mod options;
 mod patch;
 mod pattern;
 mod request;
+mod searchpath;
 mod shading;
 mod teapot;
 mod transform;
@@ -132,9 +134,35 @@ impl RibError {
     }
 }
 
-/// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name).
+/// The bytes of a RIB file, decompressed when they are gzip (by content, whatever the name). A
+/// path `archive.zip!member` names a member of a zip file, as RenderMan reads them (RenderMan for
+/// Maya writes its geometry caches so).
 fn read_rib_bytes(path: &Path) -> Result<Vec<u8>, String> {
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?;
+    let text = path.to_string_lossy();
+    let bytes = match text.find(".zip!") {
+        Some(at) => {
+            let (zip, member) = (Path::new(&text[..at + 4]), &text[at + 5..]);
+            let file = std::fs::File::open(zip)
+                .map_err(|e| format!("cannot read the zip file {}: {e}", zip.display()))?;
+            let mut archive = zip::ZipArchive::new(file)
+                .map_err(|e| format!("{} is not a zip file that can be read: {e}", zip.display()))?;
+            let mut entry = archive.by_name(member).map_err(|e| {
+                format!(
+                    "cannot read \"{member}\" from the zip file {}: {e}",
+                    zip.display()
+                )
+            })?;
+            let mut out = Vec::new();
+            std::io::Read::read_to_end(&mut entry, &mut out).map_err(|e| {
+                format!(
+                    "cannot read \"{member}\" from the zip file {}: {e}",
+                    zip.display()
+                )
+            })?;
+            out
+        }
+        None => std::fs::read(path).map_err(|e| format!("cannot read the file: {e}"))?,
+    };
     decompress(bytes)
 }
 
@@ -278,7 +306,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 77] = {
+const REQUESTS: [Request; 78] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -364,6 +392,7 @@ const REQUESTS: [Request; 77] = {
         known("ObjectEnd", Anywhere, Reader::object_end),
         known("ObjectInstance", World, Reader::object_instance),
         known("Procedural", World, Reader::procedural),
+        known("Procedural2", World, Reader::procedural2),
         known("SolidBegin", World, Reader::solid),
         known("SolidEnd", World, Reader::solid),
         known("Blobby", World, Reader::blobby),
@@ -390,6 +419,8 @@ struct Reader {
     motion: Option<MotionBlock>,
     /// `file:line` of `WorldBegin` once read.
     world: Option<String>,
+    /// How many blocks were open at `WorldBegin` (transform blocks may enclose a world).
+    world_blocks: usize,
     /// `Declare`d names → full declarations (`fov` → `float fov`).
     declared: HashMap<String, String>,
     /// Attributes already warned about (each is warned about once).
@@ -424,6 +455,8 @@ struct Reader {
     retained: objects::Retained,
     /// `Pattern` handles read so far.
     patterns: pattern::Patterns,
+    /// `Option "searchpath"`.
+    search: searchpath::SearchPaths,
 }
 
 /// An `ArchiveBegin` block being read.
@@ -448,6 +481,7 @@ impl Reader {
             blocks: Vec::new(),
             motion: None,
             world: None,
+            world_blocks: 0,
             declared: HashMap::new(),
             warned_attributes: HashSet::new(),
             warned_options: HashSet::new(),
@@ -465,6 +499,7 @@ impl Reader {
             classic_state: classic_shaders::ClassicState::default(),
             retained: objects::Retained::default(),
             patterns: pattern::Patterns::new(),
+            search: searchpath::SearchPaths::default(),
         }
     }
 
@@ -665,7 +700,9 @@ impl Reader {
         if let Some(commands) = self.inline_archives.get(file.as_str()).cloned() {
             return self.run_commands(&commands, r.file, r.base, r.depth + 1);
         }
-        let path = r.resolve(file);
+        let path = self
+            .find_file(searchpath::Kind::Archive, r, file)
+            .unwrap_or_else(|| r.resolve(file));
         let bytes =
             read_rib_bytes(&path).map_err(|e| r.err(format!("ReadArchive \"{}\": {e}", path.display())))?;
         let name = path.display().to_string();

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use glam::Mat4;
 
 use super::lex::Value;
-use super::request::Req;
+use super::request::{Req, get_string};
 use super::transform::Ctm;
 use super::{Reader, RibError};
 use crate::types::{MotionTransform, Object};
@@ -136,6 +136,25 @@ impl Reader {
                 "Procedural \"{other}\" is not known (known: DelayedReadArchive)"
             ))),
         }
+    }
+
+    /// `Procedural2 "DelayedReadArchive2" "SimpleBound" "string filename" [file] "float[6] bound" […]`
+    /// (RenderMan 21) reads the archive in place, as `DelayedReadArchive`; other kinds stop.
+    pub(super) fn procedural2(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [Value::Str(kind), Value::Str(_bound_kind), rest @ ..] = r.args else {
+            return Err(r.err("Procedural2 expects a kind and a bound kind (2 strings) then parameters"));
+        };
+        if kind != "DelayedReadArchive2" {
+            return Err(r.err(format!(
+                "Procedural2 \"{kind}\" is not supported (known: DelayedReadArchive2); expand it to RIB first"
+            )));
+        }
+        let list = self.params(r, rest, &["string filename", "float[6] bound"], false)?;
+        let Some(file) = get_string(&list, "filename").filter(|f| !f.is_empty()) else {
+            return Err(r.err("Procedural2 \"DelayedReadArchive2\" expects \"string filename\" [\"file\"]"));
+        };
+        let file = [Value::Str(file.to_string())];
+        self.read_archive(&Req { args: &file, ..*r })
     }
 
     /// `SolidBegin`/`SolidEnd`: the primitives inside are drawn as they are, with one warning.

@@ -257,6 +257,9 @@ impl Reader {
         let Some(Value::Str(name)) = r.args.first() else {
             return Err(r.err("Option expects an option name (a string) then parameters"));
         };
+        if name == "searchpath" {
+            return self.search_path(r, &r.args[1..]);
+        }
         if self.warned_options.insert(name.clone()) {
             self.warn(r, format!("Option \"{name}\" is not supported, ignored"));
         }

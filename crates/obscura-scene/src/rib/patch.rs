@@ -8,8 +8,13 @@
 //! bilinear `n − 1` or `n`. `"Pz"` gives a height field over `(u, v) ∈ [0, 1]²` of the whole mesh;
 //! `"Pw"` points are divided by `w` (exact for `w = 1`; a rational patch is approximated, with a
 //! warning).
+//!
+//! Texture coordinates are the RI's `varying` ones: one `(s, t)` per patch corner (`"st"`, or `"s"`
+//! and `"t"`), `(nu_p + 1) × (nv_p + 1)` of them on a nonperiodic mesh of `nu_p × nv_p` patches (one
+//! fewer per periodic direction), interpolated bilinearly over each patch; without them `s = u`,
+//! `t = v` over the whole mesh, `(u, v)` running over `[0, 1]²` as the spec says.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 use super::geometry::with_primitive_variables;
 use super::lex::Value;
@@ -146,7 +151,7 @@ fn bicubic(cu: &[[f64; 4]; 4], cv: &[[f64; 4]; 4], g: &[Vec3; 16]) -> BezierPatc
             points[4 * j + i] = p;
         }
     }
-    BezierPatch { points }
+    BezierPatch::new(points)
 }
 
 /// A bilinear patch (`(0,0) (1,0) (0,1) (1,1)`) as an exact bicubic Bézier patch.
@@ -155,7 +160,7 @@ fn bilinear(p: [Vec3; 4]) -> BezierPatch {
         let (u, v) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
         (p[0] * (1.0 - u) + p[1] * u) * (1.0 - v) + (p[2] * (1.0 - u) + p[3] * u) * v
     });
-    BezierPatch { points }
+    BezierPatch::new(points)
 }
 
 /// Patches along one direction of a mesh of `n` points: their first point indices.
@@ -206,16 +211,40 @@ impl Reader {
     }
 
     /// The control points of a patch request: `"P"`, `"Pw"` (divided by w) or `"Pz"` (a height
-    /// field on the `cols × rows` grid over `[0, 1]²`).
+    /// field on the `cols × rows` grid over `[0, 1]²`); and its varying texture coordinates
+    /// (`"st"`, or `"s"` and `"t"`), unchecked, when given.
     fn patch_points(
         &mut self,
         r: &Req<'_>,
         rest: &[Value],
         cols: usize,
         rows: usize,
-    ) -> Result<Vec<Vec3>, RibError> {
+    ) -> Result<(Vec<Vec3>, Option<Vec<Vec2>>), RibError> {
         let table = with_primitive_variables(&["vertex point P", "vertex hpoint Pw", "vertex float Pz"]);
         let list = self.params(r, rest, &table, false)?;
+        let st = match (
+            get_floats(&list, "st"),
+            get_floats(&list, "s"),
+            get_floats(&list, "t"),
+        ) {
+            (Some(st), _, _) => Some(
+                st.chunks(2)
+                    .map(|c| Vec2::new(c[0], c.get(1).copied().unwrap_or(f32::NAN)))
+                    .collect(),
+            ),
+            (None, Some(s), Some(t)) if s.len() == t.len() => {
+                Some(s.iter().zip(t).map(|(&s, &t)| Vec2::new(s, t)).collect())
+            }
+            (None, Some(s), Some(t)) => {
+                return Err(r.err(format!(
+                    "{}: \"s\" has {} values and \"t\" {}; they pair up, one (s, t) per patch corner",
+                    r.name,
+                    s.len(),
+                    t.len()
+                )));
+            }
+            _ => None,
+        };
         self.primitive_color(r, &list);
         let need = cols * rows;
         let points: Vec<Vec3> = if let Some(p) = get_floats(&list, "P") {
@@ -250,7 +279,7 @@ impl Reader {
                 points.len()
             )));
         }
-        Ok(points)
+        Ok((points, st))
     }
 
     /// `Patch "bilinear"|"bicubic" "P" [...]`.
@@ -258,19 +287,20 @@ impl Reader {
         let [Value::Str(kind), rest @ ..] = r.args else {
             return Err(r.err("Patch expects \"bilinear\" or \"bicubic\" then \"P\" [...]"));
         };
-        let patch = match kind.as_str() {
+        let (mut patch, st) = match kind.as_str() {
             "bilinear" => {
-                let p = self.patch_points(r, rest, 2, 2)?;
-                bilinear([p[0], p[1], p[2], p[3]])
+                let (p, st) = self.patch_points(r, rest, 2, 2)?;
+                (bilinear([p[0], p[1], p[2], p[3]]), st)
             }
             "bicubic" => {
-                let p = self.patch_points(r, rest, 4, 4)?;
+                let (p, st) = self.patch_points(r, rest, 4, 4)?;
                 let g: [Vec3; 16] = std::array::from_fn(|k| p[k]);
-                bicubic(
+                let patch = bicubic(
                     &self.classic.basis.u.to_bezier(),
                     &self.classic.basis.v.to_bezier(),
                     &g,
-                )
+                );
+                (patch, st)
             }
             other => {
                 return Err(r.err(format!(
@@ -278,6 +308,9 @@ impl Reader {
                 )));
             }
         };
+        if let Some(st) = st {
+            patch.st = corner_st(r, &st, (1, false), (1, false))?[0];
+        }
         self.add_object(r, Shape::Patches(vec![patch]));
         Ok(())
     }
@@ -304,9 +337,10 @@ impl Reader {
             _ => Err(r.err(format!("PatchMesh: {what} must be a positive integer"))),
         };
         let (nu, nv) = (count(nu, "nu")?, count(nv, "nv")?);
+        // `wrap`/`nowrap` are the RenderMan Interface's older names (RI_WRAP, RI_NOWRAP in ri.h).
         let wrap = |w: &str| match w {
-            "periodic" => Ok(true),
-            "nonperiodic" => Ok(false),
+            "periodic" | "wrap" => Ok(true),
+            "nonperiodic" | "nowrap" => Ok(false),
             other => Err(r.err(format!(
                 "PatchMesh: wrap \"{other}\" is not \"periodic\" or \"nonperiodic\""
             ))),
@@ -321,7 +355,7 @@ impl Reader {
                 )));
             }
         };
-        let points = self.patch_points(r, rest, nu, nv)?;
+        let (points, st) = self.patch_points(r, rest, nu, nv)?;
         let (Some(us), Some(vs)) = (
             patch_starts(nu, uper, cubic, self.classic.basis.u.step),
             patch_starts(nv, vper, cubic, self.classic.basis.v.step),
@@ -330,7 +364,14 @@ impl Reader {
                 "PatchMesh: {nu} × {nv} points make no {kind} patch (a nonperiodic bicubic direction needs at least 4)"
             )));
         };
-        let patches = mesh_patches(&points, nu, nv, &us, &vs, cubic.then_some(self.classic.basis));
+        let mut patches = mesh_patches(&points, nu, nv, &us, &vs, cubic.then_some(self.classic.basis));
+        let st = match st {
+            Some(st) => corner_st(r, &st, (us.len(), uper), (vs.len(), vper))?,
+            None => grid_st(us.len(), vs.len()),
+        };
+        for (p, st) in patches.iter_mut().zip(st) {
+            p.st = st;
+        }
         self.add_object(r, Shape::Patches(patches));
         Ok(())
     }
@@ -353,11 +394,48 @@ impl Reader {
             let p: Vec<Vec3> = points.iter().map(|q| Vec3::from_array(*q)).collect();
             let us = patch_starts(nu, false, true, 3).unwrap_or_default();
             let vs = patch_starts(nv, false, true, 3).unwrap_or_default();
-            patches.extend(mesh_patches(&p, nu, nv, &us, &vs, Some(bezier)));
+            let mut mesh = mesh_patches(&p, nu, nv, &us, &vs, Some(bezier));
+            for (patch, st) in mesh.iter_mut().zip(grid_st(us.len(), vs.len())) {
+                patch.st = st;
+            }
+            patches.extend(mesh);
         }
         self.add_object(r, Shape::Patches(patches));
         Ok(())
     }
+}
+
+/// The default texture coordinates of a mesh of `nu × nv` patches (`u` fastest): `s = u`, `t = v`
+/// with `(u, v)` over `[0, 1]²` of the whole mesh.
+fn grid_st(nu: usize, nv: usize) -> Vec<[Vec2; 4]> {
+    let at = |i: usize, j: usize| Vec2::new(i as f32 / nu as f32, j as f32 / nv as f32);
+    (0..nv)
+        .flat_map(|j| (0..nu).map(move |i| [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)]))
+        .collect()
+}
+
+/// Each patch's corner texture coordinates, `u` fastest, from the varying `st` of a mesh of
+/// `nu × nv` patches: one value per corner of the patch grid, `u` fastest, a periodic direction's last
+/// patch ending on its first corner.
+fn corner_st(
+    r: &Req<'_>,
+    st: &[Vec2],
+    (nu, uper): (usize, bool),
+    (nv, vper): (usize, bool),
+) -> Result<Vec<[Vec2; 4]>, RibError> {
+    let (cols, rows) = (nu + usize::from(!uper), nv + usize::from(!vper));
+    if st.len() != cols * rows || st.iter().any(|v| !v.is_finite()) {
+        return Err(r.err(format!(
+            "{}: texture coordinates (\"st\", or \"s\" and \"t\") are varying: {} finite (s, t) pairs expected, one per patch corner ({cols} × {rows}), got {}",
+            r.name,
+            cols * rows,
+            st.len()
+        )));
+    }
+    let at = |i: usize, j: usize| st[(j % rows) * cols + i % cols];
+    Ok((0..nv)
+        .flat_map(|j| (0..nu).map(move |i| [at(i, j), at(i + 1, j), at(i, j + 1), at(i + 1, j + 1)]))
+        .collect())
 }
 
 /// The patches of a `cols × rows` mesh (`u` fastest) starting at `us × vs`; bicubic in `basis`, or

@@ -4,7 +4,7 @@ use obscura_sdk::Rgb;
 
 use super::classic_shaders::CLASSIC_LIGHTS;
 use super::lex::Value;
-use super::request::{Req, get_color, get_float, get_string};
+use super::request::{Req, get_color, get_float, get_int, get_string};
 use super::{Reader, RibError};
 use crate::types::{Light, Material};
 
@@ -21,6 +21,9 @@ impl Reader {
                 self.identifier = id.to_string();
             }
             return Ok(());
+        }
+        if name == "light" {
+            return self.light_attribute(r, rest);
         }
         if name != "dice" {
             if self.warned_attributes.insert(name.clone()) {
@@ -111,7 +114,7 @@ impl Reader {
         let mut table = vec!["color lightColor", "float intensity", "float exposure"];
         match kind.as_str() {
             "PxrDomeLight" => table.push("string lightColorMap"),
-            "PxrDistantLight" => table.push("float angleExtent"),
+            "PxrDistantLight" => table.extend(["float angleExtent", "int enableShadows"]),
             "PxrRectLight" | "PxrSphereLight" => {}
             other => {
                 self.warn(
@@ -165,6 +168,7 @@ impl Reader {
                 intensity,
                 exposure,
                 angle_extent: get_float(&list, "angleExtent").unwrap_or(0.53),
+                enable_shadows: get_int(&list, "enableShadows").unwrap_or(1) != 0,
                 transform,
             },
             "PxrRectLight" => Light::Rect {

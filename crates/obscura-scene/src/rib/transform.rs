@@ -181,6 +181,18 @@ impl Reader {
 
     /// `AttributeEnd`/`TransformEnd`: restores what the matching begin saved.
     pub(super) fn end_block(&mut self, r: &Req<'_>, kind: BlockKind) -> Result<(), RibError> {
+        if self.world.is_some()
+            && self.blocks.len() <= self.world_blocks
+            && let Some(b) = self.blocks.last()
+        {
+            return Err(r.err(format!(
+                "{} inside the world would close the {} at {}:{}, begun before WorldBegin",
+                kind.end(),
+                b.kind.begin(),
+                b.file,
+                b.line
+            )));
+        }
         let Some(b) = self.blocks.pop() else {
             return Err(r.err(format!("{} without a matching {}", kind.end(), kind.begin())));
         };

@@ -280,3 +280,41 @@ fn tree_depth_stays_bounded_on_adversarial_input() {
         }
     }
 }
+
+#[test]
+fn sphere_3e38_builds_a_real_tree() {
+    // `Sphere 3e38`: the boxes span ±3·10³⁸, so `hi − lo` and every area overflow f32. The builder
+    // once saw all splits cost ∞ (and a zero bin scale put every centroid in bin 0), found none and
+    // made the root one leaf of every triangle: each ray tested them all.
+    let radius = 3e38f32;
+    let (nu, nv) = (48u32, 24u32);
+    let mut mesh = TriangleMesh::default();
+    for j in 0..=nv {
+        let phi = std::f32::consts::PI * (j as f32 / nv as f32 - 0.5);
+        for i in 0..nu {
+            let theta = std::f32::consts::TAU * i as f32 / nu as f32;
+            mesh.positions
+                .push(Vec3A::new(theta.cos() * phi.cos(), theta.sin() * phi.cos(), phi.sin()) * radius);
+        }
+    }
+    for j in 0..nv {
+        for i in 0..nu {
+            let v = |a: u32, b: u32| b * nu + a % nu;
+            mesh.triangles.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            mesh.triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    let bvh = MeshBvh::build(mesh);
+    assert!(bvh.triangle_count() > 2000);
+    let largest = bvh.tree.largest_leaf();
+    assert!(largest <= 4, "a leaf of {largest} triangles");
+    let depth = bvh.tree.depth();
+    assert!((9..=24).contains(&depth), "depth {depth}");
+    // And the tree answers as brute force does, from the centre outward. (At this size the
+    // triangle test's edge functions, products of two coordinates, leave f32: both may miss.)
+    let mut rng = SplitMix(3);
+    for _ in 0..64 {
+        let d = Vec3A::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5);
+        check_mesh_ray(&bvh, &ray(Vec3A::ZERO, d.normalize()), radius).unwrap();
+    }
+}

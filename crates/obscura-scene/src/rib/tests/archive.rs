@@ -117,3 +117,34 @@ fn an_inline_archive_is_kept_until_read_and_then_read_each_time() {
         "t.rib:2: ArchiveEnd without a matching ArchiveBegin"
     );
 }
+
+#[test]
+fn archives_inside_zip_files_are_read_by_procedural2_and_read_archive() {
+    // RenderMan for Maya writes its geometry caches as `cache.zip!member.rib`.
+    use std::io::Write;
+    let dir = tempfile::tempdir().unwrap();
+    let mut zip = zip::ZipWriter::new(std::fs::File::create(dir.path().join("geo.zip")).unwrap());
+    let stored = zip::write::SimpleFileOptions::default().compression_method(zip::CompressionMethod::Stored);
+    zip.start_file("inner/sphere.rib", stored).unwrap();
+    zip.write_all(b"Sphere 1 -1 1 360\n").unwrap();
+    zip.finish().unwrap();
+    let scene = crate::rib::parse_str(
+        "WorldBegin\nProcedural2 \"DelayedReadArchive2\" \"SimpleBound\" \"string filename\" [\"geo.zip!inner/sphere.rib\"] \"float[6] bound\" [-1 1 -1 1 -1 1]\nReadArchive \"geo.zip!inner/sphere.rib\"\nWorldEnd\n",
+        "t.rib",
+        dir.path(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.objects.len(), 2);
+    let e = crate::rib::parse_str(
+        "WorldBegin\nReadArchive \"geo.zip!nothing.rib\"\nWorldEnd\n",
+        "t.rib",
+        dir.path(),
+    )
+    .unwrap_err();
+    assert_eq!(e.line, 2);
+    assert!(
+        e.message
+            .contains("cannot read \"nothing.rib\" from the zip file"),
+        "{e}"
+    );
+}

@@ -85,6 +85,11 @@ fn depth_of_field_is_the_perspective_cameras_thin_lens() {
     );
     let s = ok("DepthOfField 2.8 0.05 4\nDepthOfField\nProjection \"perspective\"\nWorldBegin\n");
     assert!(s.projection_params.get("fStop").is_none());
+    // An fstop of RI_INFINITY is a pinhole whatever the other two say (Affine's `DepthOfField 1e38 0 0`),
+    // and it replaces an earlier lens.
+    let s = ok("DepthOfField 2.8 0.05 4\nDepthOfField 1e38 0 0\nProjection \"perspective\"\nWorldBegin\n");
+    assert!(s.projection_params.get("fStop").is_none());
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     // Another projection keeps its own lens, said so.
     let s = ok("Projection \"PxrFisheye\"\nDepthOfField 2.8 0.05 4\nWorldBegin\n");
     assert!(s.projection_params.get("fStop").is_none());

@@ -323,3 +323,182 @@ fn blobby_programs_are_decoded_and_checked() {
     let e = fail("WorldBegin\nBlobby 1 [1003 0 0] [0 0 0 0] [\"x\"]\n");
     assert!(e.contains("opcode 1003"), "{e}");
 }
+
+#[test]
+fn paintedplastic_without_its_texture_file_warns_where_and_stays_plastic() {
+    let scene = ok(
+        "WorldBegin\nSurface \"paintedplastic\" \"texturename\" \"grid.tif\"\nSphere 1 -1 1 360\nWorldEnd\n",
+    );
+    let warning = scene
+        .warnings
+        .iter()
+        .find(|w| w.contains("grid.tif"))
+        .unwrap_or_else(|| panic!("{:?}", scene.warnings));
+    assert!(
+        warning.starts_with(
+            "t.rib:2: Surface \"paintedplastic\": texture \"grid.tif\" not found (looked in /base)"
+        ),
+        "{warning}"
+    );
+    assert!(scene.textures.is_empty() && scene.material_maps.is_empty());
+    assert!(matches!(
+        scene.materials[scene.objects[0].material as usize],
+        Material::Surface { .. }
+    ));
+}
+
+#[test]
+fn paintedplastic_finds_its_texture_through_the_searchpath_and_paints_the_diffuse_only() {
+    use crate::texture::ImageSource;
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("maps")).unwrap();
+    std::fs::write(dir.path().join("maps").join("grid.tif"), b"bytes").unwrap();
+    let text = "Option \"searchpath\" \"texture\" [\"elsewhere:maps\"]\nWorldBegin\nColor [1 0.5 0.5]\n\
+                Surface \"paintedplastic\" \"Kd\" [0.5] \"texturename\" \"grid.tif\"\nSphere 1 -1 1 360\n\
+                Surface \"paintedplastic\" \"Kd\" [0.5] \"texturename\" \"grid.tif\"\nSphere 1 -1 1 360\n\
+                Surface \"plastic\" \"Kd\" [0.5]\nSphere 1 -1 1 360\nWorldEnd\n";
+    let scene = super::super::parse_str(text, "t.rib", dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    // One texture for both surfaces, found in the searchpath's second directory.
+    assert_eq!(scene.textures.len(), 1);
+    assert_eq!(
+        scene.textures[0].source,
+        ImageSource::File(dir.path().join("maps").join("grid.tif"))
+    );
+    assert_eq!(
+        scene.textures[0].used_by,
+        "t.rib:4: Surface \"paintedplastic\" \"texturename\""
+    );
+    let (a, b, c) = (
+        scene.objects[0].material,
+        scene.objects[1].material,
+        scene.objects[2].material,
+    );
+    assert_eq!(a, b);
+    assert_ne!(a, c, "the untextured plastic is its own material");
+    let maps = &scene.material_maps[&a];
+    // Kd·Cs is the base colour factor; the highlight is the plastic's own.
+    assert_eq!(maps.base_color_factor, [0.5, 0.25, 0.25, 1.0]);
+    assert_eq!(maps.metallic, 0.0);
+    let Material::Surface { specular, .. } = scene.materials[c as usize] else {
+        panic!("plastic");
+    };
+    assert_eq!(maps.specular, Some(specular));
+    let slot = maps.base_color.expect("the texture paints the base colour");
+    assert_eq!(slot.texture, 0);
+    // (s, 1 − t) coordinates are read back at (s, t).
+    assert_eq!(slot.transform, [1.0, 0.0, 0.0, 0.0, -1.0, 1.0]);
+    assert!(!scene.material_maps.contains_key(&c));
+    // A sphere has no texture coordinates: said once.
+    let no_st: Vec<_> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("texture coordinates"))
+        .collect();
+    assert_eq!(no_st.len(), 1, "{:?}", scene.warnings);
+    assert!(no_st[0].starts_with("t.rib:5: Sphere: "), "{no_st:?}");
+}
+
+#[test]
+fn patch_meshes_carry_their_texture_coordinates() {
+    // A 3 × 2 bilinear mesh: 2 × 1 patches; by default s = u, t = v over the whole mesh.
+    let scene = ok(
+        "WorldBegin\nPatchMesh \"bilinear\" 3 \"nonperiodic\" 2 \"nonperiodic\" \"P\" [0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0]\n\
+         PatchMesh \"bilinear\" 3 \"nonperiodic\" 2 \"nonperiodic\" \"P\" [0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0] \"st\" [0 0 2 0 4 0 0 1 2 1 4 1]\n\
+         PatchMesh \"bilinear\" 3 \"periodic\" 2 \"nonperiodic\" \"P\" [0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0] \"s\" [0 1 2 0 1 2] \"t\" [0 0 0 1 1 1]\nWorldEnd\n",
+    );
+    let st = |k: usize| -> Vec<[f32; 8]> {
+        let Shape::Patches(p) = &scene.objects[k].shape else {
+            panic!("patches");
+        };
+        p.iter()
+            .map(|p| {
+                let s = p.st;
+                [s[0].x, s[0].y, s[1].x, s[1].y, s[2].x, s[2].y, s[3].x, s[3].y]
+            })
+            .collect()
+    };
+    assert_eq!(
+        st(0),
+        vec![
+            [0.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.5, 1.0],
+            [0.5, 0.0, 1.0, 0.0, 0.5, 1.0, 1.0, 1.0]
+        ]
+    );
+    assert_eq!(
+        st(1),
+        vec![
+            [0.0, 0.0, 2.0, 0.0, 0.0, 1.0, 2.0, 1.0],
+            [2.0, 0.0, 4.0, 0.0, 2.0, 1.0, 4.0, 1.0]
+        ]
+    );
+    // Periodic in u: three patches, the last closing on the first corner.
+    assert_eq!(st(2).len(), 3);
+    assert_eq!(st(2)[2], [2.0, 0.0, 0.0, 0.0, 2.0, 1.0, 0.0, 1.0]);
+    let e = fail(
+        "WorldBegin\nPatch \"bilinear\" \"P\" [0 0 0 1 0 0 0 1 0 1 1 0] \"st\" [0 0 1 0 0 1]\nWorldEnd\n",
+    );
+    assert!(
+        e.starts_with("t.rib:2: ") && e.contains("4 finite (s, t) pairs expected"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_distant_light_without_a_direction_is_left_out_with_a_warning() {
+    // `"to" [0 0 0]` with the default `"from"`: the spec's shader would light along a zero vector.
+    let scene = ok(
+        "WorldBegin\nLightSource \"distantlight\" 1 \"to\" [1 0 0]\nLightSource \"distantlight\" 2 \"to\" [0 0 0]\nSphere 1 -1 1 360\nWorldEnd\n",
+    );
+    assert_eq!(scene.lights.len(), 1);
+    assert!(
+        scene.warnings.iter().any(|w| w
+            .starts_with("t.rib:3: LightSource \"distantlight\": \"from\" and \"to\" are the same point")),
+        "{:?}",
+        scene.warnings
+    );
+}
+
+#[test]
+fn older_wrap_names_and_empty_points_are_read() {
+    // RI_WRAP/RI_NOWRAP spell periodic/nonperiodic in older scenes; a particle frame without
+    // particles writes `Points "P" []`.
+    let scene = ok(
+        "WorldBegin\nPatchMesh \"bilinear\" 3 \"wrap\" 2 \"nowrap\" \"P\" [0 0 0 1 0 0 2 0 0 0 1 0 1 1 0 2 1 0]\nPoints \"P\" []\nWorldEnd\n",
+    );
+    let Shape::Patches(p) = &scene.objects[0].shape else {
+        panic!("patches");
+    };
+    assert_eq!(p.len(), 3, "periodic in u: as many patches as points");
+    assert_eq!(scene.objects.len(), 1);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w == "t.rib:3: Points: \"P\" is empty; nothing to draw"),
+        "{:?}",
+        scene.warnings
+    );
+}
+
+#[test]
+fn classic_lights_cast_shadows_only_under_bmrts_light_attribute() {
+    let scene = ok(
+        "WorldBegin\nLightSource \"pointlight\" 1\nAttributeBegin\nAttribute \"light\" \"shadows\" \"on\"\n\
+         LightSource \"spotlight\" 2\nLightSource \"distantlight\" 3\nAttributeEnd\nLightSource \"distantlight\" 4\n\
+         Light \"PxrDistantLight\" \"d\"\nLight \"PxrDistantLight\" \"e\" \"int enableShadows\" [0]\nWorldEnd\n",
+    );
+    let shadows: Vec<bool> = scene
+        .lights
+        .iter()
+        .map(|l| match l {
+            Light::Point(p) | Light::Spot { emitter: p, .. } => p.enable_shadows,
+            Light::Distant { enable_shadows, .. } => *enable_shadows,
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    assert_eq!(shadows, [false, true, true, false, true, false]);
+    assert!(
+        fail("WorldBegin\nAttribute \"light\" \"shadows\" \"yes\"\nWorldEnd\n")
+            .starts_with("t.rib:2: Attribute \"light\" \"shadows\": expected \"on\" or \"off\"")
+    );
+}

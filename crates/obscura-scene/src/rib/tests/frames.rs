@@ -153,3 +153,129 @@ fn a_file_of_frames_is_read_with_its_frame_numbers() {
     // Each frame's camera is its own: the transform was inside the frame.
     assert_camera_point(&f[2].scene, 0, Vec3::ZERO, Vec3::new(0.0, 0.0, 12.0));
 }
+
+/// The material of object `k` of frame `f`, checked to be in that frame's scene.
+fn material_of(f: &Frame, k: usize) -> crate::types::Material {
+    let index = f.scene.objects[k].material as usize;
+    assert!(
+        index < f.scene.materials.len(),
+        "object {k} of frame {} names material {index} of {}",
+        f.number,
+        f.scene.materials.len()
+    );
+    f.scene.materials[index]
+}
+
+#[test]
+fn frame_end_restores_the_classic_attributes() {
+    // RISpec §4: FrameBegin/FrameEnd save and restore the attributes; frame 2 must not inherit
+    // frame 1's Color and Surface.
+    let f = frames(
+        "FrameBegin 1\n  Color [1 0 0]\n  Surface \"matte\"\n  WorldBegin\n  Sphere 1 -1 1 360\n  WorldEnd\nFrameEnd\n\
+         FrameBegin 2\n  WorldBegin\n  Sphere 1 -1 1 360\n  WorldEnd\nFrameEnd\n",
+    );
+    assert_eq!(
+        material_of(&f[0], 0),
+        crate::types::Material::Diffuse {
+            color: obscura_sdk::Rgb::new(1.0, 0.0, 0.0)
+        }
+    );
+    assert_eq!(f[1].scene.objects[0].material, 0);
+    assert_eq!(material_of(&f[1], 0), crate::types::Material::default());
+}
+
+#[test]
+fn world_end_restores_the_attributes_of_world_begin() {
+    // A colour set before the first world carries into the next (outside any frame); one set inside
+    // the world ends with it, as do the world's Surface and Basis.
+    let f = frames(
+        "Color [1 0 0]\nWorldBegin\n  Sphere 1 -1 1 360\n  Color [0 1 0]\n  Surface \"constant\"\n  Basis \"b-spline\" 1 \"b-spline\" 1\n  Sphere 1 -1 1 360\nWorldEnd\n\
+         WorldBegin\n  Sphere 1 -1 1 360\n  Patch \"bicubic\" \"P\" [0 0 0 1 0 0 2 0 0 3 0 0 0 1 0 1 1 0 2 1 0 3 1 0 0 2 0 1 2 0 2 2 0 3 2 0 0 3 0 1 3 0 2 3 0 3 3 0]\nWorldEnd\n",
+    );
+    let red = obscura_sdk::Rgb::new(1.0, 0.0, 0.0);
+    assert_eq!(
+        material_of(&f[0], 1),
+        crate::types::Material::Constant {
+            color: obscura_sdk::Rgb::new(0.0, 1.0, 0.0)
+        }
+    );
+    assert_eq!(
+        material_of(&f[1], 0),
+        crate::types::Material::Diffuse { color: red }
+    );
+    // Bézier (the default basis) again: the patch's corner is its first control point.
+    let crate::types::Shape::Patches(p) = &f[1].scene.objects[1].shape else {
+        panic!("a patch");
+    };
+    assert_eq!(p[0].points[0], Vec3::ZERO);
+}
+
+#[test]
+fn world_end_restores_sides_and_orientation() {
+    // Sides and the orientation are attributes: one-sided and inside-out in the first world, the
+    // second world's sphere is two-sided again (RISpec §4: WorldEnd restores the attributes).
+    let f = frames(
+        "WorldBegin\n  Sides 1\n  ReverseOrientation\n  Sphere 1 -1 1 360\nWorldEnd\n\
+         WorldBegin\n  Sphere 1 -1 1 360\nWorldEnd\n",
+    );
+    assert_eq!(f[0].scene.objects[0].sides, crate::Sides::new(true, true));
+    assert_eq!(f[1].scene.objects[0].sides, crate::Sides::Both);
+}
+
+#[test]
+fn materials_of_one_world_are_not_reused_by_the_next() {
+    // The reader interns classic materials; the next world's scene starts without the first world's,
+    // so an interned index must not outlive its world (it once named the wrong material, or none).
+    let f = frames(
+        "WorldBegin\n  Color [0 1 0]\n  Surface \"plastic\"\n  Sphere 1 -1 1 360\nWorldEnd\n\
+         WorldBegin\n  Color [0 0 1]\n  Surface \"matte\"\n  Sphere 1 -1 1 360\n  Color [0 1 0]\n  Surface \"plastic\"\n  Sphere 1 -1 1 360\nWorldEnd\n",
+    );
+    let plastic = material_of(&f[0], 0);
+    assert!(matches!(plastic, crate::types::Material::Surface { .. }));
+    assert_eq!(material_of(&f[1], 1), plastic);
+    assert_eq!(
+        material_of(&f[1], 0),
+        crate::types::Material::Diffuse {
+            color: obscura_sdk::Rgb::new(0.0, 0.0, 1.0)
+        }
+    );
+}
+
+#[test]
+fn objects_defined_in_a_world_are_freed_at_its_end() {
+    // RISpec §4: WorldEnd frees the world's retained objects; one defined before the worlds stays.
+    let text = "ObjectBegin \"kept\"\n  Sphere 1 -1 1 360\nObjectEnd\n\
+                WorldBegin\n  ObjectBegin \"inner\"\n  Sphere 1 -1 1 360\n  ObjectEnd\n  ObjectInstance \"inner\"\nWorldEnd\n\
+                WorldBegin\n  ObjectInstance \"kept\"\n  ObjectInstance \"inner\"\nWorldEnd\n";
+    let e = parse_bytes_frames(text.as_bytes(), "t.rib", Path::new(HERE)).unwrap_err();
+    assert_eq!(e.line, 12, "{e}");
+    assert!(e.message.contains("\"inner\""), "{e}");
+}
+
+#[test]
+fn a_transform_block_may_enclose_the_camera_and_the_world() {
+    // As MTOR and Houdini wrote them: the camera's motion and the world inside one transform block.
+    let f = frames(
+        "FrameBegin 1\nTransformBegin\nTranslate 0 0 5\nWorldBegin\nTransformBegin\nSphere 1 -1 1 360\nTransformEnd\nWorldEnd\nTransformEnd\nFrameEnd\n",
+    );
+    assert_eq!(f.len(), 1);
+    assert_eq!(f[0].scene.objects.len(), 1);
+    let at = |text: &str| {
+        parse_bytes_frames(text.as_bytes(), "t.rib", Path::new(HERE))
+            .unwrap_err()
+            .to_string()
+    };
+    // Attribute blocks still may not, and the world may not close a block begun before it.
+    assert!(
+        at("AttributeBegin\nWorldBegin\nWorldEnd\nAttributeEnd\n")
+            .starts_with("t.rib:2: WorldBegin inside AttributeBegin (at t.rib:1)")
+    );
+    assert_eq!(
+        at("TransformBegin\nWorldBegin\nTransformEnd\nWorldEnd\n"),
+        "t.rib:3: TransformEnd inside the world would close the TransformBegin at t.rib:1, begun before WorldBegin"
+    );
+    assert!(
+        at("TransformBegin\nWorldBegin\nTransformBegin\nWorldEnd\n")
+            .starts_with("t.rib:4: WorldEnd: TransformBegin at t.rib:3")
+    );
+}

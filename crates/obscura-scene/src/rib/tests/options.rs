@@ -376,3 +376,29 @@ fn camera_options_fill_aperture_and_shutter_opening() {
         "t.rib:1: Camera: \"float[8] shutteropening\" needs 8 value(s), got 3"
     );
 }
+
+#[test]
+fn a_window_named_with_folders_that_do_not_exist_is_written_beside_the_scene() {
+    // RenderMan for Maya names its `it` window `renderman/<scene>/images/<scene>`.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("there")).unwrap();
+    let text = "Display \"renderman/osl1/images/osl1\" \"it\" \"rgba\"\nDisplay \"+there/fb\" \"framebuffer\" \"rgb\"\n\
+                WorldBegin\nWorldEnd\n";
+    let scene = super::super::parse_str(text, "t.rib", dir.path()).unwrap_or_else(|e| panic!("{e}"));
+    let paths: Vec<_> = scene.displays.iter().map(|d| d.path.clone()).collect();
+    assert_eq!(
+        paths,
+        [
+            dir.path().join("osl1.exr"),
+            dir.path().join("there").join("fb.exr")
+        ]
+    );
+    assert!(
+        scene.warnings[0].ends_with(&format!(
+            "written to {} instead",
+            dir.path().join("osl1.exr").display()
+        )),
+        "{:?}",
+        scene.warnings
+    );
+}

@@ -95,6 +95,7 @@ fn lights_are_read_with_defaults_and_transforms() {
             intensity: 1.0,
             exposure: 0.0,
             angle_extent: 2.0,
+            enable_shadows: true,
             transform: Mat4::IDENTITY
         }
     );
@@ -121,6 +122,7 @@ fn lights_are_read_with_defaults_and_transforms() {
         l[4],
         Light::Distant {
             angle_extent: 0.53,
+            enable_shadows: true,
             ..
         }
     ));
