@@ -117,7 +117,12 @@ impl Reader {
             .iter()
             .map(|d| d.display().to_string())
             .collect();
-        places.push(r.base.display().to_string());
+        // A RIB file named without a folder has an empty base: the current directory.
+        places.push(if r.base.as_os_str().is_empty() {
+            ".".to_string()
+        } else {
+            r.base.display().to_string()
+        });
         format!("looked in {}", places.join(", "))
     }
 }

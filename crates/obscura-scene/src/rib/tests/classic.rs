@@ -348,6 +348,25 @@ fn paintedplastic_without_its_texture_file_warns_where_and_stays_plastic() {
 }
 
 #[test]
+fn a_missing_texture_beside_a_rib_named_without_a_folder_says_the_current_directory() {
+    // `obscura render t.rib` has an empty base folder; the message once read "(looked in )".
+    let scene = crate::rib::parse_str(
+        "WorldBegin\nSurface \"paintedplastic\" \"texturename\" \"grid.tif\"\nSphere 1 -1 1 360\nWorldEnd\n",
+        "t.rib",
+        std::path::Path::new(""),
+    )
+    .unwrap();
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("not found (looked in .)")),
+        "{:?}",
+        scene.warnings
+    );
+}
+
+#[test]
 fn paintedplastic_finds_its_texture_through_the_searchpath_and_paints_the_diffuse_only() {
     use crate::texture::ImageSource;
     let dir = tempfile::tempdir().unwrap();
