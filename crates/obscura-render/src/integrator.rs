@@ -9,7 +9,10 @@
 //!   the weight is 1; after a BSDF sample it is the power heuristic
 //!   `w_bsdf = p_bsdf² / (p_bsdf² + p_light²)`. A camera ray that escapes sees the domes only
 //!   ([`Lights::background`]).
-//! - At each surface vertex `k < max_depth` (PxrConstant surfaces end the path), one light is
+//! - At each surface vertex `k < max_depth` (PxrConstant surfaces end the path), the classic ambient
+//!   lights' unshadowed radiance `A` ([`Lights::ambient`]) is reflected by the surface's ambient
+//!   reflectance: `β · ρ_a · A`, `ρ_a` = `Ka·Cs` for a classic shader's surface, the diffuse albedo
+//!   for any other. Then one light is
 //!   sampled ([`Lights::sample`]) and a shadow ray traced ([`Tracer::occluded`]); the contribution
 //!   `β · f · |n·wi| · L / p_light` is weighted by `w_light = p_light² / (p_light² + p_bsdf²)` when
 //!   the light can also be found by BSDF rays, by 1 otherwise (delta-like distant lights).
@@ -18,6 +21,9 @@
 //!   the BSDF's density; a BSDF ray that hits such a triangle weights its emission the other way
 //!   ([`EmissiveTriangles::pdf`]). Emitters light sampling cannot aim at (moving, cut out) keep
 //!   weight 1 when hit.
+//! - A classic shader's surface ([`LocalShading`]: local illumination) ends the path here: its
+//!   light samples above take weight 1 (no BSDF ray will find those lights), and nothing reaches it by
+//!   way of other surfaces, as in the RI's standard shaders.
 //! - The BSDF then draws the next direction; the throughput becomes `β ← β · f |n·wi| / p_bsdf`.
 //!   From vertex `rr_start` on, Russian roulette continues the path with probability
 //!   `q = clamp(max(β), 0.05, 1)` and divides `β` by `q`.
@@ -34,7 +40,7 @@
 //! contribution is checked: NaN, infinite and negative values never reach the result.
 
 use glam::{Vec2, Vec3A};
-use obscura_scene::Material;
+use obscura_scene::{AmbientReflectance, LocalShading, Material};
 
 use crate::light::Lights;
 use crate::light::emissive::EmissiveTriangles;
@@ -56,6 +62,10 @@ pub struct ShadingScene {
     pub texturing: Texturing,
     /// The emissive triangles light sampling aims at (empty: emission is found by BSDF rays only).
     pub emissive: EmissiveTriangles,
+    /// For each material (index into `materials`), how it shades when it is a classic RenderMan
+    /// shader's: by local illumination ([`LocalShading`]). `None`, or an index past the end: path
+    /// traced.
+    pub local_shading: Vec<Option<LocalShading>>,
 }
 
 impl ShadingScene {
@@ -67,6 +77,13 @@ impl ShadingScene {
             .and_then(|&m| self.materials.get(m as usize))
             .copied()
             .unwrap_or_default()
+    }
+
+    /// How instance `instance`'s material shades when it is a classic shader's (local illumination).
+    #[must_use]
+    pub fn local_shading(&self, instance: u32) -> Option<LocalShading> {
+        let m = self.material_index(instance)?;
+        self.local_shading.get(m as usize).copied().flatten()
     }
 
     /// The index of instance `instance`'s material, when it is a known one.
@@ -322,6 +339,19 @@ pub fn trace_path_cone(
         let eps = epsilon(p, hit.t * dir_len);
         let origin = p + n_g * eps;
 
+        // A classic shader's surface: its lights (weight 1, as no BSDF ray follows), its ambient
+        // term, and the path ends.
+        let local = scene.local_shading(hit.instance);
+        let ambient = lights.ambient();
+        if ambient != Vec3A::ZERO {
+            let reflectance = match local.map(|l| l.ambient) {
+                Some(AmbientReflectance::Color(c)) => Vec3A::new(c.r, c.g, c.b),
+                Some(AmbientReflectance::DiffuseScaled(k)) => k * bsdf.diffuse_albedo(),
+                None => bsdf.diffuse_albedo(),
+            };
+            accumulate(&mut radiance, throughput * reflectance * ambient);
+        }
+
         // Next-event estimation.
         let (u_light, u_pick) = (rng.next_2d(), rng.next_f32());
         if let Some(ls) = lights.sample(p, n_s, u_light, u_pick)
@@ -342,7 +372,7 @@ pub fn trace_path_cone(
                     time: ray.time,
                 };
                 if t_max > eps && !(ls.shadows && shadow_blocked(scene, tracer, &shadow, cutouts, rng)) {
-                    let w = if ls.mis {
+                    let w = if ls.mis && local.is_none() {
                         power_heuristic(ls.pdf, pdf_b)
                     } else {
                         1.0
@@ -378,12 +408,20 @@ pub fn trace_path_cone(
                         time: ray.time,
                     };
                     if !shadow_blocked(scene, tracer, &shadow, cutouts, rng) {
-                        let w = power_heuristic(es.pdf, pdf_b);
+                        let w = if local.is_none() {
+                            power_heuristic(es.pdf, pdf_b)
+                        } else {
+                            1.0
+                        };
                         let cos = n_s.dot(es.wi).abs();
                         accumulate(&mut radiance, throughput * f * es.radiance * (cos * w / es.pdf));
                     }
                 }
             }
+        }
+
+        if local.is_some() {
+            break;
         }
 
         // BSDF sampling for the next direction.

@@ -11,7 +11,7 @@
 //! | rect | radiance `S` from the light's `+Z` side of the 1×1 square `[−½, ½]²` of the light's XY plane (one-sided; RenderMan's `normalize` off: `S` is radiance whatever the size) | uniform in area, `p = d² / (cos θ_l · A)` |
 //! | sphere | radiance `S` outward from the sphere of diameter 1 at the light's origin (radius `½ · ∛|det M|`) | uniform in the cone the sphere subtends, `p = 1 / (2π(1 − cos θ_max))`, `sin θ_max = r/d` |
 //! | point, spot (classic `pointlight`, `spotlight`; `light/classic.rs`) | irradiance `S / d²` facing the light, times the spot's `cosᵇ α · smoothstep(cos θ_c, cos(θ_c − δ), cos α)` | a delta: `p` = the selection probability, not seen by rays |
-//! | ambient (classic `ambientlight`) | a dome of radiance `S` without a map that camera rays do not see | as the dome |
+//! | ambient (classic `ambientlight`) | not an emitter: uniform radiance `S` that reaches every surface unshadowed, the RI's `ambient()` ([`Lights::ambient`]); the integrator adds it analytically | none |
 //!
 //! **Dome orientation.** With an identity transform `+Y` is up, and the centre of the lat-long map
 //! (`u = v = ½`) is seen looking down `+Z`. A light-space direction `d` reads the map at
@@ -183,8 +183,6 @@ struct Dome {
     to_world: Mat3A,
     to_light: Mat3A,
     map: Option<EnvMap>,
-    /// Seen by camera rays that escape (false for the classic `ambientlight`).
-    camera_visible: bool,
 }
 
 impl Dome {
@@ -423,6 +421,8 @@ impl Emitter {
 #[derive(Debug, Clone, Default)]
 pub struct Lights {
     emitters: Vec<Emitter>,
+    /// The classic ambient lights' summed strength.
+    ambient: Vec3A,
 }
 
 impl Lights {
@@ -435,12 +435,27 @@ impl Lights {
     /// [`ShadeError`] naming the map file when it cannot be read or is empty.
     pub fn new(lights: &[Light], base_dir: &Path) -> Result<Self, ShadeError> {
         let mut emitters = Vec::new();
+        let mut ambient = Vec3A::ZERO;
         for light in lights {
-            if let Some(e) = Self::prepare(light, base_dir)? {
+            if let Light::Ambient { color: c, intensity } = light {
+                ambient += sanitize(color(*c) * *intensity);
+            } else if let Some(e) = Self::prepare(light, base_dir)? {
                 emitters.push(e);
             }
         }
-        Ok(Lights { emitters })
+        Ok(Lights {
+            emitters,
+            ambient: sanitize(ambient),
+        })
+    }
+
+    /// The radiance of the classic `ambientlight`s, summed: `Σ I·C`. It reaches every surface from
+    /// every direction without shadowing, as the RI's `ambient()` does: a surface whose ambient
+    /// reflectance is `ρ_a` (`Ka·Cs` for a classic shader, the diffuse albedo for any other) reflects
+    /// `ρ_a·Σ I·C`. Not seen by any ray.
+    #[must_use]
+    pub fn ambient(&self) -> Vec3A {
+        self.ambient
     }
 
     fn prepare(light: &Light, base_dir: &Path) -> Result<Option<Emitter>, ShadeError> {
@@ -469,16 +484,10 @@ impl Lights {
                     to_world,
                     to_light: to_world.transpose(),
                     map,
-                    camera_visible: true,
                 })
             }
-            Light::Ambient { color: c, intensity } => Emitter::Dome(Dome {
-                strength: strength(*c, *intensity, 0.0),
-                to_world: Mat3A::IDENTITY,
-                to_light: Mat3A::IDENTITY,
-                map: None,
-                camera_visible: false,
-            }),
+            // Not an emitter: summed into `Lights::ambient` by `new`.
+            Light::Ambient { .. } => return Ok(None),
             Light::Point(p) => {
                 if !p.position.is_finite() {
                     return Ok(None);
@@ -805,9 +814,7 @@ impl Lights {
             .emitters
             .iter()
             .map(|e| {
-                if let Emitter::Dome(d) = e
-                    && d.camera_visible
-                {
+                if let Emitter::Dome(d) = e {
                     d.radiance(dir)
                 } else {
                     Vec3A::ZERO

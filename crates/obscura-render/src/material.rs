@@ -403,6 +403,17 @@ impl Bsdf {
         }
     }
 
+    /// The diffuse lobe's albedo: PxrDiffuse's colour, PxrSurface's diffuse colour, 0 for
+    /// PxrConstant. What an unshadowed uniform (ambient) radiance `A` is reflected by: `albedo·A`.
+    #[must_use]
+    pub fn diffuse_albedo(&self) -> Vec3A {
+        match self.lobes {
+            Lobes::Lambert { albedo } => albedo,
+            Lobes::Surface { diffuse, .. } => diffuse,
+            Lobes::Emitter { .. } => Vec3A::ZERO,
+        }
+    }
+
     /// The radiance the surface emits toward any direction: `emitColor` for PxrConstant, else 0.
     #[must_use]
     pub fn emission(&self) -> Vec3A {

@@ -336,6 +336,9 @@ pub fn prepare(
         lights: Lights::new(&scene.lights, base_dir)?,
         texturing,
         emissive,
+        local_shading: (0..scene.materials.len() as u32)
+            .map(|m| scene.local_shading.get(&m).copied())
+            .collect(),
     };
     let spp = opts.samples_per_pixel.unwrap_or(scene.samples_per_pixel).max(1);
     if spp > obscura_host::sampler::MAX_SAMPLES {

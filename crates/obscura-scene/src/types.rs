@@ -199,6 +199,29 @@ impl Default for Material {
     }
 }
 
+/// How a surface of a classic RenderMan Interface shader (`matte`, `plastic`, `metal`, …) shades
+/// beyond its physically based [`Material`]: as the shader's own formula does, by **local
+/// illumination**. Its radiance is its emission, plus what its lights give it directly (shadowed as
+/// each light says), plus its ambient term, and nothing else: no light reaches it by way of another
+/// surface (the standard shaders call only `ambient()`, `diffuse()` and `specular()`; `ambientlight`
+/// stands in for the indirect light), so a path ends there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalShading {
+    /// The ambient term's reflectance: `Ka·Cs` in the standard shaders' `Cs·(Ka·ambient() + …)`.
+    pub ambient: AmbientReflectance,
+}
+
+/// The reflectance a classic surface's ambient term multiplies the ambient light `Σ I·C` of the
+/// scene's `ambientlight`s by (unshadowed, as the RI's `ambient()`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AmbientReflectance {
+    /// A fixed colour: `Ka·Cs`.
+    Color(Rgb),
+    /// `k` times the diffuse albedo found at the hit, texture included: `paintedplastic`'s
+    /// `Ka·Cs·texture(s, t)` = `(Ka/Kd)·(Kd·Cs·texture(s, t))`, with `k = Ka/Kd`.
+    DiffuseScaled(f32),
+}
+
 /// A light. Intensity is `color · intensity · 2^exposure` (RenderMan's). Each light's `transform` is
 /// its light-to-world matrix at shutter open.
 #[derive(Debug, Clone, PartialEq)]
@@ -533,6 +556,9 @@ pub struct Scene {
     pub clip_planes: Vec<ClipPlane>,
     /// `Exposure gain gamma`, applied to the colour of every display.
     pub exposure: Exposure,
+    /// The materials that shade by local illumination (the classic shaders'; see [`LocalShading`]),
+    /// by index into [`Scene::materials`]. Every other material is path traced.
+    pub local_shading: BTreeMap<u32, LocalShading>,
 }
 
 impl Scene {
@@ -558,6 +584,7 @@ impl Scene {
             animation_seconds: None,
             clip_planes: Vec::new(),
             exposure: Exposure::default(),
+            local_shading: BTreeMap::new(),
         }
     }
 }

@@ -75,6 +75,7 @@ fn scene(material: Material, lights: Lights) -> ShadingScene {
         lights,
         texturing: Default::default(),
         emissive: Default::default(),
+        local_shading: Vec::new(),
     }
 }
 
@@ -295,6 +296,7 @@ fn constant_material_is_unlit_emission() {
         lights: uniform_dome(1.0),
         texturing: Default::default(),
         emissive: Default::default(),
+        local_shading: Vec::new(),
     };
     let ray = Ray {
         origin: Vec3A::new(0.0, 0.0, -5.0),
@@ -458,6 +460,7 @@ proptest! {
             lights: Lights::new(&lights, Path::new(".")).unwrap(),
             texturing: Default::default(),
             emissive: Default::default(),
+            local_shading: Vec::new(),
         };
         let direction = direction.try_normalize().unwrap_or(Vec3A::Z);
         let ray = Ray { origin, direction, t_min: 0.0, t_max: f32::INFINITY, time: 0.5 };
@@ -469,4 +472,138 @@ proptest! {
             prop_assert!(r.alpha == 0.0 || r.alpha == 1.0);
         }
     }
+}
+
+/// A classic shader's local shading with the ambient reflectance `Ka·Cs` = `ka`.
+fn classic(ka: Rgb) -> Option<LocalShading> {
+    Some(LocalShading {
+        ambient: AmbientReflectance::Color(ka),
+    })
+}
+
+#[test]
+fn a_classic_surface_inside_a_closed_sphere_shows_exactly_its_ambient_term() {
+    // The camera inside a closed sphere: nothing escapes, so only the unshadowed ambient term can
+    // light it. A classic surface shows `Ka·Cs·Σ I·C` on every path, with no noise; before, the
+    // ambient light was a dome the sphere hid, and the surface was black (or lit by its own bounces).
+    let tracer = Spheres(vec![(Vec3A::ZERO, 10.0)]);
+    let ambient = [
+        Light::Ambient {
+            color: Rgb::WHITE,
+            intensity: 0.3,
+        },
+        Light::Ambient {
+            color: Rgb::new(1.0, 0.0, 0.0),
+            intensity: 0.1,
+        },
+    ];
+    let mut s = scene(
+        Material::Diffuse {
+            color: Rgb::new(0.9, 0.9, 0.9),
+        },
+        Lights::new(&ambient, Path::new(".")).unwrap(),
+    );
+    s.local_shading = vec![classic(Rgb::new(0.5, 0.25, 1.0))];
+    let want = Vec3A::new(0.4 * 0.5, 0.3 * 0.25, 0.3);
+    let mut rng = Rng::new(5, 5);
+    for k in 0..64 {
+        let a = k as f32 * 0.7;
+        let direction = Vec3A::new(a.cos(), (0.3 * a).sin(), a.sin()).normalize();
+        let ray = Ray {
+            origin: Vec3A::new(0.5, -1.0, 2.0),
+            direction,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+            time: 0.0,
+        };
+        let r = trace_path(&s, &tracer, &ray, &mut rng, &DEEP);
+        assert!(
+            (r.radiance - want).abs().max_element() < 1e-6,
+            "{} vs {want}",
+            r.radiance
+        );
+        assert_eq!(r.alpha, 1.0);
+    }
+}
+
+#[test]
+fn a_path_traced_surface_adds_the_ambient_term_at_every_bounce() {
+    // The same closed sphere with a PxrDiffuse of albedo ρ: each vertex reflects ρ·A and passes ρ
+    // on, so the expected radiance is A·(ρ + ρ² + …) = A·ρ/(1 − ρ) (Russian roulette is unbiased).
+    let tracer = Spheres(vec![(Vec3A::ZERO, 10.0)]);
+    let rho = 0.5f64;
+    let s = scene(
+        Material::Diffuse {
+            color: Rgb::new(0.5, 0.5, 0.5),
+        },
+        Lights::new(
+            &[Light::Ambient {
+                color: Rgb::WHITE,
+                intensity: 0.4,
+            }],
+            Path::new("."),
+        )
+        .unwrap(),
+    );
+    let ray = Ray {
+        origin: Vec3A::ZERO,
+        direction: Vec3A::Z,
+        t_min: 0.0,
+        t_max: f32::INFINITY,
+        time: 0.0,
+    };
+    let (m, se) = mean(&s, &tracer, &ray, 16_384, &DEEP);
+    let want = 0.4 * rho / (1.0 - rho);
+    assert!((m - want).abs() < 5.0 * se + 1e-3, "{m} ± {se} vs {want}");
+}
+
+#[test]
+fn a_classic_surface_takes_its_lights_directly_and_nothing_by_way_of_other_surfaces() {
+    // A unit sphere (classic matte, Kd·Cs = 0.8) inside a white enclosure of radius 10, lit by a point
+    // light. Its radiance is the classic diffuse() term exactly, ρ/π · S·cos θ/d²; the white enclosure
+    // lit by the same light would add light by way of its walls if the path went on.
+    let tracer = Spheres(vec![(Vec3A::ZERO, 1.0), (Vec3A::ZERO, 10.0)]);
+    let light_at = Vec3A::new(0.0, 0.0, -4.0);
+    let point = Light::Point(obscura_scene::PointEmitter {
+        color: Rgb::WHITE,
+        intensity: 3.0,
+        position: light_at.into(),
+        enable_shadows: true,
+    });
+    let mut s = ShadingScene {
+        materials: vec![
+            Material::Diffuse {
+                color: Rgb::new(0.8, 0.8, 0.8),
+            },
+            Material::Diffuse { color: Rgb::WHITE },
+        ],
+        instance_material: vec![0, 1],
+        lights: Lights::new(&[point], Path::new(".")).unwrap(),
+        ..ShadingScene::default()
+    };
+    s.local_shading = vec![classic(Rgb::BLACK), None];
+    let mut checked = 0;
+    for ray in camera_rays() {
+        let Some(h) = tracer.intersect(&ray).filter(|h| h.instance == 0) else {
+            continue;
+        };
+        let to_light = light_at - h.position;
+        let d2 = to_light.length_squared();
+        let want = 0.8 / PI * 3.0 * h.geometric_normal.dot(to_light.normalize()).max(0.0) / d2;
+        let mut rng = Rng::new(7, 7);
+        for _ in 0..16 {
+            let r = trace_path(&s, &tracer, &ray, &mut rng, &DEEP);
+            assert!((r.radiance.x - want).abs() < 1e-5, "{} vs {want}", r.radiance.x);
+        }
+        // Path traced, the same surface gathers the enclosure's light as well.
+        let mut traced = s.clone();
+        traced.local_shading.clear();
+        let (m, se) = mean(&traced, &tracer, &ray, 4096, &DEEP);
+        assert!(
+            m > f64::from(want) + 0.01 && m > f64::from(want) + 5.0 * se,
+            "{m} ± {se} vs {want}"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 4);
 }

@@ -182,17 +182,26 @@ mod tests {
     }
 
     #[test]
-    fn an_ambient_light_lights_surfaces_but_is_not_seen() {
+    fn ambient_lights_sum_into_the_unshadowed_ambient_term_and_are_not_seen() {
         let lights = Lights::new(
-            &[Light::Ambient {
-                color: Rgb::WHITE,
-                intensity: 0.5,
-            }],
+            &[
+                Light::Ambient {
+                    color: Rgb::WHITE,
+                    intensity: 0.5,
+                },
+                Light::Ambient {
+                    color: Rgb::new(1.0, 0.0, 0.5),
+                    intensity: 0.2,
+                },
+            ],
             Path::new("."),
         )
         .unwrap();
+        // Σ I·C, and nothing a ray can see or a light sample can pick.
+        assert!((lights.ambient() - Vec3A::new(0.7, 0.5, 0.6)).length() < 1e-6);
         assert_eq!(lights.background(Vec3A::X), Vec3A::ZERO);
-        let (radiance, pdf) = lights.escaped(Vec3A::X);
-        assert!((radiance - Vec3A::splat(0.5)).length() < 1e-6 && pdf > 0.0);
+        assert_eq!(lights.escaped(Vec3A::X), (Vec3A::ZERO, 0.0));
+        assert!(lights.is_empty());
+        assert!(lights.sample(Vec3A::ZERO, Vec3A::Y, (0.5, 0.5), 0.5).is_none());
     }
 }

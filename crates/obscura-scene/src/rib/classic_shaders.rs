@@ -13,7 +13,7 @@
 //!
 //! | light | physical light |
 //! |---|---|
-//! | `ambientlight` | [`Light::Ambient`]: uniform radiance `I·C` from every direction, not seen by the camera (an unoccluded Lambertian surface reflects `ρ·I·C`, the classic `Kd·ambient()` with `Ka = Kd`) |
+//! | `ambientlight` | [`Light::Ambient`]: uniform radiance `I·C` reaching every surface unshadowed, not seen by any ray; a classic surface reflects `Ka·Cs·Σ I·C` (the `Ka·ambient()` term), any other its diffuse albedo times `Σ I·C` |
 //! | `distantlight` | [`Light::Distant`] travelling along `to − from`, `angleExtent` 0 |
 //! | `pointlight` | [`Light::Point`] at `from` |
 //! | `spotlight` | [`Light::Spot`] at `from` along `to − from`: `coneangle`, `conedeltaangle` (radians, as in RIB), `beamdistribution`; the spec's attenuation `cosᵇ α · smoothstep(cos(cone), cos(cone − delta), cos α) / d²` |
@@ -40,8 +40,20 @@
 //! | `metal`, `shinymetal` (`Ks` 1, `roughness` .1) | `PxrSurface`: no diffuse, `F0 = Ks·Cs·a(n)` |
 //! | any other | `PxrDiffuse` with albedo `Cs`, and a warning naming the shader |
 //!
-//! Albedos are clamped to `[0, 1]`. `Ka` has no physical counterpart (ambient light arrives through
-//! the diffuse lobe); `Kr` and `texturename` of `shinymetal` (a reflection map) are left out.
+//! Albedos are clamped to `[0, 1]`. `Kr` and `texturename` of `shinymetal` (a reflection map) are
+//! left out. A `Color` with neither a `Surface` nor a `Bxdf` shades as `matte`.
+//!
+//! # Local illumination
+//!
+//! The standard shaders compute `Cs·(Ka·ambient() + Kd·diffuse(N)) + specularcolor·Ks·specular(N, V,
+//! roughness)` (without the terms a shader lacks): the light that reaches them straight from their
+//! lights, plus an ambient term standing in for everything else. So a surface of theirs shades that
+//! way here too ([`LocalShading`], `Scene::local_shading`): its lights are sampled as for any
+//! surface (shadowed as each light says), the ambient term `Ka·Cs·Σ I·C` is added without a shadow
+//! ray (`paintedplastic`: `Ka·Cs·texture`), and the path ends there, so no light arrives by way of
+//! other surfaces. The look is the classic one (a planet inside a matte star-field sphere is lit by
+//! its sun, not fogged by light bouncing around the inside of the sphere), and a classic scene costs
+//! one camera ray and one shadow ray per light sample.
 //! `Opacity` and `Os` below 1 render opaque, with a warning.
 //!
 //! # `paintedplastic`'s texture
@@ -74,7 +86,7 @@ use super::request::{Req, get_color, get_float, get_floats, get_string};
 use super::searchpath::Kind;
 use super::{Reader, RibError};
 use crate::texture::{ColorSpace, ImageSource, SurfaceMaps, TextureDesc, TextureSlot, Wrap};
-use crate::types::{Light, Material, PointEmitter};
+use crate::types::{AmbientReflectance, Light, LocalShading, Material, PointEmitter};
 
 /// The classic shading attributes (saved and restored by attribute blocks).
 #[derive(Debug, Clone, PartialEq)]
@@ -125,6 +137,8 @@ pub(super) enum ClassicSurface {
     Constant,
     /// `matte`.
     Matte {
+        /// `Ka`.
+        ka: f32,
         /// `Kd`.
         kd: f32,
     },
@@ -133,6 +147,8 @@ pub(super) enum ClassicSurface {
         /// `paintedplastic`'s `texturename`, when the file was found: its index in the scene's
         /// textures.
         texture: Option<u32>,
+        /// `Ka`.
+        ka: f32,
         /// `Kd`.
         kd: f32,
         /// `Ks`.
@@ -144,13 +160,18 @@ pub(super) enum ClassicSurface {
     },
     /// `metal` and `shinymetal`.
     Metal {
+        /// `Ka`.
+        ka: f32,
         /// `Ks`.
         ks: f32,
         /// `roughness`.
         roughness: f32,
     },
-    /// Any other shader: a diffuse surface of colour `Cs`.
-    Other,
+    /// Any other shader: a diffuse surface of colour `Cs` (its `Ka`, when it has one, kept).
+    Other {
+        /// `Ka`.
+        ka: f32,
+    },
 }
 
 /// The Blinn exponent of the classic `specular()` at `roughness`: `8/roughness` (roughness floored
@@ -201,6 +222,33 @@ fn painted(texture: u32, diffuse: Rgb, specular: Rgb, roughness: f32) -> Surface
 }
 
 impl ClassicSurface {
+    /// How the surface shades with colour `cs` beyond its material: by local illumination, with the
+    /// ambient term `Ka·Cs` (`paintedplastic`'s `Ka·Cs·texture` through the diffuse albedo); `None`
+    /// for `constant`, which only emits.
+    pub(super) fn local(&self, cs: Rgb) -> Option<LocalShading> {
+        let fixed = |ka: f32| {
+            let c = |x: f32| {
+                let y = ka * x;
+                if y.is_finite() { y.max(0.0) } else { 0.0 }
+            };
+            AmbientReflectance::Color(Rgb::new(c(cs.r), c(cs.g), c(cs.b)))
+        };
+        let ambient = match *self {
+            ClassicSurface::Constant => return None,
+            ClassicSurface::Plastic {
+                texture: Some(_),
+                ka,
+                kd,
+                ..
+            } if kd > 0.0 && (ka / kd).is_finite() => AmbientReflectance::DiffuseScaled((ka / kd).max(0.0)),
+            ClassicSurface::Matte { ka, .. }
+            | ClassicSurface::Plastic { ka, .. }
+            | ClassicSurface::Metal { ka, .. }
+            | ClassicSurface::Other { ka } => fixed(ka),
+        };
+        Some(LocalShading { ambient })
+    }
+
     /// `paintedplastic`'s texture, when it has one.
     fn texture(&self) -> Option<u32> {
         match self {
@@ -215,10 +263,10 @@ impl ClassicSurface {
             ClassicSurface::Constant => Material::Constant {
                 color: scaled(cs, 1.0),
             },
-            ClassicSurface::Matte { kd } => Material::Diffuse {
+            ClassicSurface::Matte { kd, .. } => Material::Diffuse {
                 color: scaled(cs, kd),
             },
-            ClassicSurface::Other => Material::Diffuse {
+            ClassicSurface::Other { .. } => Material::Diffuse {
                 color: scaled(cs, 1.0),
             },
             ClassicSurface::Plastic {
@@ -235,7 +283,7 @@ impl ClassicSurface {
                     roughness: ggx_roughness(n),
                 }
             }
-            ClassicSurface::Metal { ks, roughness } => {
+            ClassicSurface::Metal { ks, roughness, .. } => {
                 let n = classic_exponent(roughness);
                 Material::Surface {
                     diffuse: Rgb::BLACK,
@@ -323,15 +371,20 @@ impl Reader {
         let f = |key: &str, default: f32| get_float(&list, key).unwrap_or(default);
         let surface = match name.as_str() {
             "constant" => ClassicSurface::Constant,
-            "matte" => ClassicSurface::Matte { kd: f("Kd", 1.0) },
+            "matte" => ClassicSurface::Matte {
+                ka: f("Ka", 1.0),
+                kd: f("Kd", 1.0),
+            },
             "plastic" | "paintedplastic" => ClassicSurface::Plastic {
                 texture: None,
+                ka: f("Ka", 1.0),
                 kd: f("Kd", 0.5),
                 ks: f("Ks", 0.5),
                 roughness: f("roughness", 0.1),
                 specular_color: get_color(&list, "specularcolor").unwrap_or(Rgb::WHITE),
             },
             "metal" | "shinymetal" => ClassicSurface::Metal {
+                ka: f("Ka", 1.0),
                 ks: f("Ks", 1.0),
                 roughness: f("roughness", 0.1),
             },
@@ -342,7 +395,7 @@ impl Reader {
                         "Surface \"{other}\" is not a standard shader (constant, matte, metal, shinymetal, plastic, paintedplastic); drawn as matte in its Color"
                     ),
                 );
-                ClassicSurface::Other
+                ClassicSurface::Other { ka: f("Ka", 1.0) }
             }
         };
         let mut surface = surface;
@@ -352,7 +405,7 @@ impl Reader {
         {
             *texture = self.painted_texture(r, t);
         }
-        if surface != ClassicSurface::Other {
+        if !matches!(surface, ClassicSurface::Other { .. }) {
             self.classic_mapped(r);
         }
         self.classic.surface = Some(surface);
@@ -463,22 +516,26 @@ impl Reader {
         let own = self.classic_state.primitive_color.take();
         let color = own.or(self.classic.color);
         let cs = color.unwrap_or(Rgb::WHITE);
-        let (material, texture) = match &self.classic.surface {
-            Some(s) => (s.material(cs), s.texture()),
-            None if self.material == 0 && color.is_some() => (
-                Material::Diffuse {
-                    color: scaled(cs, 1.0),
-                },
-                None,
-            ),
+        // A `Color` without any `Surface` (nor `Bxdf`) shades as `matte`.
+        let matte = ClassicSurface::Matte { ka: 1.0, kd: 1.0 };
+        let surface = match &self.classic.surface {
+            Some(s) => s,
+            None if self.material == 0 && color.is_some() => &matte,
             None => return self.material,
         };
-        self.intern_material(material, texture)
+        let (material, texture, local) = (surface.material(cs), surface.texture(), surface.local(cs));
+        self.intern_material(material, texture, local)
     }
 
-    /// The index of `material` (painted with `texture`, when given) in the scene, adding it when new.
-    fn intern_material(&mut self, material: Material, texture: Option<u32>) -> u32 {
-        let key = format!("{material:?} {texture:?}");
+    /// The index of `material` (painted with `texture`, shading by `local` illumination, when given)
+    /// in the scene, adding it when new.
+    fn intern_material(
+        &mut self,
+        material: Material,
+        texture: Option<u32>,
+        local: Option<LocalShading>,
+    ) -> u32 {
+        let key = format!("{material:?} {texture:?} {local:?}");
         if let Some(&k) = self.classic_state.materials.get(&key) {
             return k;
         }
@@ -496,6 +553,9 @@ impl Reader {
             self.scene
                 .material_maps
                 .insert(k, painted(t, diffuse, specular, roughness));
+        }
+        if let Some(local) = local {
+            self.scene.local_shading.insert(k, local);
         }
         self.classic_state.materials.insert(key, k);
         k
@@ -600,6 +660,7 @@ mod tests {
     fn plastic_keeps_kd_ks_roughness_and_specularcolor() {
         let s = ClassicSurface::Plastic {
             texture: None,
+            ka: 1.0,
             kd: 0.5,
             ks: 0.5,
             roughness: 0.1,
@@ -628,7 +689,7 @@ mod tests {
             Material::Constant { color: red }
         );
         assert_eq!(
-            ClassicSurface::Matte { kd: 0.8 }.material(red),
+            ClassicSurface::Matte { ka: 1.0, kd: 0.8 }.material(red),
             Material::Diffuse {
                 color: Rgb::new(0.8, 0.0, 0.0)
             }
@@ -636,6 +697,7 @@ mod tests {
         let Material::Surface {
             diffuse, specular, ..
         } = (ClassicSurface::Metal {
+            ka: 1.0,
             ks: 1.0,
             roughness: 0.1,
         })

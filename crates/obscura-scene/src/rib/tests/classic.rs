@@ -7,7 +7,7 @@ use glam::Vec3;
 use obscura_sdk::Rgb;
 
 use super::{fail, ok};
-use crate::types::{Light, Material, Shape};
+use crate::types::{AmbientReflectance, Light, LocalShading, Material, Shape};
 
 #[test]
 fn surfaces_take_the_current_color_and_attribute_blocks_restore_them() {
@@ -407,6 +407,15 @@ fn paintedplastic_finds_its_texture_through_the_searchpath_and_paints_the_diffus
     // (s, 1 − t) coordinates are read back at (s, t).
     assert_eq!(slot.transform, [1.0, 0.0, 0.0, 0.0, -1.0, 1.0]);
     assert!(!scene.material_maps.contains_key(&c));
+    // The ambient term is Ka·Cs·texture: (Ka/Kd) times the textured diffuse albedo.
+    assert_eq!(
+        scene.local_shading[&a].ambient,
+        AmbientReflectance::DiffuseScaled(2.0)
+    );
+    assert_eq!(
+        scene.local_shading[&c].ambient,
+        AmbientReflectance::Color(Rgb::new(1.0, 0.5, 0.5))
+    );
     // A sphere has no texture coordinates: said once.
     let no_st: Vec<_> = scene
         .warnings
@@ -520,4 +529,38 @@ fn classic_lights_cast_shadows_only_under_bmrts_light_attribute() {
         fail("WorldBegin\nAttribute \"light\" \"shadows\" \"yes\"\nWorldEnd\n")
             .starts_with("t.rib:2: Attribute \"light\" \"shadows\": expected \"on\" or \"off\"")
     );
+}
+
+#[test]
+fn classic_surfaces_shade_by_local_illumination_with_ka_cs_as_their_ambient() {
+    let scene = ok("WorldBegin\nColor [1 0.5 0]\n\
+         Surface \"matte\" \"Ka\" 0.3\nSphere 1 -1 1 360\n\
+         Surface \"plastic\"\nSphere 1 -1 1 360\n\
+         Surface \"metal\" \"Ka\" 2\nSphere 1 -1 1 360\n\
+         Surface \"wood\" \"Ka\" 0.5\nSphere 1 -1 1 360\n\
+         Surface \"constant\"\nSphere 1 -1 1 360\nWorldEnd\n");
+    let local = |k: usize| scene.local_shading.get(&scene.objects[k].material).copied();
+    let ambient = |ka: f32| {
+        Some(LocalShading {
+            ambient: AmbientReflectance::Color(Rgb::new(ka, 0.5 * ka, 0.0)),
+        })
+    };
+    assert_eq!(local(0), ambient(0.3));
+    assert_eq!(local(1), ambient(1.0), "Ka defaults to 1");
+    assert_eq!(local(2), ambient(2.0));
+    assert_eq!(local(3), ambient(0.5), "an unknown shader's Ka is kept");
+    assert_eq!(local(4), None, "constant only emits");
+
+    let scene = ok(
+        "WorldBegin\nColor [0 1 0]\nSphere 1 -1 1 360\nBxdf \"PxrDiffuse\" \"d\"\nSphere 1 -1 1 360\nWorldEnd\n",
+    );
+    let local = |k: usize| scene.local_shading.get(&scene.objects[k].material).copied();
+    assert_eq!(
+        local(0),
+        Some(LocalShading {
+            ambient: AmbientReflectance::Color(Rgb::new(0.0, 1.0, 0.0))
+        }),
+        "a Color without a Surface shades as matte"
+    );
+    assert_eq!(local(1), None, "a Bxdf is path traced");
 }
