@@ -522,7 +522,8 @@ pub struct Scene {
     pub projection: String,
     /// The projection's parameters as given.
     pub projection_params: ParamList,
-    /// `Hider "raytrace" "int maxsamples"` (default 64).
+    /// `Hider "raytrace" "int maxsamples"`, or `PixelSamples x y` as `⌈x⌉·⌈y⌉`, whichever came last
+    /// (default 64).
     pub samples_per_pixel: u32,
     /// `PixelFilter`.
     pub filter: PixelFilter,

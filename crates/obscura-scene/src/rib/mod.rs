@@ -1,7 +1,7 @@
 //! The ASCII RIB reader: RenderMan Interface Bytestream → [`Scene`].
 //!
 //! Reads the subset of RIB a camera user needs: the options that describe the image and the camera
-//! (`Format`, `ScreenWindow`, `CropWindow`, `Shutter`, `Clipping`, `PixelFilter`, `Hider`, `Display`,
+//! (`Format`, `ScreenWindow`, `CropWindow`, `Shutter`, `Clipping`, `PixelFilter`, `Hider`, `PixelSamples`, `Display`,
 //! `Projection`, `Camera`), transforms and motion blocks, attribute and transform blocks, the quadrics,
 //! polygons (triangulated on load) and Catmull–Clark subdivision meshes, `Bxdf` materials, lights and
 //! `ReadArchive`; and classic RenderMan Interface scenes: `Color`, `Opacity`, the standard `Surface`
@@ -306,7 +306,7 @@ const fn known(name: &'static str, scope: Scope, handle: Handler) -> Request {
 /// Every request the reader knows besides the transform requests (`Identity`, `Translate`, `Rotate`,
 /// `Scale`, `ConcatTransform`, `Transform`), which [`transform_op`] reads first because a motion block
 /// collects them instead of applying them. Any other request is skipped with a warning.
-const REQUESTS: [Request; 78] = {
+const REQUESTS: [Request; 79] = {
     use Scope::{Anywhere, Options, World};
     [
         known("version", Anywhere, Reader::ignore),
@@ -324,6 +324,7 @@ const REQUESTS: [Request; 78] = {
         known("Clipping", Options, Reader::clipping),
         known("PixelFilter", Options, Reader::pixel_filter),
         known("Hider", Options, Reader::hider),
+        known("PixelSamples", Options, Reader::pixel_samples),
         known("Display", Options, Reader::display),
         known("Projection", Options, Reader::projection),
         known("Camera", Options, Reader::camera),

@@ -197,6 +197,31 @@ impl Reader {
         Ok(())
     }
 
+    /// `PixelSamples xsamples ysamples`: the RI's samples per pixel in x and y, read as
+    /// `⌈xsamples⌉·⌈ysamples⌉` samples per pixel (the renderer stratifies them itself); a later
+    /// `Hider "raytrace" "maxsamples"` or `--spp` replaces it.
+    pub(super) fn pixel_samples(&mut self, r: &Req<'_>) -> Result<(), RibError> {
+        let [x, y] = r.only_numbers::<2>("xsamples ysamples")?;
+        let count = |v: f32| {
+            (v.is_finite() && (1.0..=65_536.0).contains(&v))
+                .then(|| v.ceil() as u32)
+                .ok_or_else(|| {
+                    r.err(format!(
+                        "PixelSamples expects sample counts from 1 to 65536, got {x} {y}"
+                    ))
+                })
+        };
+        let samples = count(x)?.saturating_mul(count(y)?);
+        if samples > obscura_host::sampler::MAX_SAMPLES {
+            return Err(r.err(format!(
+                "PixelSamples {x} {y} asks for {samples} samples per pixel; at most {} are allowed",
+                obscura_host::sampler::MAX_SAMPLES
+            )));
+        }
+        self.scene.samples_per_pixel = samples;
+        Ok(())
+    }
+
     /// `Projection "name"` and its parameters, kept as given for the projection plugin (`perspective` and
     /// `orthographic` name `PxrPerspective` and `PxrOrthographic`).
     pub(super) fn projection(&mut self, r: &Req<'_>) -> Result<(), RibError> {

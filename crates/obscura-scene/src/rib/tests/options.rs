@@ -160,6 +160,32 @@ fn hider_maxsamples_sets_samples_per_pixel() {
 }
 
 #[test]
+fn pixel_samples_sets_samples_per_pixel_as_their_product() {
+    assert_eq!(ok("PixelSamples 3 2").samples_per_pixel, 6);
+    // Fractional counts round up, as a stratified sampler needs whole strata.
+    assert_eq!(ok("PixelSamples 1.5 4").samples_per_pixel, 8);
+    // The last word wins, whichever request says it.
+    assert_eq!(
+        ok("PixelSamples 4 4\nHider \"raytrace\" \"int maxsamples\" [9]").samples_per_pixel,
+        9
+    );
+    assert_eq!(
+        ok("Hider \"raytrace\" \"int maxsamples\" [9]\nPixelSamples 2 2").samples_per_pixel,
+        4
+    );
+    assert!(ok("PixelSamples 2 2").warnings.is_empty());
+    assert_eq!(
+        fail("PixelSamples 0 2"),
+        "t.rib:1: PixelSamples expects sample counts from 1 to 65536, got 0 2"
+    );
+    assert_eq!(
+        fail("PixelSamples 1000 1000"),
+        "t.rib:1: PixelSamples 1000 1000 asks for 1000000 samples per pixel; at most 65536 are allowed"
+    );
+    assert!(fail("PixelSamples 2").starts_with("t.rib:1: PixelSamples expects xsamples ysamples"));
+}
+
+#[test]
 fn display_adds_or_replaces_and_reads_channels_and_type() {
     let scene = ok("Display \"out/beauty.exr\" \"openexr\" \"rgba\"\n\
          Display \"+aovs.exr\" \"exr\" \"rgba,z,N,P,cameraDirection\" \"string type\" \"half\"\n\
