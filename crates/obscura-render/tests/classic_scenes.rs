@@ -168,3 +168,32 @@ fn classic_lights_cast_no_shadows_unless_bmrts_attribute_asks() {
     let shadowed = centre(&scene("Attribute \"light\" \"shadows\" \"on\"\n"));
     assert!(shadowed[0] < 1e-6, "{shadowed:?}");
 }
+
+#[test]
+fn a_surface_of_opacity_below_one_shows_what_is_behind_it_in_proportion() {
+    // A red constant square of opacity 0.3 in front of a blue constant one: 0.3·red + 0.7·blue, the
+    // RI's compositing of `Oi`. Without transparency the centre is pure red.
+    let c = centre(
+        "Format 16 16 1\nHider \"raytrace\" \"int maxsamples\" [256]\nProjection \"PxrPerspective\" \"float fov\" [30]\n\
+         WorldBegin\nSurface \"constant\"\n\
+         AttributeBegin\nColor [1 0 0]\nOpacity [0.3 0.3 0.3]\nPolygon \"P\" [-5 -5 5  5 -5 5  5 5 5  -5 5 5]\nAttributeEnd\n\
+         Color [0 0 1]\nPolygon \"P\" [-50 -50 20  50 -50 20  50 50 20  -50 50 20]\nWorldEnd\n",
+    );
+    assert!((c[0] - 0.3).abs() < 0.03, "{c:?}");
+    assert!(c[1].abs() < 1e-6, "{c:?}");
+    assert!((c[2] - 0.7).abs() < 0.03, "{c:?}");
+}
+
+#[test]
+fn a_classic_surface_inside_a_closed_sphere_is_lit_by_its_ambient_term() {
+    // The camera inside a matte sphere (Ka 0.5) with only an ambientlight of 0.4: the RI's
+    // Ka·Cs·ambient() = 0.5·(1, 0.5, 1)·0.4, exactly and without noise. An occluded ambient dome
+    // would leave it black.
+    let c = centre(&format!(
+        "{CAMERA}WorldBegin\nLightSource \"ambientlight\" 1 \"intensity\" [0.4]\nColor [1 0.5 1]\n\
+         Surface \"matte\" \"Ka\" [0.5]\nSphere 10 -10 10 360\nWorldEnd\n"
+    ));
+    for (got, want) in c.iter().zip([0.2, 0.1, 0.2]) {
+        assert!((got - want).abs() < 1e-5, "{c:?}");
+    }
+}

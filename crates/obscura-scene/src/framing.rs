@@ -115,7 +115,9 @@ pub const DEFAULT_KEY_DIRECTION: Vec3 = Vec3::new(0.45, -0.75, -0.5);
 
 /// The default lights of a scene without any: a soft sky (a uniform dome of [`DEFAULT_SKY`]) and a
 /// distant key light along [`DEFAULT_KEY_DIRECTION`] (intensity 2.2, 5° wide), so surfaces show their
-/// shape and the backdrop is not the asset's white. The choice is recorded in
+/// shape and the backdrop is not the asset's white. In a scene of classic RenderMan shaders
+/// ([`Scene::local_shading`] not empty) the key light casts no shadows, as the classic lights it
+/// stands in for do: a scene closed by a star-field sphere is still lit. The choice is recorded in
 /// [`Scene::auto_light`] for the renderer's info line.
 pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, _file: &str) {
     if scene.lights.is_empty() {
@@ -138,7 +140,7 @@ pub(crate) fn add_default_dome_if_unlit(scene: &mut Scene, _file: &str) {
             intensity: 2.2,
             exposure: 0.0,
             angle_extent: 5.0,
-            enable_shadows: true,
+            enable_shadows: scene.local_shading.is_empty(),
             transform: Mat4::from_cols(x.extend(0.0), y.extend(0.0), z.extend(0.0), Vec4::W),
         });
         // A closed interior lets neither in: a lamp under its ceiling shows the room.

@@ -54,7 +54,10 @@
 //! other surfaces. The look is the classic one (a planet inside a matte star-field sphere is lit by
 //! its sun, not fogged by light bouncing around the inside of the sphere), and a classic scene costs
 //! one camera ray and one shadow ray per light sample.
-//! `Opacity` and `Os` below 1 render opaque, with a warning.
+//! `Opacity` and a primitive's `Os` below 1 make the material blended: a ray passes through with
+//! probability `1 − o`, `o` the mean of the channels (a coloured opacity is warned about), so what is
+//! behind shows through in the RI's proportion `o·C + (1 − o)·B`; the surface keeps its look
+//! (untextured surface maps of the same colours, `constant` as emission over black).
 //!
 //! # `paintedplastic`'s texture
 //!
@@ -85,7 +88,7 @@ use super::patch::Basis;
 use super::request::{Req, get_color, get_float, get_floats, get_string};
 use super::searchpath::Kind;
 use super::{Reader, RibError};
-use crate::texture::{ColorSpace, ImageSource, SurfaceMaps, TextureDesc, TextureSlot, Wrap};
+use crate::texture::{AlphaMode, ColorSpace, ImageSource, SurfaceMaps, TextureDesc, TextureSlot, Wrap};
 use crate::types::{AmbientReflectance, Light, LocalShading, Material, PointEmitter};
 
 /// The classic shading attributes (saved and restored by attribute blocks).
@@ -128,6 +131,8 @@ pub(super) struct ClassicState {
     pub(super) textures: HashMap<PathBuf, u32>,
     /// The colour the next primitive's own `"Cs"` gives it (consumed by that primitive).
     pub(super) primitive_color: Option<Rgb>,
+    /// The opacity the next primitive's own `"Os"` gives it (consumed by that primitive).
+    pub(super) primitive_opacity: Option<Rgb>,
 }
 
 /// A classic surface shader's parameters, as the material mapping needs them.
@@ -202,6 +207,50 @@ fn scaled(c: Rgb, k: f32) -> Rgb {
         if y.is_nan() { 0.0 } else { y.clamp(0.0, 1.0) }
     };
     Rgb::new(f(c.r), f(c.g), f(c.b))
+}
+
+/// How much of a surface of opacity `os` is there: the mean of its channels in `[0, 1]` (NaN → 1,
+/// opaque). The renderer passes a ray through with probability `1 − coverage`, so a surface of
+/// opacity `o` in front of a background `B` shows `o·C + (1 − o)·B` on average: the RI's `Oi`
+/// compositing, with a grey opacity.
+fn coverage(os: Rgb) -> f32 {
+    let mean = (os.r + os.g + os.b) / 3.0;
+    if mean.is_nan() { 1.0 } else { mean.clamp(0.0, 1.0) }
+}
+
+/// `material` as surface maps without textures (the form transparency takes): the same diffuse
+/// colour, specular colour and roughness, or, for `constant`, its colour as emission over a black
+/// surface (which, reflecting nothing, ends the path as `constant` does).
+fn untextured(material: Material) -> SurfaceMaps {
+    let base = |c: Rgb| [c.r, c.g, c.b, 1.0];
+    let maps = SurfaceMaps {
+        metallic: 0.0,
+        vertex_colors: false,
+        ..SurfaceMaps::default()
+    };
+    match material {
+        Material::Diffuse { color } => SurfaceMaps {
+            base_color_factor: base(color),
+            diffuse_only: true,
+            ..maps
+        },
+        Material::Constant { color } => SurfaceMaps {
+            base_color_factor: base(Rgb::BLACK),
+            diffuse_only: true,
+            emissive_factor: color,
+            ..maps
+        },
+        Material::Surface {
+            diffuse,
+            specular,
+            roughness,
+        } => SurfaceMaps {
+            base_color_factor: base(diffuse),
+            roughness,
+            specular: Some(specular),
+            ..maps
+        },
+    }
 }
 
 /// `paintedplastic`: the plastic's diffuse colour `Kd·Cs` times texture `texture` at `(s, t)`, its
@@ -348,18 +397,27 @@ impl Reader {
         Ok(())
     }
 
-    /// `Opacity [r g b]`: recorded; below 1 renders opaque with a warning.
+    /// `Opacity [r g b]`: the surfaces that follow are seen through (see [`coverage`]).
     pub(super) fn opacity(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let [red, green, blue] = r.only_numbers::<3>("an opacity: 3 numbers, e.g. Opacity [1 1 1]")?;
         self.classic.opacity = Rgb::new(red, green, blue);
-        if red < 1.0 || green < 1.0 || blue < 1.0 {
+        self.warn_coloured_opacity(r, self.classic.opacity);
+        Ok(())
+    }
+
+    /// Warns, once per scene, that an opacity whose channels differ is drawn grey.
+    fn warn_coloured_opacity(&mut self, r: &Req<'_>, opacity: Rgb) {
+        if opacity.r != opacity.g || opacity.g != opacity.b {
             self.warn_once(
                 r,
-                "opacity",
-                "Opacity below 1: the renderer draws every surface opaque".into(),
+                "coloured opacity",
+                format!(
+                    "{}: a coloured opacity is drawn as the mean of its channels ({:.3}): the renderer's transparency is grey",
+                    r.name,
+                    coverage(opacity)
+                ),
             );
         }
-        Ok(())
     }
 
     /// `Surface "name" params`: a classic surface shader becomes the current material.
@@ -483,8 +541,8 @@ impl Reader {
         Ok(())
     }
 
-    /// Records a primitive's own `"Cs"` for the next object: one colour, or several averaged with a
-    /// warning (the renderer shades one colour per primitive). `"Os"` below 1 is warned about.
+    /// Records a primitive's own `"Cs"` and `"Os"` for the next object: one value, or several averaged
+    /// with a warning (the renderer shades one colour and one opacity per primitive).
     pub(super) fn primitive_color(&mut self, r: &Req<'_>, list: &ParamList) {
         if let Some(cs) = get_floats(list, "Cs").filter(|c| c.len() >= 3) {
             let n = (cs.len() / 3) as f32;
@@ -501,12 +559,21 @@ impl Reader {
             }
             self.classic_state.primitive_color = Some(Rgb::new(sum[0] / n, sum[1] / n, sum[2] / n));
         }
-        if get_floats(list, "Os").is_some_and(|o| o.iter().any(|&x| x < 1.0)) {
-            self.warn_once(
-                r,
-                "opacity",
-                "Opacity below 1: the renderer draws every surface opaque".into(),
-            );
+        if let Some(os) = get_floats(list, "Os").filter(|o| o.len() >= 3) {
+            let n = (os.len() / 3) as f32;
+            let sum = os
+                .chunks_exact(3)
+                .fold([0.0f32; 3], |a, c| [a[0] + c[0], a[1] + c[1], a[2] + c[2]]);
+            if os.chunks_exact(3).any(|c| c != &os[..3]) {
+                self.warn_once(
+                    r,
+                    "varying Os",
+                    format!("{}: \"Os\" varies over the primitive; drawn with its average opacity (one opacity per primitive)", r.name),
+                );
+            }
+            let os = Rgb::new(sum[0] / n, sum[1] / n, sum[2] / n);
+            self.warn_coloured_opacity(r, os);
+            self.classic_state.primitive_opacity = Some(os);
         }
     }
 
@@ -516,43 +583,52 @@ impl Reader {
         let own = self.classic_state.primitive_color.take();
         let color = own.or(self.classic.color);
         let cs = color.unwrap_or(Rgb::WHITE);
-        // A `Color` without any `Surface` (nor `Bxdf`) shades as `matte`.
+        let opacity = self.classic_state.primitive_opacity.take();
+        let alpha = coverage(opacity.unwrap_or(self.classic.opacity));
+        // A `Color` or an `Opacity` without any `Surface` (nor `Bxdf`) shades as `matte`.
         let matte = ClassicSurface::Matte { ka: 1.0, kd: 1.0 };
         let surface = match &self.classic.surface {
             Some(s) => s,
-            None if self.material == 0 && color.is_some() => &matte,
+            None if self.material == 0 && (color.is_some() || alpha < 1.0) => &matte,
             None => return self.material,
         };
         let (material, texture, local) = (surface.material(cs), surface.texture(), surface.local(cs));
-        self.intern_material(material, texture, local)
+        self.intern_material(material, texture, local, alpha)
     }
 
-    /// The index of `material` (painted with `texture`, shading by `local` illumination, when given)
-    /// in the scene, adding it when new.
+    /// The index of `material` (painted with `texture`, shading by `local` illumination, when given,
+    /// and seen through where `alpha` < 1) in the scene, adding it when new.
     fn intern_material(
         &mut self,
         material: Material,
         texture: Option<u32>,
         local: Option<LocalShading>,
+        alpha: f32,
     ) -> u32 {
-        let key = format!("{material:?} {texture:?} {local:?}");
+        let key = format!("{material:?} {texture:?} {local:?} {alpha:?}");
         if let Some(&k) = self.classic_state.materials.get(&key) {
             return k;
         }
         let k = self.scene.materials.len() as u32;
         self.scene.materials.push(material);
-        if let (
-            Some(t),
-            Material::Surface {
-                diffuse,
-                specular,
-                roughness,
-            },
-        ) = (texture, material)
-        {
-            self.scene
-                .material_maps
-                .insert(k, painted(t, diffuse, specular, roughness));
+        let maps = match (texture, material) {
+            (
+                Some(t),
+                Material::Surface {
+                    diffuse,
+                    specular,
+                    roughness,
+                },
+            ) => Some(painted(t, diffuse, specular, roughness)),
+            _ if alpha < 1.0 => Some(untextured(material)),
+            _ => None,
+        };
+        if let Some(mut maps) = maps {
+            if alpha < 1.0 {
+                maps.base_color_factor[3] = alpha;
+                maps.alpha = AlphaMode::Blend;
+            }
+            self.scene.material_maps.insert(k, maps);
         }
         if let Some(local) = local {
             self.scene.local_shading.insert(k, local);

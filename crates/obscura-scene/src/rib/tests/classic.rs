@@ -271,8 +271,17 @@ fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
     )
     .unwrap();
     assert!(
-        matches!(scene.lights[..], [Light::Dome { .. }, Light::Distant { .. }]),
-        "{:?}",
+        matches!(
+            scene.lights[..],
+            [
+                Light::Dome { .. },
+                Light::Distant {
+                    enable_shadows: false,
+                    ..
+                }
+            ]
+        ),
+        "the key light of a classic scene casts no shadows, as classic lights: {:?}",
         scene.lights
     );
     assert!(
@@ -563,4 +572,46 @@ fn classic_surfaces_shade_by_local_illumination_with_ka_cs_as_their_ambient() {
         "a Color without a Surface shades as matte"
     );
     assert_eq!(local(1), None, "a Bxdf is path traced");
+}
+
+#[test]
+fn opacity_below_one_makes_a_blended_material_of_the_same_look() {
+    use crate::texture::AlphaMode;
+    let scene = ok(
+        "WorldBegin\nColor [1 0.5 0]\nOpacity [0.5 0.5 0.5]\nSurface \"matte\"\nSphere 1 -1 1 360\n\
+         Surface \"plastic\"\nSphere 1 -1 1 360\nOpacity [1 1 1]\nSphere 1 -1 1 360\n\
+         Surface \"constant\"\nSphere 1 -1 1 360 \"Os\" [0.2 0.2 0.2]\n\
+         Opacity [0.2 0.4 0.6]\nSphere 1 -1 1 360\nWorldEnd\n",
+    );
+    let maps = |k: usize| scene.material_maps.get(&scene.objects[k].material);
+    let matte = maps(0).expect("a transparent matte has maps");
+    assert_eq!(matte.base_color_factor, [1.0, 0.5, 0.0, 0.5]);
+    assert_eq!(matte.alpha, AlphaMode::Blend);
+    assert!(matte.diffuse_only && !matte.vertex_colors && matte.metallic == 0.0);
+    let Material::Surface {
+        diffuse,
+        specular,
+        roughness,
+    } = scene.materials[scene.objects[1].material as usize]
+    else {
+        panic!("plastic");
+    };
+    let plastic = maps(1).expect("a transparent plastic has maps");
+    assert_eq!(plastic.base_color_factor, [diffuse.r, diffuse.g, diffuse.b, 0.5]);
+    assert_eq!((plastic.specular, plastic.roughness), (Some(specular), roughness));
+    assert!(!plastic.diffuse_only);
+    assert!(maps(2).is_none(), "opaque again after Opacity [1 1 1]");
+    // A primitive's own Os; constant becomes emission over a black surface.
+    let constant = maps(3).expect("a transparent constant has maps");
+    assert_eq!(constant.base_color_factor, [0.0, 0.0, 0.0, 0.2]);
+    assert_eq!(constant.emissive_factor, Rgb::new(1.0, 0.5, 0.0));
+    // A coloured opacity is its mean, said once.
+    assert!((maps(4).unwrap().base_color_factor[3] - 0.4).abs() < 1e-6);
+    let said: Vec<_> = scene
+        .warnings
+        .iter()
+        .filter(|w| w.contains("coloured opacity"))
+        .collect();
+    assert_eq!(said.len(), 1, "{:?}", scene.warnings);
+    assert!(said[0].starts_with("t.rib:"), "{said:?}");
 }
