@@ -95,6 +95,10 @@ pub const MIN_SEGMENTS_PER_TURN: u32 = 4;
 /// after the last level): the memory bound for a primitive that surrounds the camera.
 pub const MAX_QUADS_PER_PRIMITIVE: u64 = 1 << 22;
 
+/// A quadric whose uniform grid holds more quads than this is diced on a grid fitted cell by cell
+/// (see the module documentation); smaller ones keep the uniform grid.
+pub const UNIFORM_GRID_QUADS: u64 = 4096;
+
 /// The deepest Catmull–Clark subdivision level.
 pub const MAX_SUBDIVISION_LEVEL: u32 = 6;
 
@@ -432,9 +436,50 @@ pub fn dice_with_st(
 #[must_use]
 pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
     let (c, rho, sigma) = camera_sphere(ctx, centre, radius);
+    let k = nearest_point_rate(ctx, c, rho, sigma);
+    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
+    clamp_rate(k.min(coverage_cap(covered, radius)))
+}
+
+/// Pixels per unit for one piece of a larger primitive (a cell of a quadric's grid), whose
+/// object-space bounding sphere is (centre, radius): the piece's own nearest-point rate, at most
+/// `on_screen_cap` (the whole primitive's [`pixels_per_unit`]) when the piece's sphere reaches the
+/// image and at most `off_screen_cap` (the whole primitive's rate had it covered only
+/// [`OFF_SCREEN_PIXELS`]) when it does not. See the module documentation. Always finite and in
+/// `[0, MAX_PIXELS_PER_UNIT]`.
+#[must_use]
+pub(super) fn piece_pixels_per_unit(
+    ctx: &DicingContext,
+    centre: Vec3,
+    radius: f32,
+    on_screen_cap: f32,
+    off_screen_cap: f32,
+) -> f32 {
+    let (c, rho, sigma) = camera_sphere(ctx, centre, radius);
+    let k = nearest_point_rate(ctx, c, rho, sigma);
+    let cap = if screen_coverage(ctx, c, rho) > 0.0 {
+        on_screen_cap
+    } else {
+        off_screen_cap
+    };
+    clamp_rate(k.min(cap))
+}
+
+/// The rate at which a primitive whose object-space bounding radius is `radius` holds
+/// `F·pixels` micropolygons of one pixel over the `2πρ₀ × πρ₀` arcs of a sphere's grid:
+/// `√(F·pixels/(2π²))/ρ₀` (NaN when `radius` is 0 or NaN; `f32::min` then keeps the other rate).
+#[must_use]
+pub(super) fn coverage_cap(pixels: f32, radius: f32) -> f32 {
+    let grid_area = 2.0 * std::f32::consts::PI * std::f32::consts::PI;
+    (COVERAGE_FACTOR * pixels / grid_area).sqrt() / radius.abs()
+}
+
+/// The uncapped rate of the module documentation's first table for a camera-space sphere (centre
+/// `c`, radius `rho`) from an object space stretched at most `sigma` times.
+fn nearest_point_rate(ctx: &DicingContext, c: Vec3, rho: f32, sigma: f32) -> f32 {
     let near = (NEAR_FRACTION * rho).max(f32::MIN_POSITIVE);
     let s = pixels_per_screen_unit(ctx);
-    let k = match ctx.hint {
+    match ctx.hint {
         DicingHint::Orthographic => sigma * s,
         DicingHint::Perspective => {
             let d = 1.0 / (0.5 * field_of_view_radians(ctx.field_of_view, 179.0)).tan();
@@ -446,11 +491,11 @@ pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
             let distance = (c.length() - rho).max(near);
             sigma * pixels_per_radian / distance
         }
-    };
-    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
-    let grid_area = 2.0 * std::f32::consts::PI * std::f32::consts::PI;
-    let cap = (COVERAGE_FACTOR * covered / grid_area).sqrt() / radius.abs();
-    let k = if cap.is_nan() { k } else { k.min(cap) };
+    }
+}
+
+/// A rate clamped to `[0, MAX_PIXELS_PER_UNIT]`, NaN read as 0.
+fn clamp_rate(k: f32) -> f32 {
     if k.is_nan() {
         0.0
     } else {

@@ -2,6 +2,7 @@
 //! the helpers they share (watertightness, area, edge lengths).
 
 mod bounds;
+mod fitted;
 mod quadric;
 mod subdivision;
 
