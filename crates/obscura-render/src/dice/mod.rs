@@ -46,11 +46,36 @@
 //! `1/16` pixel would. What is left unbounded (a polygon mesh passes through as given) is held by the
 //! scene's triangle budget ([`TriangleBudget`]).
 //!
+//! # Piece by piece: quadrics on a fitted grid
+//!
+//! One rate for a whole primitive that holds the camera spreads the image's `F·P` micropolygons over
+//! all of it, behind the camera as densely as in view (nebula.rib's star-field sphere: 613,088
+//! triangles at 160×120, most of them out of view). A quadric whose uniform grid holds more than
+//! [`UNIFORM_GRID_QUADS`] quads is therefore measured cell by cell:
+//!
+//! 1. `[0, 1]²` is cut into `B_u × B_v` equal cells, `B_u = min(32, n_u)`, `B_v = min(16, n_v)`
+//!    (`n_u × n_v` the uniform grid).
+//! 2. Each cell is sampled at 5 × 5 points of the surface: its bounding sphere (`c_i`, `ρ_i`) is
+//!    the samples' box centre and farthest sample, grown by half the longest step between
+//!    neighbouring samples; its arcs `A_u`, `A_v` are the longest sampled polylines along u and v.
+//! 3. Its rate is `k_i = min(k(c_i, ρ_i), cap_i)`, `k` the uncapped rate of the first table, and
+//!    `cap_i` the whole primitive's `k'` when `P(c_i, ρ_i) > 0` (the cell reaches the image: behind
+//!    the camera too for a 360° `Spherical` projection), else the whole primitive's off-screen rate
+//!    `min(k, √(F·P₀/(2π²))/ρ₀)`. No cell is diced finer than the whole primitive would be.
+//! 4. Column `a` gets `max_b ⌈A_u·k_i/m⌉` segments (at least 1), row `b` gets `max_a ⌈A_v·k_i/m⌉`;
+//!    the u lines are each column's even subdivision one after the other, the v lines likewise. A
+//!    direction over [`MAX_SEGMENTS`] is scaled down.
+//! 5. The fitted grid replaces the uniform one when it holds at most half its quads. A primitive
+//!    mostly in view keeps its uniform grid, so its limb stays as fine as its nearest point.
+//!
+//! The grid is still one tensor product of u and v lines, so neighbouring cells share every vertex
+//! (no cracks), and seams, poles and winding are the uniform grid's.
+//!
 //! # Files
 //!
 //! | module | holds |
 //! |---|---|
-//! | `quadric` | spheres, cylinders, cones, disks and tori: segment counts and the (u, v) grid |
+//! | `quadric` | spheres, cylinders, cones, disks and tori: segment counts and the (u, v) grid, uniform or fitted cell by cell |
 //! | `subdivision` | Catmull–Clark with semi-sharp creases: levels, topology, the limit surface |
 //! | `polygon` | polygon meshes, checked and passed through |
 //! | `classic_quadrics` | hyperboloids and paraboloids, on `quadric`'s grid |

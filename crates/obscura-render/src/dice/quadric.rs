@@ -9,6 +9,11 @@
 //! `n = clamp(⌈A·k / m⌉, max(1, ⌈4·f⌉), 4096)` segments,
 //!
 //! and when `n_u·n_v` exceeds [`MAX_QUADS_PER_PRIMITIVE`] both are scaled down by the same factor.
+//! That is the uniform grid, lines at `i/n_u` and `j/n_v`. Above [`UNIFORM_GRID_QUADS`] quads the
+//! lines are fitted cell by cell instead ([`tessellate_fitted`]; the rule is in the
+//! [`dice`](super) module's "Piece by piece"): each column and row of cells as fine as its finest
+//! cell needs, where each cell is measured at its own distance and whether it is in view. All seven
+//! quadrics (with `classic_quadrics`) go through that one function.
 //! The arcs (angles in radians, `Δθ` = thetamax clamped to one turn, every length and angle taken
 //! as its absolute value):
 //!
