@@ -13,7 +13,7 @@ use std::f64::consts::TAU;
 use glam::{DVec2, DVec3};
 
 use super::DicingContext;
-use super::quadric::{Grid, Rate, finite, fit_budget, min_segments, sweep, tessellate};
+use super::quadric::{Grid, Rate, finite, fit_budget, min_segments, sweep, tessellate_fitted};
 use crate::ray::TriangleMesh;
 
 /// `Hyperboloid x1 y1 z1 x2 y2 z2 thetamax`.
@@ -53,7 +53,7 @@ pub(super) fn hyperboloid(
         pole1: None,
     };
     let along = b - a;
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let t = u * theta;
         let (c, s) = (t.cos(), t.sin());
         let rot = |p: DVec3| DVec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
@@ -106,7 +106,7 @@ pub(super) fn paraboloid(
         pole0: apex,
         pole1: None,
     };
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let t = u * theta;
         let z = z0 + v * dz;
         let ratio = (z / z1).max(0.0);

@@ -46,11 +46,36 @@
 //! `1/16` pixel would. What is left unbounded (a polygon mesh passes through as given) is held by the
 //! scene's triangle budget ([`TriangleBudget`]).
 //!
+//! # Piece by piece: quadrics on a fitted grid
+//!
+//! One rate for a whole primitive that holds the camera spreads the image's `F·P` micropolygons over
+//! all of it, behind the camera as densely as in view (nebula.rib's star-field sphere: 613,088
+//! triangles at 160×120, most of them out of view). A quadric whose uniform grid holds more than
+//! [`UNIFORM_GRID_QUADS`] quads is therefore measured cell by cell:
+//!
+//! 1. `[0, 1]²` is cut into `B_u × B_v` equal cells, `B_u = min(32, n_u)`, `B_v = min(16, n_v)`
+//!    (`n_u × n_v` the uniform grid).
+//! 2. Each cell is sampled at 5 × 5 points of the surface: its bounding sphere (`c_i`, `ρ_i`) is
+//!    the samples' box centre and farthest sample, grown by half the longest step between
+//!    neighbouring samples; its arcs `A_u`, `A_v` are the longest sampled polylines along u and v.
+//! 3. Its rate is `k_i = min(k(c_i, ρ_i), cap_i)`, `k` the uncapped rate of the first table, and
+//!    `cap_i` the whole primitive's `k'` when `P(c_i, ρ_i) > 0` (the cell reaches the image: behind
+//!    the camera too for a 360° `Spherical` projection), else the whole primitive's off-screen rate
+//!    `min(k, √(F·P₀/(2π²))/ρ₀)`. No cell is diced finer than the whole primitive would be.
+//! 4. Column `a` gets `max_b ⌈A_u·k_i/m⌉` segments (at least 1), row `b` gets `max_a ⌈A_v·k_i/m⌉`;
+//!    the u lines are each column's even subdivision one after the other, the v lines likewise. A
+//!    direction over [`MAX_SEGMENTS`] is scaled down.
+//! 5. The fitted grid replaces the uniform one when it holds at most half its quads. A primitive
+//!    mostly in view keeps its uniform grid, so its limb stays as fine as its nearest point.
+//!
+//! The grid is still one tensor product of u and v lines, so neighbouring cells share every vertex
+//! (no cracks), and seams, poles and winding are the uniform grid's.
+//!
 //! # Files
 //!
 //! | module | holds |
 //! |---|---|
-//! | `quadric` | spheres, cylinders, cones, disks and tori: segment counts and the (u, v) grid |
+//! | `quadric` | spheres, cylinders, cones, disks and tori: segment counts and the (u, v) grid, uniform or fitted cell by cell |
 //! | `subdivision` | Catmull–Clark with semi-sharp creases: levels, topology, the limit surface |
 //! | `polygon` | polygon meshes, checked and passed through |
 //! | `classic_quadrics` | hyperboloids and paraboloids, on `quadric`'s grid |
@@ -94,6 +119,10 @@ pub const MIN_SEGMENTS_PER_TURN: u32 = 4;
 /// The most quads one primitive dices into (a quadric's `n_u·n_v`, a subdivision surface's faces
 /// after the last level): the memory bound for a primitive that surrounds the camera.
 pub const MAX_QUADS_PER_PRIMITIVE: u64 = 1 << 22;
+
+/// A quadric whose uniform grid holds more quads than this is diced on a grid fitted cell by cell
+/// (see the module documentation); smaller ones keep the uniform grid.
+pub const UNIFORM_GRID_QUADS: u64 = 4096;
 
 /// The deepest Catmull–Clark subdivision level.
 pub const MAX_SUBDIVISION_LEVEL: u32 = 6;
@@ -432,9 +461,50 @@ pub fn dice_with_st(
 #[must_use]
 pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
     let (c, rho, sigma) = camera_sphere(ctx, centre, radius);
+    let k = nearest_point_rate(ctx, c, rho, sigma);
+    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
+    clamp_rate(k.min(coverage_cap(covered, radius)))
+}
+
+/// Pixels per unit for one piece of a larger primitive (a cell of a quadric's grid), whose
+/// object-space bounding sphere is (centre, radius): the piece's own nearest-point rate, at most
+/// `on_screen_cap` (the whole primitive's [`pixels_per_unit`]) when the piece's sphere reaches the
+/// image and at most `off_screen_cap` (the whole primitive's rate had it covered only
+/// [`OFF_SCREEN_PIXELS`]) when it does not. See the module documentation. Always finite and in
+/// `[0, MAX_PIXELS_PER_UNIT]`.
+#[must_use]
+pub(super) fn piece_pixels_per_unit(
+    ctx: &DicingContext,
+    centre: Vec3,
+    radius: f32,
+    on_screen_cap: f32,
+    off_screen_cap: f32,
+) -> f32 {
+    let (c, rho, sigma) = camera_sphere(ctx, centre, radius);
+    let k = nearest_point_rate(ctx, c, rho, sigma);
+    let cap = if screen_coverage(ctx, c, rho) > 0.0 {
+        on_screen_cap
+    } else {
+        off_screen_cap
+    };
+    clamp_rate(k.min(cap))
+}
+
+/// The rate at which a primitive whose object-space bounding radius is `radius` holds
+/// `F·pixels` micropolygons of one pixel over the `2πρ₀ × πρ₀` arcs of a sphere's grid:
+/// `√(F·pixels/(2π²))/ρ₀` (NaN when `radius` is 0 or NaN; `f32::min` then keeps the other rate).
+#[must_use]
+pub(super) fn coverage_cap(pixels: f32, radius: f32) -> f32 {
+    let grid_area = 2.0 * std::f32::consts::PI * std::f32::consts::PI;
+    (COVERAGE_FACTOR * pixels / grid_area).sqrt() / radius.abs()
+}
+
+/// The uncapped rate of the module documentation's first table for a camera-space sphere (centre
+/// `c`, radius `rho`) from an object space stretched at most `sigma` times.
+fn nearest_point_rate(ctx: &DicingContext, c: Vec3, rho: f32, sigma: f32) -> f32 {
     let near = (NEAR_FRACTION * rho).max(f32::MIN_POSITIVE);
     let s = pixels_per_screen_unit(ctx);
-    let k = match ctx.hint {
+    match ctx.hint {
         DicingHint::Orthographic => sigma * s,
         DicingHint::Perspective => {
             let d = 1.0 / (0.5 * field_of_view_radians(ctx.field_of_view, 179.0)).tan();
@@ -446,11 +516,11 @@ pub fn pixels_per_unit(ctx: &DicingContext, centre: Vec3, radius: f32) -> f32 {
             let distance = (c.length() - rho).max(near);
             sigma * pixels_per_radian / distance
         }
-    };
-    let covered = screen_coverage(ctx, c, rho).max(OFF_SCREEN_PIXELS);
-    let grid_area = 2.0 * std::f32::consts::PI * std::f32::consts::PI;
-    let cap = (COVERAGE_FACTOR * covered / grid_area).sqrt() / radius.abs();
-    let k = if cap.is_nan() { k } else { k.min(cap) };
+    }
+}
+
+/// A rate clamped to `[0, MAX_PIXELS_PER_UNIT]`, NaN read as 0.
+fn clamp_rate(k: f32) -> f32 {
     if k.is_nan() {
         0.0
     } else {

@@ -9,6 +9,11 @@
 //! `n = clamp(⌈A·k / m⌉, max(1, ⌈4·f⌉), 4096)` segments,
 //!
 //! and when `n_u·n_v` exceeds [`MAX_QUADS_PER_PRIMITIVE`] both are scaled down by the same factor.
+//! That is the uniform grid, lines at `i/n_u` and `j/n_v`. Above [`UNIFORM_GRID_QUADS`] quads the
+//! lines are fitted cell by cell instead ([`tessellate_fitted`]; the rule is in the
+//! [`dice`](super) module's "Piece by piece"): each column and row of cells as fine as its finest
+//! cell needs, where each cell is measured at its own distance and whether it is in view. All seven
+//! quadrics (with `classic_quadrics`) go through that one function.
 //! The arcs (angles in radians, `Δθ` = thetamax clamped to one turn, every length and angle taken
 //! as its absolute value):
 //!
@@ -33,21 +38,28 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::{
-    DicingContext, MAX_QUADS_PER_PRIMITIVE, MAX_SEGMENTS, MIN_SEGMENTS_PER_TURN, micropolygon_length,
-    pixels_per_unit,
+    DicingContext, MAX_QUADS_PER_PRIMITIVE, MAX_SEGMENTS, MIN_SEGMENTS_PER_TURN, OFF_SCREEN_PIXELS,
+    UNIFORM_GRID_QUADS, coverage_cap, micropolygon_length, piece_pixels_per_unit, pixels_per_unit,
 };
 use crate::ray::TriangleMesh;
 
 /// The rate for one primitive.
 pub(super) struct Rate {
+    /// The whole primitive's [`pixels_per_unit`]: also the cap of its pieces in view.
     pixels_per_unit: f64,
+    /// The whole primitive's rate had it covered only [`OFF_SCREEN_PIXELS`]: the cap of its pieces
+    /// out of view.
+    off_screen: f64,
     micropolygon_length: f64,
 }
 
 impl Rate {
     pub(super) fn new(ctx: &DicingContext, centre: DVec3, radius: f64) -> Rate {
+        let radius = radius as f32;
+        let whole = pixels_per_unit(ctx, centre.as_vec3(), radius);
         Rate {
-            pixels_per_unit: f64::from(pixels_per_unit(ctx, centre.as_vec3(), radius as f32)),
+            pixels_per_unit: f64::from(whole),
+            off_screen: f64::from(whole.min(coverage_cap(OFF_SCREEN_PIXELS, radius))),
             micropolygon_length: micropolygon_length(ctx),
         }
     }
@@ -90,7 +102,8 @@ pub(super) fn sweep(degrees: f32) -> Option<f64> {
     (d.is_finite() && d != 0.0).then(|| d.clamp(-360.0, 360.0).to_radians())
 }
 
-/// A (u, v) ∈ [0, 1]² grid of `nu × nv` cells over a surface.
+/// A (u, v) ∈ [0, 1]² grid of `nu × nv` cells over a surface, evenly spaced unless tessellated on
+/// [`Lines`] of its own.
 pub(super) struct Grid {
     pub(super) nu: u32,
     pub(super) nv: u32,
@@ -121,12 +134,193 @@ fn swept_grid(rate: &Rate, r: f64, theta: f64, length: f64, pole1: Option<(DVec3
     }
 }
 
-/// Tessellates `surface(u, v) → (position, unit normal)` over `grid`.
-pub(super) fn tessellate<F>(grid: &Grid, surface: F) -> TriangleMesh
+/// Where a grid's lines fall: increasing parameter values from 0 to 1 along u and along v.
+pub(super) struct Lines {
+    u: Vec<f64>,
+    v: Vec<f64>,
+}
+
+impl Lines {
+    /// `i/nu` and `j/nv`.
+    fn uniform(nu: u32, nv: u32) -> Lines {
+        let even = |n: u32| (0..=n).map(|i| f64::from(i) / f64::from(n)).collect();
+        Lines {
+            u: even(nu.max(1)),
+            v: even(nv.max(1)),
+        }
+    }
+
+    /// Cell `a` of `counts.len()` equal cells cut into `counts[a]` equal segments, one after the
+    /// other: the values that start each segment, then 1.
+    fn concatenated(counts: &[u32]) -> Vec<f64> {
+        let cells = counts.len() as f64;
+        let mut values = Vec::with_capacity(counts.iter().map(|&n| n as usize).sum::<usize>() + 1);
+        for (a, &n) in counts.iter().enumerate() {
+            values.extend((0..n).map(|s| (a as f64 + f64::from(s) / f64::from(n)) / cells));
+        }
+        values.push(1.0);
+        values
+    }
+}
+
+/// Cells across u in which a large quadric's rate is measured (at most its uniform `nu`).
+const CELLS_U: u32 = 32;
+
+/// Cells along v in which a large quadric's rate is measured (at most its uniform `nv`).
+const CELLS_V: u32 = 16;
+
+/// Segments of a cell's side between its surface samples (5 × 5 samples a cell).
+const CELL_SAMPLES: u32 = 4;
+
+/// A cell of the fitting grid, measured from its surface samples.
+struct Cell {
+    /// The samples' bounding sphere, grown by half the longest step between neighbouring samples
+    /// to cover the surface between them.
+    centre: DVec3,
+    radius: f64,
+    /// The longest polyline through the samples along u, and along v.
+    arc_u: f64,
+    arc_v: f64,
+}
+
+impl Cell {
+    /// Cell `(a, b)` of `samples` (rows along v, each along u, `CELL_SAMPLES` steps a cell).
+    fn measure(samples: &[Vec<DVec3>], a: u32, b: u32) -> Cell {
+        let n = CELL_SAMPLES as usize;
+        let (i0, j0) = (a as usize * n, b as usize * n);
+        let at = |i: usize, j: usize| samples[j0 + j][i0 + i];
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        let (mut arc_u, mut arc_v, mut step) = (0.0f64, 0.0f64, 0.0f64);
+        for k in 0..=n {
+            let (mut along_u, mut along_v) = (0.0, 0.0);
+            for i in 0..=n {
+                let p = at(i, k);
+                (lo, hi) = (lo.min(p), hi.max(p));
+                if i < n {
+                    let (du, dv) = (p.distance(at(i + 1, k)), at(k, i).distance(at(k, i + 1)));
+                    (along_u, along_v) = (along_u + du, along_v + dv);
+                    step = step.max(du).max(dv);
+                }
+            }
+            (arc_u, arc_v) = (arc_u.max(along_u), arc_v.max(along_v));
+        }
+        let centre = 0.5 * (lo + hi);
+        let reach = (0..=n)
+            .flat_map(|j| (0..=n).map(move |i| (i, j)))
+            .map(|(i, j)| centre.distance(at(i, j)))
+            .fold(0.0, f64::max);
+        Cell {
+            centre,
+            radius: reach + 0.5 * step,
+            arc_u,
+            arc_v,
+        }
+    }
+}
+
+/// The lines of a quadric's `grid` fitted cell by cell, or `None` when the uniform grid is to be
+/// kept: it holds at most [`UNIFORM_GRID_QUADS`] quads, the fitted grid would not halve it (a
+/// primitive mostly in view keeps its uniform grid, and with it the same precision on its limb as
+/// at its nearest point), or a cell cannot be measured.
+///
+/// `[0, 1]²` is cut into `B_u × B_v` cells (`B_u = min(CELLS_U, nu)`, `B_v = min(CELLS_V, nv)`),
+/// each measured from 5 × 5 samples of `surface` and diced at its own rate
+/// ([`piece_pixels_per_unit`], capped by the whole primitive's rates in `rate`); a column of cells
+/// gets the most segments any of its cells wants along u, a row the most along v, so the grid
+/// stays one tensor product: no T-junctions, seams and poles as in the uniform grid.
+fn fitted_lines<F>(grid: &Grid, rate: &Rate, ctx: &DicingContext, surface: &F) -> Option<Lines>
 where
     F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
 {
     let (nu, nv) = (grid.nu.max(1), grid.nv.max(1));
+    let uniform = u64::from(nu) * u64::from(nv);
+    if uniform <= UNIFORM_GRID_QUADS {
+        return None;
+    }
+    let (cells_u, cells_v) = (CELLS_U.min(nu), CELLS_V.min(nv));
+    let (steps_u, steps_v) = (cells_u * CELL_SAMPLES, cells_v * CELL_SAMPLES);
+    let samples: Vec<Vec<DVec3>> = (0..=steps_v)
+        .into_par_iter()
+        .map(|j| {
+            let v = f64::from(j) / f64::from(steps_v);
+            (0..=steps_u)
+                .map(|i| surface(f64::from(i) / f64::from(steps_u), v).0)
+                .collect()
+        })
+        .collect();
+    let (on_screen, off_screen) = (rate.pixels_per_unit as f32, rate.off_screen as f32);
+    let mut columns = vec![1u32; cells_u as usize];
+    let mut rows = vec![1u32; cells_v as usize];
+    for b in 0..cells_v {
+        for a in 0..cells_u {
+            let cell = Cell::measure(&samples, a, b);
+            let (centre, radius) = (cell.centre.as_vec3(), cell.radius as f32);
+            if !centre.is_finite() || !radius.is_finite() {
+                return None;
+            }
+            let k = f64::from(piece_pixels_per_unit(ctx, centre, radius, on_screen, off_screen));
+            let segments = |arc: f64| {
+                let want = (arc * k / rate.micropolygon_length).ceil();
+                if want.is_nan() {
+                    1
+                } else {
+                    want.clamp(1.0, f64::from(MAX_SEGMENTS)) as u32
+                }
+            };
+            let (column, row) = (&mut columns[a as usize], &mut rows[b as usize]);
+            (*column, *row) = (
+                (*column).max(segments(cell.arc_u)),
+                (*row).max(segments(cell.arc_v)),
+            );
+        }
+    }
+    let (columns, rows) = (at_most_max_segments(columns), at_most_max_segments(rows));
+    let total = |counts: &[u32]| counts.iter().map(|&n| u64::from(n)).sum::<u64>();
+    (2 * total(&columns) * total(&rows) <= uniform).then(|| Lines {
+        u: Lines::concatenated(&columns),
+        v: Lines::concatenated(&rows),
+    })
+}
+
+/// `counts` scaled down together (each at least 1) when they add up to more than [`MAX_SEGMENTS`].
+fn at_most_max_segments(counts: Vec<u32>) -> Vec<u32> {
+    let sum: u64 = counts.iter().map(|&n| u64::from(n)).sum();
+    if sum <= u64::from(MAX_SEGMENTS) {
+        return counts;
+    }
+    // Leaving one segment a cell for the rounding up to 1 keeps the sum within the limit.
+    let scale = f64::from(MAX_SEGMENTS - counts.len() as u32) / sum as f64;
+    counts
+        .into_iter()
+        .map(|n| ((f64::from(n) * scale).floor() as u32).max(1))
+        .collect()
+}
+
+/// Tessellates a quadric's `surface` over `grid`, on lines fitted cell by cell when that makes
+/// fewer quads (see [`fitted_lines`]).
+pub(super) fn tessellate_fitted<F>(grid: &Grid, rate: &Rate, ctx: &DicingContext, surface: F) -> TriangleMesh
+where
+    F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
+{
+    let lines = fitted_lines(grid, rate, ctx, &surface).unwrap_or_else(|| Lines::uniform(grid.nu, grid.nv));
+    tessellate_on(grid, &lines, surface)
+}
+
+/// Tessellates `surface(u, v) → (position, unit normal)` over `grid`, evenly spaced.
+pub(super) fn tessellate<F>(grid: &Grid, surface: F) -> TriangleMesh
+where
+    F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
+{
+    tessellate_on(grid, &Lines::uniform(grid.nu, grid.nv), surface)
+}
+
+/// Tessellates `surface` over `grid`'s wraps and poles with its lines at `lines` (their counts
+/// replace `grid.nu` and `grid.nv`).
+fn tessellate_on<F>(grid: &Grid, lines: &Lines, surface: F) -> TriangleMesh
+where
+    F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
+{
+    let (nu, nv) = (lines.u.len() as u32 - 1, lines.v.len() as u32 - 1);
     let rows = if grid.wrap_v { nv } else { nv + 1 };
     let cols = if grid.wrap_u { nu } else { nu + 1 };
     // Rows are j = 0..=nv; with wrap_v row nv is row 0 again (and there are no poles).
@@ -140,10 +334,8 @@ where
         .map(|j| match pole(j) {
             Some(p) => vec![p],
             None => {
-                let v = f64::from(j) / f64::from(nv);
-                (0..cols)
-                    .map(|i| surface(f64::from(i) / f64::from(nu), v))
-                    .collect()
+                let v = lines.v[j as usize];
+                (0..cols).map(|i| surface(lines.u[i as usize], v)).collect()
             }
         })
         .collect();
@@ -251,7 +443,7 @@ pub(super) fn sphere(
         pole0,
         pole1,
     };
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let (t, p) = (u * theta, phi0 + v * dphi);
         let n = DVec3::new(p.cos() * t.cos(), p.cos() * t.sin(), p.sin());
         (n * r, n)
@@ -277,7 +469,7 @@ pub(super) fn cylinder(
     let dz = z1 - z0;
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * (z0 + z1)), r.hypot(0.5 * dz));
     let grid = swept_grid(&rate, r, theta, dz.abs(), None);
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let t = u * theta;
         let n = DVec3::new(t.cos(), t.sin(), 0.0);
         (DVec3::new(r * n.x, r * n.y, z0 + v * dz), n)
@@ -298,7 +490,7 @@ pub(super) fn cone(height: f32, radius: f32, theta_max: f32, ctx: &DicingContext
     let up = if h < 0.0 { -1.0 } else { 1.0 };
     let apex = (DVec3::new(0.0, 0.0, h), DVec3::new(0.0, 0.0, up));
     let grid = swept_grid(&rate, r, theta, r.hypot(h), Some(apex));
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let t = u * theta;
         let (c, s) = (t.cos(), t.sin());
         let p = DVec3::new((1.0 - v) * r * c, (1.0 - v) * r * s, v * h);
@@ -323,7 +515,7 @@ pub(super) fn disk(height: f32, radius: f32, theta_max: f32, ctx: &DicingContext
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, h), r);
     let centre = (DVec3::new(0.0, 0.0, h), DVec3::Z);
     let grid = swept_grid(&rate, r, theta, r, Some(centre));
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let t = u * theta;
         (
             DVec3::new((1.0 - v) * r * t.cos(), (1.0 - v) * r * t.sin(), h),
@@ -366,7 +558,7 @@ pub(super) fn torus(
         pole1: None,
     };
     let outward = small.signum();
-    tessellate(&grid, |u, v| {
+    tessellate_fitted(&grid, &rate, ctx, |u, v| {
         let (t, p) = (u * theta, phi0 + v * dphi);
         let ring = big + small * p.cos();
         let position = DVec3::new(ring * t.cos(), ring * t.sin(), small * p.sin());

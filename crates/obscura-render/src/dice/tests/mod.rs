@@ -1,7 +1,9 @@
-//! Tests of dicing: the rate (this file), quadrics and Catmull–Clark surfaces (one file each), and
-//! the helpers they share (watertightness, area, edge lengths).
+//! Tests of dicing: the rate (this file), its on-screen bound, quadrics, quadrics on grids fitted
+//! cell by cell and Catmull–Clark surfaces (one file each), and the helpers they share
+//! (watertightness, area, edge lengths).
 
 mod bounds;
+mod fitted;
 mod quadric;
 mod subdivision;
 
