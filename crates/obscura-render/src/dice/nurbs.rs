@@ -6,14 +6,17 @@
 //! `S = A/w`; the partials are `S_u = (A_u − w_u S)/w` (likewise `v`) and the normal is
 //! `S_u × S_v` normalised. The rate comes from the bounding sphere of the control points; each
 //! direction gets `⌈A·k/m⌉` segments (`A` the longest control polyline in that direction, never
-//! shorter than the curve), and at least one per non-empty knot span in the range.
+//! shorter than the curve), and at least one per non-empty knot span in the range. A grid of more
+//! than [`UNIFORM_GRID_QUADS`](super::UNIFORM_GRID_QUADS) quads is then fitted cell by cell as the
+//! quadrics' are (`quadric::tessellate_fitted`): each cell measured on the surface itself, whose
+//! arcs a wavy control net overstates many times, at its own distance.
 
 use glam::DVec3;
 use obscura_scene::{NuPatch, NurbsAxis};
 
 use super::DicingContext;
 use super::patch::{bounding_sphere, fit_all, surface_normal};
-use super::quadric::{Grid, Rate, tessellate};
+use super::quadric::{Grid, Rate, tessellate_fitted};
 use crate::ray::TriangleMesh;
 
 /// The knot span holding `t`: the largest `s` in `[order − 1, count − 1]` with `knots[s] ≤ t`.
@@ -172,7 +175,9 @@ pub(super) fn nu_patch(patch: &NuPatch, ctx: &DicingContext) -> TriangleMesh {
     let (u0, u1) = (f64::from(patch.u.min), f64::from(patch.u.max));
     let (v0, v1) = (f64::from(patch.v.min), f64::from(patch.v.max));
     let eval = |s: f64, t: f64| evaluate(patch, u0 + s * (u1 - u0), v0 + t * (v1 - v0));
-    tessellate(&grid, |s, t| (eval(s, t).0, surface_normal(eval, s, t)))
+    tessellate_fitted(&grid, &rate, ctx, |s, t| {
+        (eval(s, t).0, surface_normal(eval, s, t))
+    })
 }
 
 #[cfg(test)]
@@ -223,5 +228,66 @@ mod tests {
             let n = pu.cross(pv).normalize();
             assert!((n - p.with_z(0.0)).length() < 1e-5, "normal {n} at {p}");
         }
+    }
+
+    #[test]
+    fn a_wavy_control_net_is_diced_by_its_surface_not_by_its_net() {
+        // A cubic B-spline patch on the plane z = 2 filling a 90° view: its control points zig-zag
+        // across u and v (±0.4 around an even spread), so the control polygon is several times the
+        // surface's arc. Diced by the net, the grid hits the on-screen budget; fitted cell by cell
+        // on the surface, it needs a fraction of that, stays on the plane and reaches its edges.
+        use glam::{Mat4, Vec3};
+        use obscura_sdk::{DicingHint, Format};
+        let n = 12u32;
+        let knots: Vec<f32> = (0..n + 4).map(|k| k as f32).collect();
+        let mut points = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                let zig = |k: u32| if k % 2 == 0 { 0.4 } else { -0.4 };
+                let x = -1.0 + 2.0 * i as f32 / (n - 1) as f32 + zig(i);
+                let y = -1.0 + 2.0 * j as f32 / (n - 1) as f32 + zig(j);
+                points.push([x, y, 0.0, 1.0]);
+            }
+        }
+        let patch = NuPatch {
+            u: axis(n, 4, &knots),
+            v: axis(n, 4, &knots),
+            points,
+        };
+        let mut ctx = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(64, 48));
+        ctx.object_to_camera = Mat4::from_translation(Vec3::new(0.0, 0.0, 2.0));
+        let mesh = nu_patch(&patch, &ctx);
+        // The budget the net alone reaches: F·P quads for the whole image, two triangles each.
+        let budget = 2.0 * f64::from(crate::dice::COVERAGE_FACTOR) * 64.0 * 48.0;
+        let triangles = mesh.triangles.len() as f64;
+        assert!(
+            triangles <= budget / 4.0,
+            "{triangles} triangles against a budget of {budget}"
+        );
+        assert!(triangles >= 2.0 * 64.0 * 48.0 / 16.0, "too coarse: {triangles}");
+        // On the surface (the plane), and reaching the surface's corners.
+        assert!(mesh.positions.iter().all(|p| p.z.abs() < 1e-5));
+        let corner = evaluate(&patch, f64::from(patch.u.max), f64::from(patch.v.max)).0;
+        let reach = mesh
+            .positions
+            .iter()
+            .map(|p| (p.x as f64 - corner.x).hypot(p.y as f64 - corner.y))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            reach < 1e-5,
+            "the far corner {corner} is {reach} from the nearest vertex"
+        );
+        // Quad sides on screen stay near a pixel (a triangle's longest edge is the quad's diagonal):
+        // s·d/z = 16 px per unit at z = 2 (the plane itself).
+        let longest = mesh
+            .triangles
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .map(|(a, b)| mesh.positions[a as usize].distance(mesh.positions[b as usize]) * 16.0)
+            .fold(0.0f32, f32::max);
+        assert!(
+            longest <= 1.5 * std::f32::consts::SQRT_2,
+            "longest edge {longest} px"
+        );
     }
 }
