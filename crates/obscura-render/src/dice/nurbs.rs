@@ -243,7 +243,7 @@ mod tests {
         let mut points = Vec::new();
         for j in 0..n {
             for i in 0..n {
-                let zig = |k: u32| if k % 2 == 0 { 0.4 } else { -0.4 };
+                let zig = |k: u32| if k.is_multiple_of(2) { 0.4 } else { -0.4 };
                 let x = -1.0 + 2.0 * i as f32 / (n - 1) as f32 + zig(i);
                 let y = -1.0 + 2.0 * j as f32 / (n - 1) as f32 + zig(j);
                 points.push([x, y, 0.0, 1.0]);
