@@ -1,11 +1,13 @@
 #!/usr/bin/env python3
 """Renders every complete RIB scene (one with WorldBegin) under a directory and classifies each.
 
-    scripts/rib-corpus.py DIR [DIR ...] [--obscura PATH] [--jobs N] [--keep] [--csv FILE]
+    scripts/rib-corpus.py DIR [DIR ...] [--obscura PATH] [--jobs N] [--threads N] [--keep] [--csv FILE]
 
 Each scene is rendered by `obscura render SCENE --format 160x120 --spp 4` with its own Display lines,
 in a copy of its collection (outputs land beside the copied scenes, never in DIR), with a 60 s wall
-clock limit and 2 GiB of address space (prlimit --as). Every outcome is one of:
+clock limit and 2 GiB of address space (prlimit --as). By default one scene at a time on every core,
+as a user runs the command; `--jobs N --threads 1` runs N at once for throughput (the 60 s limit
+then measures one core). Every outcome is one of:
 
   rendered   exit 0 and every image written holds more than one colour
   flat       exit 0 but an image is black or one flat colour
@@ -39,7 +41,7 @@ import numpy as np
 
 LIMIT_SECONDS = 60
 LIMIT_BYTES = 2 << 30
-ARGS = ["--format", "160x120", "--spp", "4", "--threads", "1"]
+ARGS = ["--format", "160x120", "--spp", "4"]
 
 
 def read_image(path):
@@ -80,10 +82,13 @@ LOCATED = re.compile(
 )
 
 
-def run_one(obscura, scene):
-    """Renders `scene` (in a copied tree); returns (class, seconds, message)."""
+def run_one(obscura, scene, threads=None):
+    """Renders `scene` (in a copied tree) with `threads` threads (None: every core); returns (class,
+    seconds, message)."""
     cwd = os.path.dirname(scene)
     cmd = ["prlimit", f"--as={LIMIT_BYTES}", "--", obscura, "render", scene] + ARGS
+    if threads is not None:
+        cmd += ["--threads", str(threads)]
     start = time.monotonic()
     proc = subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
     try:
@@ -136,7 +141,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("dirs", nargs="+")
     ap.add_argument("--obscura", default=os.path.join(os.path.dirname(__file__), "..", "target", "release", "obscura"))
-    ap.add_argument("--jobs", type=int, default=1)
+    ap.add_argument("--jobs", type=int, default=1, help="scenes rendered at once (default 1)")
+    ap.add_argument("--threads", type=int, help="--threads for each render (default: every core)")
     ap.add_argument("--csv")
     ap.add_argument("--keep", action="store_true", help="keep the copied trees and their renders")
     a = ap.parse_args()
@@ -150,7 +156,7 @@ def main():
         scenes += [(os.path.relpath(s, copy), s, d) for s in complete_scenes(copy, seen)]
     rows = []
     with ThreadPoolExecutor(max_workers=a.jobs) as pool:
-        for (rel, path, d), (cls, secs, msg) in zip(scenes, pool.map(lambda s: run_one(obscura, s[1]), scenes)):
+        for (rel, path, d), (cls, secs, msg) in zip(scenes, pool.map(lambda s: run_one(obscura, s[1], a.threads), scenes)):
             rows.append((d, rel, cls, f"{secs:.1f}", msg))
             print(f"{cls:9} {secs:5.1f}s  {os.path.join(d, rel)}  {msg[:160]}", flush=True)
     counts = {}
