@@ -98,8 +98,9 @@ impl Reader {
         let [f_stop, focal_length, focal_distance] =
             r.only_numbers::<3>("fstop focallength focaldistance")?;
         // RISpec 3.2 §4.1.2: an fstop of RI_INFINITY (1e38 in RIB) is a pinhole camera, whatever the
-        // other two say (files write `DepthOfField 1e38 0 0`).
-        if f_stop >= RI_INFINITY {
+        // other two say (files write `DepthOfField 1e38 0 0`). So is a focal length of 0 with any
+        // positive fstop: the lens's aperture, focallength/fstop, is then 0 (`DepthOfField 1e+37 0 0`).
+        if f_stop >= RI_INFINITY || (focal_length == 0.0 && f_stop > 0.0) {
             self.depth_of_field = None;
             return Ok(());
         }

@@ -90,6 +90,14 @@ fn depth_of_field_is_the_perspective_cameras_thin_lens() {
     let s = ok("DepthOfField 2.8 0.05 4\nDepthOfField 1e38 0 0\nProjection \"perspective\"\nWorldBegin\n");
     assert!(s.projection_params.get("fStop").is_none());
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    // A focal length of 0 leaves no aperture (focallength/fstop = 0): a pinhole too (Affine's
+    // `DepthOfField 1e+37 0 0`); a negative one is still refused.
+    let s = ok("DepthOfField 2.8 0.05 4\nDepthOfField 1e+37 0 0\nProjection \"perspective\"\nWorldBegin\n");
+    assert!(s.projection_params.get("fStop").is_none());
+    assert_eq!(
+        fail("DepthOfField 2.8 -1 1\n"),
+        "t.rib:1: DepthOfField expects a positive fstop, focal length and focal distance, got 2.8 -1 1"
+    );
     // Another projection keeps its own lens, said so.
     let s = ok("Projection \"PxrFisheye\"\nDepthOfField 2.8 0.05 4\nWorldBegin\n");
     assert!(s.projection_params.get("fStop").is_none());
