@@ -197,3 +197,25 @@ fn a_classic_surface_inside_a_closed_sphere_is_lit_by_its_ambient_term() {
         assert!((got - want).abs() < 1e-5, "{c:?}");
     }
 }
+
+#[test]
+fn cs_per_vertex_shades_a_polygon_across_its_vertices() {
+    // A matte square lit head-on (Kd·Cs·I·cos θ = Cs), red on its left edge and blue on its right:
+    // the middle of the image is half of each. Averaged (as before) every pixel would be that half;
+    // off centre, the colour follows the vertices.
+    let rib = |x0: f32, x1: f32| {
+        format!(
+            "{CAMERA}WorldBegin\nLightSource \"distantlight\" 1 \"from\" [0 0 0] \"to\" [0 0 1]\nSurface \"matte\"\n\
+             Polygon \"P\" [{x0} -5 5  {x1} -5 5  {x1} 5 5  {x0} 5 5] \"Cs\" [1 0 0  0 0 1  0 0 1  1 0 0]\nWorldEnd\n"
+        )
+    };
+    let c = centre(&rib(-5.0, 5.0));
+    assert!(
+        (c[0] - 0.5).abs() < 0.02 && c[1].abs() < 1e-6 && (c[2] - 0.5).abs() < 0.02,
+        "{c:?}"
+    );
+    // A square spanning x from −0.5 to 9.5: the centre pixels (x ≈ ±0.17 at z = 5, the view spanning
+    // about ±1.34) lie within a tenth of its width of the red edge, so they are nearly red.
+    let c = centre(&rib(-0.5, 9.5));
+    assert!(c[0] > 0.9 && c[2] < 0.1, "near the red edge: {c:?}");
+}

@@ -133,6 +133,9 @@ pub(super) struct ClassicState {
     pub(super) primitive_color: Option<Rgb>,
     /// The opacity the next primitive's own `"Os"` gives it (consumed by that primitive).
     pub(super) primitive_opacity: Option<Rgb>,
+    /// The next primitive (a polygon mesh) carries its `"Cs"` per vertex, as vertex colours
+    /// (consumed by that primitive).
+    pub(super) vertex_colors: bool,
 }
 
 /// A classic surface shader's parameters, as the material mapping needs them.
@@ -298,6 +301,15 @@ impl ClassicSurface {
         Some(LocalShading { ambient })
     }
 
+    /// `Kd`, for the surfaces that have a diffuse term.
+    fn kd(&self) -> Option<f32> {
+        match *self {
+            ClassicSurface::Matte { kd, .. } | ClassicSurface::Plastic { kd, .. } => Some(kd),
+            ClassicSurface::Other { .. } => Some(1.0),
+            ClassicSurface::Constant | ClassicSurface::Metal { .. } => None,
+        }
+    }
+
     /// `paintedplastic`'s texture, when it has one.
     fn texture(&self) -> Option<u32> {
         match self {
@@ -403,6 +415,26 @@ impl Reader {
         self.classic.opacity = Rgb::new(red, green, blue);
         self.warn_coloured_opacity(r, self.classic.opacity);
         Ok(())
+    }
+
+    /// `"Cs"` one per vertex of a polygon mesh of `vertices` points, when it varies: the mesh's vertex
+    /// colours (linear RGBA, alpha 1), and the next primitive's material is made to use them. `None`
+    /// (the colour then averaged by [`Reader::primitive_color`]) for any other count or one colour.
+    pub(super) fn vertex_colors(&mut self, list: &ParamList, vertices: usize) -> Option<Vec<[f32; 4]>> {
+        // `constant` and `metal` take Cs into their emission and highlight, which vertex colours
+        // (multiplying the diffuse colour) cannot reach: they average it.
+        if matches!(
+            self.classic.surface,
+            Some(ClassicSurface::Constant | ClassicSurface::Metal { .. })
+        ) {
+            return None;
+        }
+        let cs = get_floats(list, "Cs").filter(|c| c.len() == 3 * vertices && vertices > 0)?;
+        if cs.chunks_exact(3).all(|c| c == &cs[..3]) {
+            return None;
+        }
+        self.classic_state.vertex_colors = true;
+        Some(cs.chunks_exact(3).map(|c| [c[0], c[1], c[2], 1.0]).collect())
     }
 
     /// Warns, once per scene, that an opacity whose channels differ is drawn grey.
@@ -542,9 +574,11 @@ impl Reader {
     }
 
     /// Records a primitive's own `"Cs"` and `"Os"` for the next object: one value, or several averaged
-    /// with a warning (the renderer shades one colour and one opacity per primitive).
+    /// with a warning (the renderer shades one colour and one opacity per primitive), unless
+    /// [`Reader::vertex_colors`] took `"Cs"` as vertex colours.
     pub(super) fn primitive_color(&mut self, r: &Req<'_>, list: &ParamList) {
-        if let Some(cs) = get_floats(list, "Cs").filter(|c| c.len() >= 3) {
+        if let Some(cs) = get_floats(list, "Cs").filter(|c| c.len() >= 3 && !self.classic_state.vertex_colors)
+        {
             let n = (cs.len() / 3) as f32;
             let sum = cs
                 .chunks_exact(3)
@@ -581,19 +615,35 @@ impl Reader {
     /// set, else the current `Bxdf` (or, with a `Color` and neither, a diffuse surface of that colour).
     pub(super) fn current_material(&mut self) -> u32 {
         let own = self.classic_state.primitive_color.take();
-        let color = own.or(self.classic.color);
+        let vertex = std::mem::take(&mut self.classic_state.vertex_colors);
+        // Vertex colours replace the colour: the material is white, and they multiply it.
+        let color = if vertex {
+            Some(Rgb::WHITE)
+        } else {
+            own.or(self.classic.color)
+        };
         let cs = color.unwrap_or(Rgb::WHITE);
         let opacity = self.classic_state.primitive_opacity.take();
         let alpha = coverage(opacity.unwrap_or(self.classic.opacity));
-        // A `Color` or an `Opacity` without any `Surface` (nor `Bxdf`) shades as `matte`.
+        // A `Color`, an `Opacity` or a `"Cs"` without any `Surface` (nor `Bxdf`) shades as `matte`.
         let matte = ClassicSurface::Matte { ka: 1.0, kd: 1.0 };
         let surface = match &self.classic.surface {
             Some(s) => s,
             None if self.material == 0 && (color.is_some() || alpha < 1.0) => &matte,
             None => return self.material,
         };
-        let (material, texture, local) = (surface.material(cs), surface.texture(), surface.local(cs));
-        self.intern_material(material, texture, local, alpha)
+        let (material, texture) = (surface.material(cs), surface.texture());
+        let local = surface.local(cs).map(|mut l| {
+            // Ka·Cs with Cs per vertex: Ka/Kd times the diffuse albedo, vertex colour included.
+            if let (true, Some(kd)) = (vertex, surface.kd())
+                && kd > 0.0
+                && let AmbientReflectance::Color(c) = l.ambient
+            {
+                l.ambient = AmbientReflectance::DiffuseScaled((c.r / kd).max(0.0));
+            }
+            l
+        });
+        self.intern_material(material, texture, local, alpha, vertex)
     }
 
     /// The index of `material` (painted with `texture`, shading by `local` illumination, when given,
@@ -604,8 +654,9 @@ impl Reader {
         texture: Option<u32>,
         local: Option<LocalShading>,
         alpha: f32,
+        vertex_colors: bool,
     ) -> u32 {
-        let key = format!("{material:?} {texture:?} {local:?} {alpha:?}");
+        let key = format!("{material:?} {texture:?} {local:?} {alpha:?} {vertex_colors}");
         if let Some(&k) = self.classic_state.materials.get(&key) {
             return k;
         }
@@ -620,10 +671,11 @@ impl Reader {
                     roughness,
                 },
             ) => Some(painted(t, diffuse, specular, roughness)),
-            _ if alpha < 1.0 => Some(untextured(material)),
+            _ if alpha < 1.0 || vertex_colors => Some(untextured(material)),
             _ => None,
         };
         if let Some(mut maps) = maps {
+            maps.vertex_colors = vertex_colors;
             if alpha < 1.0 {
                 maps.base_color_factor[3] = alpha;
                 maps.alpha = AlphaMode::Blend;

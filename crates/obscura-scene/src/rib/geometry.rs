@@ -210,8 +210,9 @@ impl Reader {
             &with_primitive_variables(&["vertex point P", "vertex float[2] uv"]),
             false,
         )?;
-        self.primitive_color(r, &list);
         let (positions, normals) = self.points_and_normals(r, &list)?;
+        let colors = self.vertex_colors(&list, positions.len());
+        self.primitive_color(r, &list);
         let uvs = super::pattern::texture_coordinates(r, &list, positions.len())?;
         let faces = match faces {
             Some(f) => f,
@@ -234,7 +235,15 @@ impl Reader {
                 ),
             }
         }
-        if !triangles.is_empty() {
+        if triangles.is_empty() {
+            // Nothing drawn: its colours must not pass to the next primitive.
+            let state = &mut self.classic_state;
+            (
+                state.vertex_colors,
+                state.primitive_color,
+                state.primitive_opacity,
+            ) = (false, None, None);
+        } else {
             self.add_object(
                 r,
                 Shape::Mesh(Mesh {
@@ -242,7 +251,7 @@ impl Reader {
                     normals,
                     triangles,
                     uvs,
-                    ..Mesh::default()
+                    colors,
                 }),
             );
         }

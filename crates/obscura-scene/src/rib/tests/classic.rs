@@ -238,14 +238,14 @@ fn procedurals_read_archives_or_name_what_is_missing() {
 
 #[test]
 fn a_varying_cs_is_averaged_with_one_warning() {
+    // On a quadric (its four corners' colours); a polygon mesh takes them as vertex colours.
     let scene = ok(
-        "WorldBegin\nSurface \"matte\"\nPolygon \"P\" [0 0 0 1 0 0 1 1 0] \"Cs\" [1 0 0 0 1 0 0 0 1]\nPolygon \"P\" [0 0 0 1 0 0 1 1 0] \"Cs\" [1 0 0 0 1 0 0 0 1]\nWorldEnd\n",
+        "WorldBegin\nSurface \"matte\"\nSphere 1 -1 1 360 \"Cs\" [1 0 0 0 1 0 0 0 1 1 1 1]\nSphere 1 -1 1 360 \"Cs\" [1 0 0 0 1 0 0 0 1 1 1 1]\nWorldEnd\n",
     );
-    let third = 1.0 / 3.0;
     assert_eq!(
         scene.materials[scene.objects[0].material as usize],
         Material::Diffuse {
-            color: Rgb::new(third, third, third)
+            color: Rgb::new(0.5, 0.5, 0.5)
         }
     );
     let warned = scene
@@ -614,4 +614,69 @@ fn opacity_below_one_makes_a_blended_material_of_the_same_look() {
         .collect();
     assert_eq!(said.len(), 1, "{:?}", scene.warnings);
     assert!(said[0].starts_with("t.rib:"), "{said:?}");
+}
+
+#[test]
+fn cs_per_vertex_on_a_polygon_mesh_becomes_vertex_colours() {
+    let scene = ok(
+        "WorldBegin\nColor [0.2 0.2 0.2]\nSurface \"matte\" \"Ka\" 0.5 \"Kd\" 0.8\n\
+         Polygon \"P\" [0 0 0  1 0 0  1 1 0  0 1 0] \"Cs\" [1 0 0  0 1 0  0 0 1  1 1 1]\n\
+         Polygon \"P\" [0 0 0  1 0 0  1 1 0] \"Cs\" [0 1 0  0 1 0  0 1 0]\n\
+         Polygon \"P\" [0 0 0  1 0 0  1 1 0]\nWorldEnd\n",
+    );
+    let Shape::Mesh(mesh) = &scene.objects[0].shape else {
+        panic!("a mesh")
+    };
+    assert_eq!(
+        mesh.colors.as_deref(),
+        Some(
+            &[
+                [1.0, 0.0, 0.0, 1.0],
+                [0.0, 1.0, 0.0, 1.0],
+                [0.0, 0.0, 1.0, 1.0],
+                [1.0; 4]
+            ][..]
+        )
+    );
+    let k = scene.objects[0].material;
+    // White, Kd 0.8, multiplied by the vertex colours; the ambient term follows them: Ka/Kd.
+    assert_eq!(
+        scene.materials[k as usize],
+        Material::Diffuse {
+            color: Rgb::new(0.8, 0.8, 0.8)
+        }
+    );
+    let maps = &scene.material_maps[&k];
+    assert!(maps.vertex_colors && maps.diffuse_only);
+    assert_eq!(maps.base_color_factor, [0.8, 0.8, 0.8, 1.0]);
+    assert_eq!(
+        scene.local_shading[&k].ambient,
+        AmbientReflectance::DiffuseScaled(0.5 / 0.8)
+    );
+    assert!(
+        !scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("varies over the primitive")),
+        "{:?}",
+        scene.warnings
+    );
+    // One colour given per vertex is that colour; without "Cs" the Color stands.
+    let Shape::Mesh(one) = &scene.objects[1].shape else {
+        panic!("a mesh")
+    };
+    assert!(one.colors.is_none());
+    assert_eq!(
+        scene.materials[scene.objects[1].material as usize],
+        Material::Diffuse {
+            color: Rgb::new(0.0, 0.8, 0.0)
+        }
+    );
+    assert_eq!(
+        scene.materials[scene.objects[2].material as usize],
+        Material::Diffuse {
+            color: Rgb::new(0.2 * 0.8, 0.2 * 0.8, 0.2 * 0.8)
+        }
+    );
+    assert!(!scene.material_maps.contains_key(&scene.objects[2].material));
 }
