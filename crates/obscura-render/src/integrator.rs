@@ -22,8 +22,9 @@
 //!   ([`EmissiveTriangles::pdf`]). Emitters light sampling cannot aim at (moving, cut out) keep
 //!   weight 1 when hit.
 //! - A classic shader's surface ([`LocalShading`]: local illumination) ends the path here: its
-//!   light samples above take weight 1 (no BSDF ray will find those lights), and nothing reaches it by
-//!   way of other surfaces, as in the RI's standard shaders.
+//!   light samples above take weight 1 (no BSDF ray will find those lights), it samples no emissive
+//!   triangles, and nothing reaches it by way of other surfaces, as in the RI's standard shaders
+//!   (only light sources light them).
 //! - The BSDF then draws the next direction; the throughput becomes `β ← β · f |n·wi| / p_bsdf`.
 //!   From vertex `rr_start` on, Russian roulette continues the path with probability
 //!   `q = clamp(max(β), 0.05, 1)` and divides `β` by `q`.
@@ -256,7 +257,10 @@ pub fn trace_path_cone(
             tracer.intersect(&ray)
         };
         let hit = match hit {
-            Some(h) if cutouts => pass_cutouts(scene, tracer, &ray, h, camera, rng, &mut passes),
+            Some(h) if cutouts => {
+                let rays = if camera { Rays::Camera } else { Rays::Secondary };
+                pass_cutouts(scene, tracer, &ray, h, rays, rng, &mut passes)
+            }
             h => h,
         };
         let t_geometry = hit.map_or(ray.t_max, |h| h.t);
@@ -383,8 +387,9 @@ pub fn trace_path_cone(
             }
         }
 
-        // Next-event estimation on the emissive triangles.
-        if !scene.emissive.is_empty() {
+        // Next-event estimation on the emissive triangles; not for a classic shader's surface, which
+        // only light sources light (a `constant` surface lights nothing in the RI).
+        if !scene.emissive.is_empty() && local.is_none() {
             let (u_point, u_tri) = (rng.next_2d(), rng.next_f32());
             let materials = |i: u32| (scene.material(i), scene.material_index(i));
             if let Some(es) = scene
@@ -408,11 +413,7 @@ pub fn trace_path_cone(
                         time: ray.time,
                     };
                     if !shadow_blocked(scene, tracer, &shadow, cutouts, rng) {
-                        let w = if local.is_none() {
-                            power_heuristic(es.pdf, pdf_b)
-                        } else {
-                            1.0
-                        };
+                        let w = power_heuristic(es.pdf, pdf_b);
                         let cos = n_s.dot(es.wi).abs();
                         accumulate(&mut radiance, throughput * f * es.radiance * (cos * w / es.pdf));
                     }
@@ -474,12 +475,23 @@ fn opacity(scene: &ShadingScene, hit: &Hit) -> f32 {
 /// The first hit along `ray` from `hit` on that is there: a cut-out (opacity 0) is passed, a
 /// transparent surface (0 < opacity < 1) is passed with probability `1 − opacity`. At most
 /// [`MAX_PASS_THROUGH`] surfaces are passed per path; then the next one counts as opaque.
+/// Which rays a search for the next hit is for: each sees what [`Tracer`] lets it see.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Rays {
+    /// [`Tracer::intersect_camera`].
+    Camera,
+    /// [`Tracer::intersect`].
+    Secondary,
+    /// [`Tracer::intersect_shadow`].
+    Shadow,
+}
+
 fn pass_cutouts(
     scene: &ShadingScene,
     tracer: &dyn Tracer,
     ray: &Ray,
     mut hit: Hit,
-    camera: bool,
+    rays: Rays,
     rng: &mut Rng,
     passes: &mut u32,
 ) -> Option<Hit> {
@@ -493,10 +505,10 @@ fn pass_cutouts(
             t_min: hit.t.next_up().max(hit.t * (1.0 + 1e-6)),
             ..*ray
         };
-        hit = if camera {
-            tracer.intersect_camera(&next)?
-        } else {
-            tracer.intersect(&next)?
+        hit = match rays {
+            Rays::Camera => tracer.intersect_camera(&next)?,
+            Rays::Secondary => tracer.intersect(&next)?,
+            Rays::Shadow => tracer.intersect_shadow(&next)?,
         };
     }
 }
@@ -515,8 +527,8 @@ fn shadow_blocked(
     }
     let mut passes = 0;
     tracer
-        .intersect(ray)
-        .and_then(|h| pass_cutouts(scene, tracer, ray, h, false, rng, &mut passes))
+        .intersect_shadow(ray)
+        .and_then(|h| pass_cutouts(scene, tracer, ray, h, Rays::Shadow, rng, &mut passes))
         .is_some()
 }
 

@@ -58,7 +58,12 @@ pub trait Tracer: Send + Sync {
     fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
         self.intersect(ray)
     }
-    /// True when anything lies on the ray with `t_min < t < t_max`.
+    /// The nearest hit a shadow ray sees: as [`Tracer::intersect`], but past what casts no shadow
+    /// (`Attribute "visibility" "int transmission" [0]`).
+    fn intersect_shadow(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect(ray)
+    }
+    /// True when anything that casts shadows lies on the ray with `t_min < t < t_max`.
     fn occluded(&self, ray: &Ray) -> bool;
 }
 

@@ -329,7 +329,19 @@ pub fn prepare(
         &texturing,
     );
     let accel = SceneAccel::build(meshes, instances)
-        .with_camera_visibility(camera_sides(scene), &clip_planes(scene, &camera_to_world));
+        .with_camera_visibility(camera_sides(scene), &clip_planes(scene, &camera_to_world))
+        .with_ray_visibility(
+            &scene
+                .objects
+                .iter()
+                .map(|o| o.visibility.camera)
+                .collect::<Vec<_>>(),
+            &scene
+                .objects
+                .iter()
+                .map(|o| o.visibility.shadows)
+                .collect::<Vec<_>>(),
+        );
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),

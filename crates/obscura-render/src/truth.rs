@@ -174,6 +174,7 @@ mod tests {
             micropolygon_length: 1.0,
             source: source.into(),
             sides: Default::default(),
+            visibility: Default::default(),
             identity: Identity {
                 object: object.into(),
                 instance: instance.into(),

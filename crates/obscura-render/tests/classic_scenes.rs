@@ -219,3 +219,37 @@ fn cs_per_vertex_shades_a_polygon_across_its_vertices() {
     let c = centre(&rib(-0.5, 9.5));
     assert!(c[0] > 0.9 && c[2] < 0.1, "near the red edge: {c:?}");
 }
+
+#[test]
+fn what_camera_rays_do_not_see_and_what_casts_no_shadow() {
+    // A white matte square lit head-on by a shadowing point light (BMRT's light shadows on), behind
+    // a blue constant square: hidden from the camera, the blue one leaves the white showing but
+    // still shadows it; hidden and shadowless, the white is lit as if it were not there.
+    let rib = |visibility: &str| {
+        format!(
+            "{CAMERA}WorldBegin\nAttribute \"light\" \"shadows\" \"on\"\n\
+             LightSource \"pointlight\" 1 \"from\" [0 0 0] \"intensity\" [25]\n\
+             Surface \"matte\"\nPolygon \"P\" [-5 -5 5  5 -5 5  5 5 5  -5 5 5]\n\
+             AttributeBegin\n{visibility}\nColor [0 0 1]\nSurface \"constant\"\n\
+             Polygon \"P\" [-2 -2 3  2 -2 3  2 2 3  -2 2 3]\nAttributeEnd\nWorldEnd\n"
+        )
+    };
+    let seen = centre(&rib(""));
+    assert!(
+        seen[2] > 0.99 && seen[0] < 1e-6,
+        "the blue square in front: {seen:?}"
+    );
+    let hidden = centre(&rib("Attribute \"visibility\" \"int camera\" [0]"));
+    assert!(
+        hidden[0] < 1e-6 && hidden[2] < 1e-6,
+        "the white square in its shadow: {hidden:?}"
+    );
+    // Lit: Kd·Cs·I/d² = 25/25 = 1 head-on at the centre (cos θ ≈ 1 over the centre pixels).
+    let shadowless = centre(&rib(
+        "Attribute \"visibility\" \"int camera\" [0] \"int transmission\" [0]",
+    ));
+    assert!(
+        (shadowless[0] - 1.0).abs() < 0.02 && (shadowless[2] - 1.0).abs() < 0.02,
+        "{shadowless:?}"
+    );
+}

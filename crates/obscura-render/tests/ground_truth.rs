@@ -102,6 +102,7 @@ fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32)
             micropolygon_length: mpl,
             source: format!("ball {i}"),
             sides: Default::default(),
+            visibility: Default::default(),
             identity: Identity {
                 object: format!("ball{i}"),
                 instance: format!("ball{i}"),
@@ -392,6 +393,7 @@ fn depth_scene(projection: &str, params: &[(&str, &[&str])]) -> (Scene, DVec3, f
         micropolygon_length: 0.25,
         source: "sphere".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity {
             object: "ball".into(),
             instance: "ball".into(),
@@ -532,6 +534,7 @@ fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, name: &str) -> Object {
         micropolygon_length: 1.0,
         source: name.into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity {
             object: name.into(),
             instance: name.into(),

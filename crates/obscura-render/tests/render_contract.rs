@@ -128,6 +128,7 @@ fn wall_scene(projection: &str, format: Format) -> Scene {
         micropolygon_length: 1.0,
         source: "test".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity::default(),
     });
     scene.samples_per_pixel = 16;
@@ -230,6 +231,7 @@ fn a_crop_equals_the_same_region_of_the_full_render() {
         micropolygon_length: 1.0,
         source: "test".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity::default(),
     });
     let full = render(&scene);
@@ -281,6 +283,7 @@ fn a_moving_sphere_is_centred_on_its_mid_shutter_position() {
         micropolygon_length: 1.0,
         source: "test".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity::default(),
     });
     let out = render(&scene);
@@ -322,6 +325,7 @@ fn a_wrong_dicing_hint_changes_the_dicing() {
         micropolygon_length: 1.0,
         source: "test".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity::default(),
     });
     let right = prepared(&scene).accel().triangle_count();
@@ -360,6 +364,7 @@ fn white_furnace_gives_a_uniform_image() {
         micropolygon_length: 1.0,
         source: "test".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity::default(),
     });
     let mut opts = RenderOptions::default();

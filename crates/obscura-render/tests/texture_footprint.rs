@@ -186,6 +186,7 @@ fn scene(dir: &Path, projection: &str, params: &ParamList) -> Scene {
         micropolygon_length: 1.0,
         source: "plane".into(),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: obscura_scene::Identity::default(),
     });
     scene

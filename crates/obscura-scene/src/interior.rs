@@ -277,6 +277,7 @@ mod tests {
             source: "test".into(),
             identity: Identity::default(),
             sides: Default::default(),
+            visibility: Default::default(),
         }
     }
 

@@ -26,7 +26,7 @@ mod test_support;
 
 pub use classic::*;
 pub use types::*;
-pub use visibility::{ClipPlane, ClipSpace, Exposure, Sides};
+pub use visibility::{ClipPlane, ClipSpace, Exposure, Sides, Visibility};
 
 use std::path::Path;
 

@@ -10,7 +10,7 @@ use obscura_sdk::{ParamList, Rgb};
 
 use crate::classic::{BezierPatch, Blobby, Curves, NuPatch, Points};
 use crate::texture::{SurfaceMaps, TextureDesc};
-use crate::visibility::{ClipPlane, Exposure, Sides};
+use crate::visibility::{ClipPlane, Exposure, Sides, Visibility};
 
 /// A transform that may move during the shutter: motion samples `(time, matrix)`, sorted by time, at
 /// least one. Matrices act on column vectors (`p' = M·p`).
@@ -335,6 +335,8 @@ pub struct Object {
     pub identity: Identity,
     /// Which sides camera rays see (RIB `Sides`, `Orientation`; both for glTF and OBJ).
     pub sides: Sides,
+    /// Which rays see it at all (RIB `Attribute "visibility"`, BMRT's `"render" "casts_shadows"`).
+    pub visibility: Visibility,
 }
 
 /// The names an object carries into the ID AOVs: several instances may share one object name (a glTF

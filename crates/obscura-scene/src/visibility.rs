@@ -23,6 +23,27 @@
 
 use glam::Vec3;
 
+/// Which rays see a surface at all: RenderMan's `Attribute "visibility"` (`"int camera"`,
+/// `"int transmission"` or the older `"string transmission"`) and BMRT's
+/// `Attribute "render" "casts_shadows"`. Every other ray (reflections, bounces) sees everything.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Visibility {
+    /// Camera rays see it (`"int camera" [0]`: seen only in reflections and by its shadow).
+    pub camera: bool,
+    /// It blocks shadow rays (`"int transmission" [0]`, `"string transmission" "transparent"`,
+    /// `"casts_shadows" "none"`: it casts no shadow).
+    pub shadows: bool,
+}
+
+impl Default for Visibility {
+    fn default() -> Self {
+        Visibility {
+            camera: true,
+            shadows: true,
+        }
+    }
+}
+
 /// Which sides of a surface camera rays see (`Sides`, with the orientation the surface had).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Sides {

@@ -80,6 +80,7 @@ pub struct SceneAccel {
     triangle_count: usize,
     /// What camera rays may not see (see [`SceneAccel::with_camera_visibility`]).
     camera: CameraVisibility,
+    shadow: ShadowVisibility,
 }
 
 /// What camera rays may not see: one-sided instances' backs and clipped half-spaces.
@@ -87,11 +88,30 @@ pub struct SceneAccel {
 struct CameraVisibility {
     /// Per instance; missing entries see both sides.
     sides: Vec<Sides>,
+    /// Per instance: camera rays do not see it at all (`Attribute "visibility" "int camera" [0]`);
+    /// missing entries are seen.
+    hidden: Vec<bool>,
     /// World-space planes `(n, c)`: a point `p` with `n·p > c` is clipped.
     clip_planes: Vec<(Vec3A, f32)>,
-    /// True when any instance is one-sided or any plane clips: camera rays then take the filtered
-    /// traversal; otherwise they take exactly the traversal of every other ray.
+    /// True when any instance is one-sided or hidden or any plane clips: camera rays then take the
+    /// filtered traversal; otherwise they take exactly the traversal of every other ray.
     any: bool,
+}
+
+/// Which instances shadow rays pass through (they cast no shadow).
+#[derive(Debug, Clone, Default)]
+struct ShadowVisibility {
+    /// Per instance; missing entries cast shadows.
+    none: Vec<bool>,
+    /// True when any instance casts no shadow.
+    any: bool,
+}
+
+impl ShadowVisibility {
+    #[inline(always)]
+    fn skips(&self, instance: u32) -> bool {
+        self.any && self.none.get(instance as usize).copied().unwrap_or(false)
+    }
 }
 
 impl SceneAccel {
@@ -131,6 +151,7 @@ impl SceneAccel {
             top_ids,
             triangle_count,
             camera: CameraVisibility::default(),
+            shadow: ShadowVisibility::default(),
         }
     }
 
@@ -148,11 +169,29 @@ impl SceneAccel {
             .filter(|(p, n)| p.is_finite() && n.is_finite() && *n != Vec3A::ZERO)
             .map(|&(p, n)| (n, n.dot(p)))
             .collect();
-        let any = !clip_planes.is_empty() || sides.iter().any(|s| *s != Sides::Both);
+        let any = !clip_planes.is_empty()
+            || sides.iter().any(|s| *s != Sides::Both)
+            || self.camera.hidden.iter().any(|&h| h);
         self.camera = CameraVisibility {
             sides,
+            hidden: std::mem::take(&mut self.camera.hidden),
             clip_planes,
             any,
+        };
+        self
+    }
+
+    /// Per instance (missing entries: seen, casting shadows): whether camera rays see it at all
+    /// (`camera`) and whether shadow rays ([`Tracer::occluded`], [`Tracer::intersect_shadow`]) are
+    /// blocked by it (`shadows`). Reflection and bounce rays see every instance.
+    #[must_use]
+    pub fn with_ray_visibility(mut self, camera: &[bool], shadows: &[bool]) -> Self {
+        self.camera.hidden = camera.iter().map(|&seen| !seen).collect();
+        self.camera.any |= self.camera.hidden.iter().any(|&h| h);
+        let none: Vec<bool> = shadows.iter().map(|&casts| !casts).collect();
+        self.shadow = ShadowVisibility {
+            any: none.iter().any(|&n| n),
+            none,
         };
         self
     }
@@ -191,7 +230,28 @@ impl SceneAccel {
             return unsafe { self.closest_avx2(k, ray) };
         }
         let _ = scalar_only;
-        self.closest::<_, false>(ScalarKernel, ray)
+        self.closest::<_, false>(ScalarKernel, ray, false)
+    }
+
+    /// The nearest hit among the instances that cast shadows, with the AVX2 kernel unless
+    /// `scalar_only`.
+    pub(super) fn closest_shadow_dispatch(&self, ray: &Ray, scalar_only: bool) -> Option<SceneHit> {
+        if !self.shadow.any {
+            return self.closest_dispatch(ray, scalar_only);
+        }
+        #[cfg(target_arch = "x86_64")]
+        if !scalar_only && let Some(k) = avx2::Avx2Kernel::detect() {
+            // SAFETY: the token from `detect` proves the CPU supports AVX2 and FMA.
+            return unsafe { self.closest_shadow_avx2(k, ray) };
+        }
+        let _ = scalar_only;
+        self.closest::<_, false>(ScalarKernel, ray, true)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn closest_shadow_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
+        self.closest::<_, false>(k, ray, true)
     }
 
     /// True when anything is hit, with the AVX2 kernel unless `scalar_only`.
@@ -208,7 +268,7 @@ impl SceneAccel {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
-        self.closest::<_, false>(k, ray)
+        self.closest::<_, false>(k, ray, false)
     }
 
     #[cfg(target_arch = "x86_64")]
@@ -231,9 +291,15 @@ impl SceneAccel {
         ))
     }
 
-    /// The nearest hit; with `CAMERA`, the nearest a camera ray sees.
+    /// The nearest hit; with `CAMERA`, the nearest a camera ray sees; with `shadow`, the nearest
+    /// that casts shadows.
     #[inline(always)]
-    fn closest<K: BoxKernel, const CAMERA: bool>(&self, kernel: K, ray: &Ray) -> Option<SceneHit> {
+    fn closest<K: BoxKernel, const CAMERA: bool>(
+        &self,
+        kernel: K,
+        ray: &Ray,
+        shadow: bool,
+    ) -> Option<SceneHit> {
         let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
         let mut visitor = SceneClosest::<K, CAMERA> {
             accel: self,
@@ -241,6 +307,7 @@ impl SceneAccel {
             ray,
             lim: ray.t_max,
             best: None,
+            shadow,
         };
         traverse(&self.top, kernel, &box_ray, ray.t_max, &mut visitor);
         visitor.best
@@ -257,13 +324,13 @@ impl SceneAccel {
             return unsafe { self.closest_camera_avx2(k, ray) };
         }
         let _ = scalar_only;
-        self.closest::<_, true>(ScalarKernel, ray)
+        self.closest::<_, true>(ScalarKernel, ray, false)
     }
 
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn closest_camera_avx2(&self, k: avx2::Avx2Kernel, ray: &Ray) -> Option<SceneHit> {
-        self.closest::<_, true>(k, ray)
+        self.closest::<_, true>(k, ray, false)
     }
 
     #[inline(always)]
@@ -296,6 +363,8 @@ struct SceneClosest<'a, K, const CAMERA: bool> {
     ray: &'a Ray,
     lim: f32,
     best: Option<SceneHit>,
+    /// Shadow rays: instances that cast no shadow are passed.
+    shadow: bool,
 }
 
 impl<K: BoxKernel, const CAMERA: bool> SceneClosest<'_, K, CAMERA> {
@@ -306,6 +375,16 @@ impl<K: BoxKernel, const CAMERA: bool> SceneClosest<'_, K, CAMERA> {
         let (ray, bvh) = (self.ray, &self.accel.meshes[mesh]);
         if !CAMERA {
             return bvh.closest(self.kernel, o, d, ray.t_min, self.lim);
+        }
+        if self
+            .accel
+            .camera
+            .hidden
+            .get(instance as usize)
+            .copied()
+            .unwrap_or(false)
+        {
+            return None;
         }
         let planes = &self.accel.camera.clip_planes;
         let sides = (self.accel.camera.sides.get(instance as usize))
@@ -335,6 +414,9 @@ impl<K: BoxKernel, const CAMERA: bool> LeafVisitor for SceneClosest<'_, K, CAMER
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
         let ray = self.ray;
         for &instance in &self.accel.top_ids[first..first + count] {
+            if self.shadow && self.accel.shadow.skips(instance) {
+                continue;
+            }
             let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
                 continue;
             };
@@ -369,6 +451,9 @@ impl<K: BoxKernel> LeafVisitor for SceneAny<'_, K> {
     fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
         let ray = self.ray;
         for &instance in &self.accel.top_ids[first..first + count] {
+            if self.accel.shadow.skips(instance) {
+                continue;
+            }
             let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
                 continue;
             };
@@ -388,6 +473,11 @@ impl Tracer for SceneAccel {
 
     fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
         self.closest_camera_dispatch(ray, false)
+            .map(|h| self.make_hit(ray, h))
+    }
+
+    fn intersect_shadow(&self, ray: &Ray) -> Option<Hit> {
+        self.closest_shadow_dispatch(ray, false)
             .map(|h| self.make_hit(ray, h))
     }
 

@@ -38,6 +38,7 @@ impl Loader<'_> {
                     prim.index()
                 ),
                 sides: Default::default(),
+                visibility: Default::default(),
                 identity: Identity {
                     object: mesh.name().unwrap_or_default().to_string(),
                     instance: node.name().unwrap_or_default().to_string(),

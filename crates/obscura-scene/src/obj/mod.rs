@@ -302,6 +302,7 @@ fn model_object(
         micropolygon_length: 1.0,
         source: format!("{file}: object \"{}\"", model.name),
         sides: Default::default(),
+        visibility: Default::default(),
         identity: Identity {
             object: model.name.clone(),
             instance: model.name.clone(),

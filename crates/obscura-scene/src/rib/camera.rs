@@ -29,7 +29,7 @@ use super::lex::Value;
 use super::request::Req;
 use super::transform::Ctm;
 use super::{Reader, RibError};
-use crate::visibility::{ClipPlane, ClipSpace, Exposure, Sides};
+use crate::visibility::{ClipPlane, ClipSpace, Exposure, Sides, Visibility};
 use obscura_host::CropWindow;
 use obscura_sdk::{ParamValue, ScreenWindow};
 
@@ -45,6 +45,9 @@ pub(super) struct Facing {
     pub(super) one_sided: bool,
     /// The current orientation is not the current coordinate system's handedness.
     pub(super) inside_out: bool,
+    /// `Attribute "visibility"` and BMRT's `Attribute "render" "casts_shadows"`: which rays see
+    /// the surfaces defined now.
+    pub(super) visibility: Visibility,
 }
 
 /// RenderMan's `RI_INFINITY` as RIB files write it (`1.0e38`); an fstop at or above it is a pinhole.

@@ -39,6 +39,7 @@ impl Reader {
             micropolygon_length: self.micropolygon_length,
             source: r.at(),
             sides: self.current_sides(),
+            visibility: self.facing.visibility,
             identity: Identity {
                 object: self.identifier.clone(),
                 instance: self.identifier.clone(),

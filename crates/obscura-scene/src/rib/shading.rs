@@ -25,6 +25,9 @@ impl Reader {
         if name == "light" {
             return self.light_attribute(r, rest);
         }
+        if name == "visibility" || name == "render" {
+            return self.visibility_attribute(r, name, rest);
+        }
         if name != "dice" {
             if self.warned_attributes.insert(name.clone()) {
                 self.warn(r, format!("Attribute \"{name}\" is not supported, ignored"));
@@ -39,6 +42,77 @@ impl Reader {
                 )));
             }
             self.micropolygon_length = x;
+        }
+        Ok(())
+    }
+
+    /// `Attribute "visibility"` (RenderMan: `"int camera"`, `"int transmission"`, the older
+    /// `"string transmission"` `"opaque"`/`"Os"`/`"shader"` or `"transparent"`) and `Attribute "render"`
+    /// (BMRT: `"string casts_shadows"` `"none"`, or `"opaque"`/`"Os"`/`"shade"`/`"Oi"`): whether camera
+    /// rays see the surfaces that follow and whether they cast shadows. The other visibilities
+    /// (`indirect`, `trace`, `diffuse`, `specular`, `photon`) and `render` attributes are warned about
+    /// once each and left as they are (seen by every other ray). Names may carry their type or not.
+    fn visibility_attribute(&mut self, r: &Req<'_>, attribute: &str, rest: &[Value]) -> Result<(), RibError> {
+        let mut pairs = rest.iter();
+        while let Some(name) = pairs.next() {
+            let Value::Str(written) = name else {
+                return Err(r.err(format!(
+                    "Attribute \"{attribute}\": expected a parameter name (a string), got a number"
+                )));
+            };
+            let Some(value) = pairs.next() else {
+                return Err(r.err(format!(
+                    "Attribute \"{attribute}\": parameter \"{written}\" has no value"
+                )));
+            };
+            let key = written.rsplit(' ').next().unwrap_or(written);
+            // One value: a number (0 or 1) or a string.
+            let (number, text) = match value {
+                Value::Num(n) => (Some(n.value), None),
+                Value::Nums(v) if v.len() == 1 => (Some(v[0].value), None),
+                Value::Str(s) => (None, Some(s.as_str())),
+                Value::Strs(v) if v.len() == 1 => (None, Some(v[0].as_str())),
+                _ => {
+                    return Err(r.err(format!(
+                        "Attribute \"{attribute}\" \"{key}\": expected one number or one string"
+                    )));
+                }
+            };
+            let visibility = &mut self.facing.visibility;
+            match (attribute, key, number, text) {
+                ("visibility", "camera", Some(x), _) => visibility.camera = x != 0.0,
+                ("visibility", "transmission", Some(x), _) => visibility.shadows = x != 0.0,
+                ("visibility", "transmission", _, Some(t)) | ("render", "casts_shadows", _, Some(t)) => {
+                    visibility.shadows = match t {
+                        "transparent" | "none" => false,
+                        "opaque" | "Os" | "Oi" | "shade" | "shader" => true,
+                        other => {
+                            return Err(r.err(format!(
+                                "Attribute \"{attribute}\" \"{key}\": expected \"opaque\", \"Os\", \"shade\" or \"{}\", got \"{other}\"",
+                                if attribute == "render" { "none" } else { "transparent" }
+                            )));
+                        }
+                    };
+                }
+                ("visibility", "camera" | "transmission", ..) | ("render", "casts_shadows", ..) => {
+                    return Err(r.err(format!(
+                        "Attribute \"{attribute}\" \"{key}\": expected {}",
+                        if key == "camera" {
+                            "0 or 1"
+                        } else {
+                            "0, 1 or a string"
+                        }
+                    )));
+                }
+                _ => {
+                    if self.warned_attributes.insert(format!("{attribute} {key}")) {
+                        self.warn(
+                            r,
+                            format!("Attribute \"{attribute}\" \"{key}\" is not supported (every other ray sees the surface), ignored"),
+                        );
+                    }
+                }
+            }
         }
         Ok(())
     }

@@ -135,3 +135,53 @@ fn clipping_planes_pass_camera_rays_on_to_the_next_hit() {
     let zero = (Vec3A::ZERO, Vec3A::ZERO);
     assert_eq!(t(&build(&[zero])), Some(2.0));
 }
+
+#[test]
+fn hidden_and_shadowless_instances_are_passed_by_camera_and_shadow_rays_only() {
+    // Two copies of the triangle along the ray: instance 0 at z = 2, instance 1 at z = 3. Each
+    // combination of (camera, shadows) for the near one: camera rays and shadow rays go on to the far
+    // one past what they do not see; every other ray stops at the near one.
+    let near = Affine3A::IDENTITY;
+    let far = Affine3A::from_translation(Vec3::new(0.0, 0.0, 1.0));
+    let r = ray(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
+    for (camera, shadows) in [(true, true), (false, true), (true, false), (false, false)] {
+        let accel = SceneAccel::build(
+            vec![facing_the_origin()],
+            vec![
+                Instance {
+                    mesh: 0,
+                    transform: vec![(0.0, near)],
+                },
+                Instance {
+                    mesh: 0,
+                    transform: vec![(0.0, far)],
+                },
+            ],
+        )
+        .with_ray_visibility(&[camera, true], &[shadows, true]);
+        let instance = |h: Option<crate::ray::Hit>| h.map(|h| h.instance);
+        let first = |seen: bool| Some(if seen { 0 } else { 1 });
+        assert_eq!(instance(accel.intersect(&r)), Some(0), "{camera} {shadows}");
+        assert_eq!(
+            instance(accel.intersect_camera(&r)),
+            first(camera),
+            "{camera} {shadows}"
+        );
+        assert_eq!(
+            instance(accel.intersect_shadow(&r)),
+            first(shadows),
+            "{camera} {shadows}"
+        );
+        // A shadow ray that ends between the two is blocked only by a near one that casts shadows.
+        let short = crate::ray::Ray { t_max: 2.5, ..r };
+        assert_eq!(accel.occluded(&short), shadows, "{camera} {shadows}");
+        assert!(accel.occluded(&r));
+        // One-sidedness and clipping keep working with hidden instances (the same filtered pass).
+        let one_sided = accel.with_camera_visibility(vec![Sides::Back, Sides::Both], &[]);
+        assert_eq!(
+            instance(one_sided.intersect_camera(&r)),
+            Some(1),
+            "{camera} {shadows}"
+        );
+    }
+}

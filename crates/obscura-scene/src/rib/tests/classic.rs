@@ -680,3 +680,45 @@ fn cs_per_vertex_on_a_polygon_mesh_becomes_vertex_colours() {
     );
     assert!(!scene.material_maps.contains_key(&scene.objects[2].material));
 }
+
+#[test]
+fn visibility_attributes_hide_from_the_camera_and_from_shadow_rays() {
+    use crate::Visibility;
+    let scene = ok("WorldBegin\n\
+         AttributeBegin\nAttribute \"visibility\" \"int camera\" [0]\nSphere 1 -1 1 360\n\
+         Attribute \"visibility\" \"string transmission\" [\"transparent\"]\nSphere 1 -1 1 360\n\
+         Attribute \"visibility\" \"camera\" 1 \"int transmission\" [1]\nSphere 1 -1 1 360\nAttributeEnd\n\
+         AttributeBegin\nAttribute \"render\" \"string casts_shadows\" [\"none\"]\nSphere 1 -1 1 360\n\
+         Attribute \"render\" \"casts_shadows\" \"Os\"\nSphere 1 -1 1 360\nAttributeEnd\n\
+         Attribute \"visibility\" \"int trace\" [1] \"int indirect\" [0]\nSphere 1 -1 1 360\nWorldEnd\n");
+    let v = |k: usize| scene.objects[k].visibility;
+    let vis = |camera, shadows| Visibility { camera, shadows };
+    assert_eq!(v(0), vis(false, true));
+    assert_eq!(v(1), vis(false, false));
+    assert_eq!(v(2), vis(true, true));
+    assert_eq!(v(3), vis(true, false), "BMRT's casts_shadows none");
+    assert_eq!(v(4), vis(true, true));
+    // The attribute blocks restored the default; the visibilities the renderer has no rays for are
+    // named once each.
+    assert_eq!(v(5), Visibility::default());
+    for key in ["\"trace\"", "\"indirect\""] {
+        assert_eq!(
+            scene
+                .warnings
+                .iter()
+                .filter(|w| w.contains(key) && w.contains("not supported"))
+                .count(),
+            1,
+            "{key}: {:?}",
+            scene.warnings
+        );
+    }
+    assert_eq!(
+        fail("WorldBegin\nAttribute \"render\" \"casts_shadows\" \"sometimes\"\n"),
+        "t.rib:2: Attribute \"render\" \"casts_shadows\": expected \"opaque\", \"Os\", \"shade\" or \"none\", got \"sometimes\""
+    );
+    assert_eq!(
+        fail("WorldBegin\nAttribute \"visibility\" \"int camera\" [\"no\"]\n"),
+        "t.rib:2: Attribute \"visibility\" \"camera\": expected 0 or 1"
+    );
+}
