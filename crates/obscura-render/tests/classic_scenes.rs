@@ -253,3 +253,42 @@ fn what_camera_rays_do_not_see_and_what_casts_no_shadow() {
         "{shadowless:?}"
     );
 }
+
+#[test]
+fn paintedplastic_paints_a_quadric_by_its_u_and_v() {
+    // A Disk of radius 4 at z = 5 under the orthographic view of `painted_patch`: the RI's default
+    // (s, t) on a quadric is its (u, v): s = θ/360° around +z from +x toward +y, t = 1 − ρ/4 from the
+    // rim in. Every pixel whose exact (s, t) is clear of a texel's edge shows that texel.
+    let dir = tempfile::tempdir().unwrap();
+    let img = image::RgbImage::from_fn(4, 2, |x, y| image::Rgb(TEXELS[y as usize][x as usize]));
+    img.save_with_format(dir.path().join("texels.tex"), image::ImageFormat::Tiff)
+        .unwrap();
+    let rib = "Format 16 8 1\nPixelFilter \"box\" 1 1\nProjection \"orthographic\"\nScreenWindow -2 2 -1 1\n\
+               WorldBegin\nLightSource \"ambientlight\" 1\n\
+               Surface \"paintedplastic\" \"Kd\" [1] \"texturename\" \"texels.tex\"\nTranslate 0 0 5\n\
+               Disk 0 4 360\nWorldEnd\n";
+    let (albedo, warnings) = painted_albedo(dir.path(), rib);
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let mut checked = 0;
+    for y in 0..8 {
+        for x in 0..16 {
+            let (wx, wy) = (-2.0 + 0.25 * (x as f32 + 0.5), 1.0 - 0.25 * (y as f32 + 0.5));
+            let s = wy.atan2(wx).rem_euclid(std::f32::consts::TAU) / std::f32::consts::TAU;
+            let t = 1.0 - wx.hypot(wy) / 4.0;
+            let clear = |v: f32| (v.fract() - 0.5).abs() < 0.4;
+            if !(clear(4.0 * s) && clear(2.0 * t)) {
+                continue;
+            }
+            let want = TEXELS[(2.0 * t) as usize][(4.0 * s) as usize].map(|c| f32::from(c) / 255.0);
+            let got = albedo[y * 16 + x];
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() < 1e-5,
+                    "pixel ({x}, {y}) at s {s}, t {t}: {got:?} instead of {want:?}"
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked >= 60, "{checked} pixels checked");
+}

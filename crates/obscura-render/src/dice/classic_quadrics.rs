@@ -10,10 +10,10 @@
 
 use std::f64::consts::TAU;
 
-use glam::{DVec2, DVec3};
+use glam::{DVec2, DVec3, Vec2};
 
 use super::DicingContext;
-use super::quadric::{Grid, Rate, finite, fit_budget, min_segments, sweep, tessellate_fitted};
+use super::quadric::{Grid, Rate, finite, fit_budget, min_segments, sweep, tessellate_fitted_st};
 use crate::ray::TriangleMesh;
 
 /// `Hyperboloid x1 y1 z1 x2 y2 z2 thetamax`.
@@ -22,18 +22,19 @@ pub(super) fn hyperboloid(
     p2: glam::Vec3,
     theta_max: f32,
     ctx: &DicingContext,
-) -> TriangleMesh {
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let (a, b) = (p1.as_dvec3(), p2.as_dvec3());
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     if !finite(&[a.x, a.y, a.z, b.x, b.y, b.z]) || a == b {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let (r1, r2) = (a.truncate().length(), b.truncate().length());
     let r = r1.max(r2);
     if r == 0.0 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let rate = Rate::new(
         ctx,
@@ -53,7 +54,7 @@ pub(super) fn hyperboloid(
         pole1: None,
     };
     let along = b - a;
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let t = u * theta;
         let (c, s) = (t.cos(), t.sin());
         let rot = |p: DVec3| DVec3::new(c * p.x - s * p.y, s * p.x + c * p.y, p.z);
@@ -83,13 +84,14 @@ pub(super) fn paraboloid(
     z_max: f32,
     theta_max: f32,
     ctx: &DicingContext,
-) -> TriangleMesh {
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let (rmax, z0, z1) = (f64::from(radius).abs(), f64::from(z_min), f64::from(z_max));
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     if !finite(&[rmax, z0, z1]) || rmax == 0.0 || z1 == 0.0 || z0 == z1 || z0 / z1 < 0.0 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let dz = z1 - z0;
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * (z0 + z1)), rmax.hypot(0.5 * dz));
@@ -106,7 +108,7 @@ pub(super) fn paraboloid(
         pole0: apex,
         pole1: None,
     };
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let t = u * theta;
         let z = z0 + v * dz;
         let ratio = (z / z1).max(0.0);
@@ -134,7 +136,7 @@ mod tests {
     #[test]
     fn hyperboloid_vertices_lie_on_the_swept_line() {
         let (p1, p2) = (Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 1.0, 1.0));
-        let m = hyperboloid(p1, p2, 360.0, &ctx());
+        let m = hyperboloid(p1, p2, 360.0, &ctx(), false).0;
         assert!(m.triangles.len() > 16);
         for p in &m.positions {
             // On the line at v = (z + 1)/2, at the line's distance from the axis.
@@ -149,7 +151,7 @@ mod tests {
 
     #[test]
     fn paraboloid_vertices_follow_r_rmax_sqrt_z_over_zmax() {
-        let m = paraboloid(2.0, 0.0, 4.0, 360.0, &ctx());
+        let m = paraboloid(2.0, 0.0, 4.0, 360.0, &ctx(), false).0;
         assert!(m.triangles.len() > 16);
         for (p, n) in m.positions.iter().zip(m.normals.as_ref().unwrap()) {
             let r = 2.0 * (p.z / 4.0).max(0.0).sqrt();

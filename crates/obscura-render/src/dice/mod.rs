@@ -364,56 +364,79 @@ impl TriangleBudget {
 ///
 /// A malformed polygon or subdivision mesh (see [`DiceError`]), or geometry that overflows `f32`.
 pub fn dice(shape: &Shape, ctx: &DicingContext) -> Result<TriangleMesh, DiceError> {
-    let mesh = match shape {
+    diced(shape, ctx, false).map(|(mesh, _)| mesh)
+}
+
+/// The shape as triangles and, with `with_st` and for the primitives that carry them, each vertex's
+/// texture coordinates `(s, t)` (see [`dice_with_st`]).
+fn diced(
+    shape: &Shape,
+    ctx: &DicingContext,
+    with_st: bool,
+) -> Result<(TriangleMesh, Option<Vec<Vec2>>), DiceError> {
+    let plain = |mesh: TriangleMesh| (mesh, None);
+    let (mesh, st) = match shape {
         Shape::Sphere {
             radius,
             z_min,
             z_max,
             theta_max,
-        } => sphere(*radius, *z_min, *z_max, *theta_max, ctx),
+        } => sphere(*radius, *z_min, *z_max, *theta_max, ctx, with_st),
         Shape::Cylinder {
             radius,
             z_min,
             z_max,
             theta_max,
-        } => cylinder(*radius, *z_min, *z_max, *theta_max, ctx),
+        } => cylinder(*radius, *z_min, *z_max, *theta_max, ctx, with_st),
         Shape::Cone {
             height,
             radius,
             theta_max,
-        } => cone(*height, *radius, *theta_max, ctx),
+        } => cone(*height, *radius, *theta_max, ctx, with_st),
         Shape::Disk {
             height,
             radius,
             theta_max,
-        } => disk(*height, *radius, *theta_max, ctx),
+        } => disk(*height, *radius, *theta_max, ctx, with_st),
         Shape::Torus {
             major_radius,
             minor_radius,
             phi_min,
             phi_max,
             theta_max,
-        } => torus(*major_radius, *minor_radius, *phi_min, *phi_max, *theta_max, ctx),
+        } => torus(
+            *major_radius,
+            *minor_radius,
+            *phi_min,
+            *phi_max,
+            *theta_max,
+            ctx,
+            with_st,
+        ),
         Shape::Hyperboloid {
             point1,
             point2,
             theta_max,
-        } => hyperboloid(*point1, *point2, *theta_max, ctx),
+        } => hyperboloid(*point1, *point2, *theta_max, ctx, with_st),
         Shape::Paraboloid {
             radius,
             z_min,
             z_max,
             theta_max,
-        } => paraboloid(*radius, *z_min, *z_max, *theta_max, ctx),
-        Shape::Patches(list) => patches(list, ctx),
-        Shape::NuPatch(patch) => nu_patch(patch, ctx),
-        Shape::Curves(c) => curves(c, ctx),
-        Shape::Points(p) => points(p, ctx),
-        Shape::Blobby(b) => blobby(b, ctx),
-        Shape::Mesh(mesh) => pass_through(mesh)?,
-        Shape::Subdiv(mesh) => subdivision(mesh, ctx)?,
+        } => paraboloid(*radius, *z_min, *z_max, *theta_max, ctx, with_st),
+        Shape::Patches(list) if with_st => {
+            let (mesh, st) = patches_with_st(list, ctx);
+            (mesh, Some(st))
+        }
+        Shape::Patches(list) => plain(patches(list, ctx)),
+        Shape::NuPatch(patch) => plain(nu_patch(patch, ctx)),
+        Shape::Curves(c) => plain(curves(c, ctx)),
+        Shape::Points(p) => plain(points(p, ctx)),
+        Shape::Blobby(b) => plain(blobby(b, ctx)),
+        Shape::Mesh(mesh) => plain(pass_through(mesh)?),
+        Shape::Subdiv(mesh) => plain(subdivision(mesh, ctx)?),
     };
-    finite(mesh)
+    Ok((finite(mesh)?, st))
 }
 
 /// `mesh`, when every vertex and normal is finite.
@@ -432,8 +455,11 @@ fn finite(mesh: TriangleMesh) -> Result<TriangleMesh, DiceError> {
 
 /// As [`dice`], with each vertex's texture coordinates `(s, t)` in the RenderMan Interface's
 /// convention (`t = 0` a texture's top row) for the primitives that carry them: patches (`Patch`,
-/// `PatchMesh`, the teapot; see [`obscura_scene::BezierPatch::st`]). `None` for the others (a polygon
-/// mesh's `"st"` travels with the scene mesh itself).
+/// `PatchMesh`, the teapot; see [`obscura_scene::BezierPatch::st`]) and the seven quadrics, whose
+/// default `(s, t)` is their `(u, v)` (`u` around the z axis from θ = 0, `v` along the RI's second
+/// parameter: z or φ from its minimum, a cone's or disk's from the rim, a hyperboloid's from its first
+/// point); a quadric's seam column and pole rows are then split, the positions unchanged. `None` for
+/// the others (a polygon mesh's `"st"` travels with the scene mesh itself).
 ///
 /// # Errors
 ///
@@ -442,13 +468,7 @@ pub fn dice_with_st(
     shape: &Shape,
     ctx: &DicingContext,
 ) -> Result<(TriangleMesh, Option<Vec<Vec2>>), DiceError> {
-    match shape {
-        Shape::Patches(list) => {
-            let (mesh, st) = patches_with_st(list, ctx);
-            Ok((finite(mesh)?, Some(st)))
-        }
-        _ => Ok((dice(shape, ctx)?, None)),
-    }
+    diced(shape, ctx, true)
 }
 
 /// Pixels per unit of object-space length for a primitive with the given object-space bounding

@@ -34,7 +34,7 @@
 
 use std::f64::consts::TAU;
 
-use glam::DVec3;
+use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 
 use super::{
@@ -302,8 +302,24 @@ pub(super) fn tessellate_fitted<F>(grid: &Grid, rate: &Rate, ctx: &DicingContext
 where
     F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
 {
+    tessellate_fitted_st(grid, rate, ctx, false, surface).0
+}
+
+/// As [`tessellate_fitted`]; with `with_st`, also each vertex's `(u, v)`, the RI's default texture
+/// coordinates `(s, t)` of a quadric: the seam column and pole rows are then split (the same
+/// positions, one vertex per `(u, v)`), so a texture does not smear across them.
+pub(super) fn tessellate_fitted_st<F>(
+    grid: &Grid,
+    rate: &Rate,
+    ctx: &DicingContext,
+    with_st: bool,
+    surface: F,
+) -> (TriangleMesh, Option<Vec<Vec2>>)
+where
+    F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
+{
     let lines = fitted_lines(grid, rate, ctx, &surface).unwrap_or_else(|| Lines::uniform(grid.nu, grid.nv));
-    tessellate_on(grid, &lines, surface)
+    tessellate_lines(grid, &lines, with_st, surface)
 }
 
 /// Tessellates `surface(u, v) → (position, unit normal)` over `grid`, evenly spaced.
@@ -311,32 +327,45 @@ pub(super) fn tessellate<F>(grid: &Grid, surface: F) -> TriangleMesh
 where
     F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
 {
-    tessellate_on(grid, &Lines::uniform(grid.nu, grid.nv), surface)
+    tessellate_lines(grid, &Lines::uniform(grid.nu, grid.nv), false, surface).0
 }
 
 /// Tessellates `surface` over `grid`'s wraps and poles with its lines at `lines` (their counts
-/// replace `grid.nu` and `grid.nv`).
-fn tessellate_on<F>(grid: &Grid, lines: &Lines, surface: F) -> TriangleMesh
+/// replace `grid.nu` and `grid.nv`); with `with_st`, the seams and poles split and each vertex's
+/// `(u, v)` returned (see [`tessellate_fitted_st`]).
+fn tessellate_lines<F>(
+    grid: &Grid,
+    lines: &Lines,
+    with_st: bool,
+    surface: F,
+) -> (TriangleMesh, Option<Vec<Vec2>>)
 where
     F: Fn(f64, f64) -> (DVec3, DVec3) + Sync,
 {
     let (nu, nv) = (lines.u.len() as u32 - 1, lines.v.len() as u32 - 1);
-    let rows = if grid.wrap_v { nv } else { nv + 1 };
-    let cols = if grid.wrap_u { nu } else { nu + 1 };
+    // Split for texture coordinates: the last column and row are their own vertices (copies of the
+    // first's positions when the grid wraps), and a pole row has one vertex per column.
+    let (wrap_u, wrap_v) = (grid.wrap_u && !with_st, grid.wrap_v && !with_st);
+    let rows = if wrap_v { nv } else { nv + 1 };
+    let cols = if wrap_u { nu } else { nu + 1 };
     // Rows are j = 0..=nv; with wrap_v row nv is row 0 again (and there are no poles).
     let pole = |j: u32| match j {
         0 => grid.pole0,
         j if j == nv && !grid.wrap_v => grid.pole1,
         _ => None,
     };
+    let point = |i: u32, j: u32| {
+        // The seam repeats the first column (and row) exactly, so the split mesh stays closed.
+        let i = if grid.wrap_u && i == nu { 0 } else { i };
+        let j = if grid.wrap_v && j == nv { 0 } else { j };
+        surface(lines.u[i as usize], lines.v[j as usize])
+    };
     let row_vertices: Vec<Vec<(DVec3, DVec3)>> = (0..rows)
         .into_par_iter()
         .map(|j| match pole(j) {
-            Some(p) => vec![p],
-            None => {
-                let v = lines.v[j as usize];
-                (0..cols).map(|i| surface(lines.u[i as usize], v)).collect()
-            }
+            Some(p) if !with_st => vec![p],
+            Some(p) => vec![p; cols as usize],
+            None => (0..cols).map(|i| point(i, j)).collect(),
         })
         .collect();
     let mut row_start = Vec::with_capacity(rows as usize);
@@ -346,9 +375,9 @@ where
         count += row.len() as u32;
     }
     let index = |i: u32, j: u32| {
-        let j = if grid.wrap_v { j % nv } else { j };
-        let i = if grid.wrap_u { i % nu } else { i };
-        if pole(j).is_some() {
+        let j = if wrap_v { j % nv } else { j };
+        let i = if wrap_u { i % nu } else { i };
+        if pole(j).is_some() && !with_st {
             row_start[j as usize]
         } else {
             row_start[j as usize] + i
@@ -385,11 +414,18 @@ where
             }
         }
     }
-    TriangleMesh {
+    let st = with_st.then(|| {
+        (0..rows)
+            .flat_map(|j| (0..cols).map(move |i| (i, j)))
+            .map(|(i, j)| Vec2::new(lines.u[i as usize] as f32, lines.v[j as usize] as f32))
+            .collect()
+    });
+    let mesh = TriangleMesh {
         positions: positions.iter().map(|p| p.as_vec3a()).collect(),
         normals: Some(row_vertices.iter().flatten().map(|v| v.1.as_vec3a()).collect()),
         triangles,
-    }
+    };
+    (mesh, st)
 }
 
 pub(super) fn finite(values: &[f64]) -> bool {
@@ -403,18 +439,19 @@ pub(super) fn sphere(
     z_max: f32,
     theta_max: f32,
     ctx: &DicingContext,
-) -> TriangleMesh {
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let r = f64::from(radius).abs();
     let (z0, z1) = (f64::from(z_min), f64::from(z_max));
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     if !finite(&[r, z0, z1]) || r == 0.0 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let (z0, z1) = (z0.clamp(-r, r), z1.clamp(-r, r));
     if z0 == z1 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let (phi0, phi1) = ((z0 / r).clamp(-1.0, 1.0).asin(), (z1 / r).clamp(-1.0, 1.0).asin());
     let dphi = phi1 - phi0;
@@ -443,7 +480,7 @@ pub(super) fn sphere(
         pole0,
         pole1,
     };
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let (t, p) = (u * theta, phi0 + v * dphi);
         let n = DVec3::new(p.cos() * t.cos(), p.cos() * t.sin(), p.sin());
         (n * r, n)
@@ -457,19 +494,20 @@ pub(super) fn cylinder(
     z_max: f32,
     theta_max: f32,
     ctx: &DicingContext,
-) -> TriangleMesh {
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let r = f64::from(radius).abs();
     let (z0, z1) = (f64::from(z_min), f64::from(z_max));
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     if !finite(&[r, z0, z1]) || r == 0.0 || z0 == z1 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let dz = z1 - z0;
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * (z0 + z1)), r.hypot(0.5 * dz));
     let grid = swept_grid(&rate, r, theta, dz.abs(), None);
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let t = u * theta;
         let n = DVec3::new(t.cos(), t.sin(), 0.0);
         (DVec3::new(r * n.x, r * n.y, z0 + v * dz), n)
@@ -477,20 +515,26 @@ pub(super) fn cylinder(
 }
 
 /// `Cone height radius thetamax`: base circle at z = 0, apex at (0, 0, height).
-pub(super) fn cone(height: f32, radius: f32, theta_max: f32, ctx: &DicingContext) -> TriangleMesh {
+pub(super) fn cone(
+    height: f32,
+    radius: f32,
+    theta_max: f32,
+    ctx: &DicingContext,
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let (h, r) = (f64::from(height), f64::from(radius).abs());
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     if !finite(&[h, r]) || r == 0.0 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * h), r.hypot(0.5 * h));
     // The outward normal is the gradient of √(x² + y²) − R·(1 − z/h), scaled by |h|.
     let up = if h < 0.0 { -1.0 } else { 1.0 };
     let apex = (DVec3::new(0.0, 0.0, h), DVec3::new(0.0, 0.0, up));
     let grid = swept_grid(&rate, r, theta, r.hypot(h), Some(apex));
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let t = u * theta;
         let (c, s) = (t.cos(), t.sin());
         let p = DVec3::new((1.0 - v) * r * c, (1.0 - v) * r * s, v * h);
@@ -504,18 +548,24 @@ pub(super) fn cone(height: f32, radius: f32, theta_max: f32, ctx: &DicingContext
 }
 
 /// `Disk height radius thetamax`: at z = height, normal +z.
-pub(super) fn disk(height: f32, radius: f32, theta_max: f32, ctx: &DicingContext) -> TriangleMesh {
+pub(super) fn disk(
+    height: f32,
+    radius: f32,
+    theta_max: f32,
+    ctx: &DicingContext,
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let (h, r) = (f64::from(height), f64::from(radius).abs());
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     if !finite(&[h, r]) || r == 0.0 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, h), r);
     let centre = (DVec3::new(0.0, 0.0, h), DVec3::Z);
     let grid = swept_grid(&rate, r, theta, r, Some(centre));
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let t = u * theta;
         (
             DVec3::new((1.0 - v) * r * t.cos(), (1.0 - v) * r * t.sin(), h),
@@ -532,17 +582,18 @@ pub(super) fn torus(
     phi_max: f32,
     theta_max: f32,
     ctx: &DicingContext,
-) -> TriangleMesh {
+    with_st: bool,
+) -> (TriangleMesh, Option<Vec<Vec2>>) {
     let (big, small) = (f64::from(major), f64::from(minor));
     let Some(theta) = sweep(theta_max) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     let Some(dphi) = sweep((f64::from(phi_max) - f64::from(phi_min)) as f32) else {
-        return TriangleMesh::default();
+        return Default::default();
     };
     let phi0 = f64::from(phi_min).to_radians();
     if !finite(&[big, small, phi0]) || small == 0.0 {
-        return TriangleMesh::default();
+        return Default::default();
     }
     let rate = Rate::new(ctx, DVec3::ZERO, big.abs() + small.abs());
     let (turn_u, turn_v) = (theta.abs() / TAU, dphi.abs() / TAU);
@@ -558,7 +609,7 @@ pub(super) fn torus(
         pole1: None,
     };
     let outward = small.signum();
-    tessellate_fitted(&grid, &rate, ctx, |u, v| {
+    tessellate_fitted_st(&grid, &rate, ctx, with_st, |u, v| {
         let (t, p) = (u * theta, phi0 + v * dphi);
         let ring = big + small * p.cos();
         let position = DVec3::new(ring * t.cos(), ring * t.sin(), small * p.sin());

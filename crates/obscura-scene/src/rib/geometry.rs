@@ -18,7 +18,14 @@ impl Reader {
     pub(super) fn add_object(&mut self, r: &Req<'_>, shape: Shape) {
         let material = self.current_material();
         let has_st = match &shape {
-            Shape::Patches(_) => true,
+            Shape::Patches(_)
+            | Shape::Sphere { .. }
+            | Shape::Cylinder { .. }
+            | Shape::Cone { .. }
+            | Shape::Disk { .. }
+            | Shape::Torus { .. }
+            | Shape::Hyperboloid { .. }
+            | Shape::Paraboloid { .. } => true,
             Shape::Mesh(m) => !m.uvs.is_empty(),
             _ => false,
         };
@@ -27,7 +34,7 @@ impl Reader {
                 r,
                 &format!("no st {}", r.name),
                 format!(
-                    "{}: the surface's texture needs texture coordinates, which the renderer has for patches and for polygons with \"st\" only; drawn in the surface's colour alone",
+                    "{}: the surface's texture needs texture coordinates, which the renderer has for patches, quadrics and polygons with \"st\" only; drawn in the surface's colour alone",
                     r.name
                 ),
             );

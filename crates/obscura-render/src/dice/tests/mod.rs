@@ -5,6 +5,7 @@
 mod bounds;
 mod fitted;
 mod quadric;
+mod st;
 mod subdivision;
 
 use std::collections::HashMap;

@@ -425,14 +425,23 @@ fn paintedplastic_finds_its_texture_through_the_searchpath_and_paints_the_diffus
         scene.local_shading[&c].ambient,
         AmbientReflectance::Color(Rgb::new(1.0, 0.5, 0.5))
     );
-    // A sphere has no texture coordinates: said once.
+    // A sphere has texture coordinates (its u and v); a polygon without "st" has none: said once.
+    assert!(
+        !scene.warnings.iter().any(|w| w.contains("texture coordinates")),
+        "{:?}",
+        scene.warnings
+    );
+    let text = "Option \"searchpath\" \"texture\" [\"maps\"]\nWorldBegin\n\
+                Surface \"paintedplastic\" \"texturename\" \"grid.tif\"\n\
+                Polygon \"P\" [0 0 0 1 0 0 1 1 0]\nPolygon \"P\" [0 0 0 1 0 0 1 1 0]\nWorldEnd\n";
+    let scene = super::super::parse_str(text, "t.rib", dir.path()).unwrap_or_else(|e| panic!("{e}"));
     let no_st: Vec<_> = scene
         .warnings
         .iter()
         .filter(|w| w.contains("texture coordinates"))
         .collect();
     assert_eq!(no_st.len(), 1, "{:?}", scene.warnings);
-    assert!(no_st[0].starts_with("t.rib:5: Sphere: "), "{no_st:?}");
+    assert!(no_st[0].starts_with("t.rib:4: Polygon: "), "{no_st:?}");
 }
 
 #[test]
