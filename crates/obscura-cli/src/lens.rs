@@ -7,10 +7,10 @@ use std::path::{Path, PathBuf};
 use crate::stdout::{out, outln};
 
 use clap::Args;
+use obscura_image::atomic::write_atomically;
 use obscura_projections::lens_system::glass::LAMBDA_D;
 use obscura_projections::lens_system::prescription::Prescription;
 use obscura_projections::lens_system::{LensSystem, Settings};
-use obscura_render::atomic::write_atomically;
 use obscura_sdk::{Format, ProjectionEnvironment};
 
 /// Arguments of `obscura lens`.

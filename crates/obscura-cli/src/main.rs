@@ -15,17 +15,17 @@ use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::shutter::ShutterDesc;
 use obscura_host::{CameraDesc, CameraStage};
+use obscura_image::raymap::{trace_ray_map, write_exr};
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all};
 use obscura_plugins::{builtin_registry, isolate};
-use obscura_render::integrator::PathOptions;
 use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
 use obscura_render::limits::{self, OutputKind};
-use obscura_render::raymap::{trace_ray_map, write_exr};
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_render::sequence::{FrameSpec, sequence_displays};
 use obscura_scene::rib::Frame;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
+use obscura_shading::integrator::PathOptions;
 
 mod animation;
 mod args;
@@ -127,7 +127,7 @@ struct RenderArgs {
     max_depth: u32,
     /// The most triangles the scene may dice into; beyond it the render stops with a message naming
     /// the primitive (about 150 bytes each with the BVH).
-    #[arg(long, default_value_t = obscura_render::dice::DEFAULT_SCENE_TRIANGLES, value_name = "N")]
+    #[arg(long, default_value_t = obscura_geometry::dice::DEFAULT_SCENE_TRIANGLES, value_name = "N")]
     max_triangles: u64,
     /// Seed of the sample sequences.
     #[arg(long, default_value_t = 0)]
@@ -285,7 +285,7 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     merge_param_args(&mut params, &a.params, factory.name(), factory.param_table())?;
     let cam = camera(a, calibration.as_ref());
     if a.samples > obscura_host::sampler::MAX_SAMPLES {
-        return Err(obscura_render::raymap::RayMapError::TooManySamples(a.samples).to_string());
+        return Err(obscura_image::raymap::RayMapError::TooManySamples(a.samples).to_string());
     }
     let source = size_source(a.format, a.calibration.as_deref(), "the default size");
     limits::check_image_size(cam.format.width, cam.format.height, &source).map_err(|e| e.to_string())?;

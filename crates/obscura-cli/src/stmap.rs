@@ -1,5 +1,5 @@
 //! `obscura stmap`: the ST-map between two projections (arguments only; the work is
-//! [`obscura_render::stmap`]).
+//! [`obscura_image::stmap`]).
 
 use std::path::{Path, PathBuf};
 
@@ -7,10 +7,10 @@ use crate::args::{load_calibration, parse_format};
 use crate::params::{merge_param_args, param_list};
 use crate::stdout::outln;
 use clap::Args;
+use obscura_image::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_render::job::CALIBRATED;
 use obscura_render::limits::{self, OutputKind};
-use obscura_render::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
 use obscura_sdk::{Format, ParamList, Registry};
 
 /// Arguments of `obscura stmap`.

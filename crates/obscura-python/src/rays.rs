@@ -10,10 +10,10 @@
 use glam::Affine3A;
 use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
 use obscura_calibration::PixelConvention;
+use obscura_geometry::motion::Motion;
+use obscura_geometry::motion::glam_from_sdk;
 use obscura_host::driver::Batch;
-use obscura_render::motion::Motion;
-use obscura_render::raymap::trace_ray_map;
-use obscura_render::render::glam_from_sdk;
+use obscura_image::raymap::trace_ray_map;
 use obscura_sdk::{Point2, RayGeometry, Rgb, Vec3};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

@@ -7,9 +7,9 @@ use std::time::Duration;
 
 use numpy::PyArrayMethods;
 use obscura_check::{CheckOptions, check_registered};
+use obscura_image::stmap::compute_stmap;
 use obscura_render::job::{self, load_scene};
 use obscura_render::render::{RenderOptions, prepare};
-use obscura_render::stmap::compute_stmap;
 use obscura_sdk::Format;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -169,7 +169,7 @@ pub fn render<'py>(
     let opts = RenderOptions {
         samples_per_pixel: spp,
         seed,
-        path: obscura_render::integrator::PathOptions {
+        path: obscura_shading::integrator::PathOptions {
             max_depth,
             ..Default::default()
         },

@@ -26,8 +26,8 @@ use std::sync::LazyLock;
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use glam::{Affine3A, Vec3A};
-use obscura_render::bvh::{Instance, MeshBvh, SceneAccel};
-use obscura_render::ray::{Ray, Tracer, TriangleMesh};
+use obscura_geometry::bvh::{Instance, MeshBvh, SceneAccel};
+use obscura_geometry::ray::{Ray, Tracer, TriangleMesh};
 use obscura_scene::Sides;
 
 const CGAL_DATA: &str = "/usr/share/doc/libcgal-dev/data.tar.gz";
@@ -50,7 +50,7 @@ fn main() {
     divan::main();
 }
 
-/// The box-test kernel `obscura_render::bvh` picks on this CPU.
+/// The box-test kernel `obscura_geometry::bvh` picks on this CPU.
 fn kernel() -> &'static str {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {

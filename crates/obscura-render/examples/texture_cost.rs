@@ -9,10 +9,10 @@ use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
 use obscura_host::CameraDesc;
-use obscura_render::material::textured::TextureLookup;
 use obscura_render::render::{Prepared, RenderOptions, prepare};
 use obscura_scene::Scene;
 use obscura_sdk::Format;
+use obscura_shading::material::textured::TextureLookup;
 
 /// Prepares `scene`: the prepared render and its setup time.
 fn prepared(scene: &Scene, base: &Path, opts: &RenderOptions) -> (Prepared, f64) {

@@ -28,38 +28,18 @@
 
 use std::time::Instant;
 
-use glam::{Affine3A, Vec3A};
+use glam::Vec3A;
 use obscura_host::Batch;
 use obscura_scene::Scene;
 use obscura_sdk::{Point2, Vec3};
 use rayon::prelude::*;
 
-use crate::motion::Motion;
-use crate::ray::Tracer;
-use crate::render::{Prepared, RenderError, camera_motion, normalise_time};
+use obscura_geometry::motion::Motion;
+use obscura_geometry::motion::{camera_motion, object_motion};
+use obscura_geometry::ray::Tracer;
+use obscura_image::samples::FlowPixel;
 
-/// One pixel's flow, as the EXR stores it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FlowPixel {
-    /// `flowForward.X`, `.Y`: toward shutter close or the next frame, pixels.
-    pub forward: [f32; 2],
-    /// `flowBackward.X`, `.Y`: toward the previous frame, pixels.
-    pub backward: [f32; 2],
-    /// `flowValid.forward`: 1 where `forward` is defined, else 0.
-    pub forward_valid: f32,
-    /// `flowValid.backward`: 1 where `backward` is defined, else 0.
-    pub backward_valid: f32,
-}
-
-impl FlowPixel {
-    /// No flow: zero vectors, not valid.
-    pub const NONE: FlowPixel = FlowPixel {
-        forward: [0.0; 2],
-        backward: [0.0; 2],
-        forward_valid: 0.0,
-        backward_valid: 0.0,
-    };
-}
+use crate::render::{Prepared, RenderError};
 
 /// The canonical time sample of shutter close: the largest `f32` below 1 (times stay in `[0, 1)`).
 pub const SHUTTER_CLOSE: f32 = 1.0 - f32::EPSILON / 2.0;
@@ -88,16 +68,12 @@ impl FlowTarget {
     /// [`RenderError::Camera`] when a camera transform is singular.
     pub fn new(scene: &Scene, time_sample: f32) -> Result<Self, RenderError> {
         let shutter = scene.camera.shutter;
-        let camera_to_world = camera_motion(scene.camera.environment().world_to_camera(), shutter)?;
+        let camera_to_world = camera_motion(scene.camera.environment().world_to_camera(), shutter)
+            .map_err(RenderError::Camera)?;
         let objects = scene
             .objects
             .iter()
-            .map(|o| {
-                let samples: Vec<(f32, Affine3A)> = (o.transform.samples.iter())
-                    .map(|(t, m)| (normalise_time(*t, shutter), Affine3A::from_mat4(*m)))
-                    .collect();
-                Motion::new(&samples)
-            })
+            .map(|o| Motion::new(&object_motion(&o.transform.samples, shutter)))
             .collect();
         Ok(FlowTarget {
             camera_to_world,

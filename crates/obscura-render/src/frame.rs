@@ -14,8 +14,8 @@ use obscura_scene::{Aov, Display, DisplayDriver, Scene};
 
 use crate::flow::{FlowTarget, SHUTTER_CLOSE};
 use crate::metadata::{camera_json, sidecar_path, write_json};
-use crate::output::OutputError;
 use crate::render::{Prepared, RenderError, RenderOutput};
+use obscura_image::output::OutputError;
 
 /// The scenes of the frames around this one, for flow across frames.
 #[derive(Debug, Clone, Copy, Default)]

@@ -14,10 +14,10 @@ use obscura_scene::rib::Frame;
 use obscura_scene::{Aov, Display, DisplayDriver, LoadError, Scene};
 use obscura_sdk::{DeclarationError, Format, ParamList};
 
-use crate::deep::{DeepCompression, write_deep_exr};
 use crate::limits::{self, LimitError, OutputKind};
-use crate::output::{OutputError, write_exr, write_png, write_tiff};
 use crate::render::RenderOutput;
+use obscura_image::deep::{DeepCompression, write_deep_exr};
+use obscura_image::output::{OutputError, write_exr, write_png, write_tiff};
 
 /// The built-in scene, rendered when no scene file is given.
 pub const DEFAULT_SCENE: &str = include_str!("../scenes/default.rib");
@@ -326,7 +326,7 @@ pub fn check_render(
         .map(|d| {
             d.aovs
                 .iter()
-                .map(|&a| crate::output::channel_names(a).len() as u64)
+                .map(|&a| obscura_image::output::channel_names(a).len() as u64)
                 .sum::<u64>()
         })
         .max()

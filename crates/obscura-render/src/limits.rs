@@ -19,7 +19,7 @@ use std::path::Path;
 
 use obscura_host::sampler::MAX_SAMPLES;
 
-use crate::atomic;
+use obscura_image::atomic;
 
 /// The longest image side, in pixels (OpenEXR stores coordinates as `i32`; 64 Ki is beyond any
 /// production plate).
@@ -36,9 +36,9 @@ pub const MAX_THREADS: usize = 1024;
 pub const MEMORY_LIMIT_VAR: &str = "OBSCURA_MEMORY_LIMIT";
 
 /// Bytes per pixel of the film (its accumulator).
-const FILM_BYTES: u64 = crate::film::Film::BYTES_PER_PIXEL as u64;
+const FILM_BYTES: u64 = obscura_image::film::Film::BYTES_PER_PIXEL as u64;
 /// Bytes per pixel of one resolved pixel at writing (every AOV).
-const RESOLVED_BYTES: u64 = std::mem::size_of::<crate::film::SampleValues>() as u64;
+const RESOLVED_BYTES: u64 = std::mem::size_of::<obscura_image::film::SampleValues>() as u64;
 /// Bytes per pixel of one deep sample (Z, ZBack, colour, alpha), times the samples per pixel.
 const DEEP_SAMPLE_BYTES: u64 = 32;
 /// Bytes per pixel of one ray-map layer (screen, ray, tint, time) and its 17 EXR channels, twice

@@ -41,8 +41,10 @@ use obscura_scene::Scene;
 use obscura_sdk::{DeepMetric, ParamValue};
 use serde_json::{Value, json};
 
-use crate::atomic::{AtomicWriteError, write_atomically};
-use crate::render::{Prepared, RenderError, camera_motion};
+use obscura_geometry::motion::camera_motion;
+use obscura_image::atomic::{AtomicWriteError, write_atomically};
+
+use crate::render::{Prepared, RenderError};
 
 /// The schema name written into every camera JSON.
 pub const SCHEMA: &str = "obscura-camera/1";
@@ -79,7 +81,8 @@ fn num(v: f64) -> Value {
 /// [`RenderError::Camera`] when a camera transform is singular.
 pub fn camera_json(scene: &Scene, prepared: &Prepared, frame: Option<i64>) -> Result<Value, RenderError> {
     let cam = &scene.camera;
-    let motion = camera_motion(cam.environment().world_to_camera(), cam.shutter)?;
+    let motion =
+        camera_motion(cam.environment().world_to_camera(), cam.shutter).map_err(RenderError::Camera)?;
     let w2c = |t: f32| Mat4::from(motion.object_to_world(t).inverse());
     let (open, close) = (w2c(0.0), w2c(1.0));
     let parameters: serde_json::Map<String, Value> = (scene.projection_params.entries().iter())

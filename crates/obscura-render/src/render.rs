@@ -36,19 +36,22 @@ use obscura_scene::Scene;
 use obscura_sdk::{DeepMetric, Matrix4, RayGeometry, Registry, Rgb};
 use rayon::prelude::*;
 
-use crate::bvh::{Instance, SceneAccel};
-use crate::deep::{DeepImage, DeepSample};
-use crate::dice::{DiceError, DicingContext, TriangleBudget, dice_with_st};
-use crate::film::{Film, FilmTile, SampleValues};
-use crate::filter::{Filter, FilterError};
-use crate::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
-use crate::light::emissive::{EmissiveTriangles, EmitterCandidate};
-use crate::light::{Lights, ShadeError};
-use crate::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
-use crate::motion::Motion;
-use crate::ray::{Ray, Tracer, TriangleMesh};
-use crate::rng::Rng;
-use crate::truth::{IdTable, Truth};
+use obscura_geometry::bvh::{Instance, SceneAccel};
+use obscura_geometry::dice::{DiceError, DicingContext, TriangleBudget, dice_with_st};
+use obscura_geometry::motion::Motion;
+use obscura_geometry::motion::{camera_motion, object_motion};
+use obscura_geometry::ray::{Ray, Tracer, TriangleMesh};
+use obscura_geometry::rng::Rng;
+use obscura_image::deep::{DeepImage, DeepSample};
+use obscura_image::film::{Film, FilmTile, SampleValues};
+use obscura_image::filter::{Filter, FilterError};
+use obscura_image::samples::Truth;
+use obscura_shading::integrator::{PathOptions, PathResult, RayCone, ShadingScene, trace_path_cone};
+use obscura_shading::light::emissive::{EmissiveTriangles, EmitterCandidate};
+use obscura_shading::light::{Lights, ShadeError};
+use obscura_shading::material::textured::{SurfaceAttributes, TextureLookup, Texturing};
+
+use crate::truth::IdTable;
 
 /// Why a render could not start.
 #[derive(Debug, thiserror::Error)]
@@ -91,7 +94,7 @@ pub struct RenderOptions {
     pub deep: bool,
     /// Tile edge in pixels.
     pub tile_size: u32,
-    /// The most triangles the scene may dice into (see [`crate::dice::TriangleBudget`]).
+    /// The most triangles the scene may dice into (see [`obscura_geometry::dice::TriangleBudget`]).
     pub max_triangles: u64,
     /// How textures are filtered (by the camera ray's footprint unless a comparison asks otherwise).
     pub texture_lookup: TextureLookup,
@@ -105,7 +108,7 @@ impl Default for RenderOptions {
             path: PathOptions::default(),
             deep: false,
             tile_size: 16,
-            max_triangles: crate::dice::DEFAULT_SCENE_TRIANGLES,
+            max_triangles: obscura_geometry::dice::DEFAULT_SCENE_TRIANGLES,
             texture_lookup: TextureLookup::Footprint,
         }
     }
@@ -193,12 +196,6 @@ impl std::fmt::Debug for Prepared {
     }
 }
 
-/// A glam (column-vector) matrix from an SDK (row-vector) one.
-#[must_use]
-pub fn glam_from_sdk(m: &Matrix4) -> Mat4 {
-    Mat4::from_cols_array_2d(&m.0)
-}
-
 /// Camera samples per batch handed to the camera stage: bounds memory at any sample count.
 const CHUNK_SAMPLES: usize = 4096;
 
@@ -217,7 +214,7 @@ struct CountingTracer<'a> {
 }
 
 impl Tracer for CountingTracer<'_> {
-    fn intersect(&self, ray: &Ray) -> Option<crate::ray::Hit> {
+    fn intersect(&self, ray: &Ray) -> Option<obscura_geometry::ray::Hit> {
         self.rays.fetch_add(1, Ordering::Relaxed);
         self.inner.intersect(ray)
     }
@@ -225,21 +222,9 @@ impl Tracer for CountingTracer<'_> {
         self.rays.fetch_add(1, Ordering::Relaxed);
         self.inner.occluded(ray)
     }
-    fn intersect_camera(&self, ray: &Ray) -> Option<crate::ray::Hit> {
+    fn intersect_camera(&self, ray: &Ray) -> Option<obscura_geometry::ray::Hit> {
         self.rays.fetch_add(1, Ordering::Relaxed);
         self.inner.intersect_camera(ray)
-    }
-}
-
-/// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, not clamped, so motion
-/// keys outside the shutter keep their place (a shutter shorter than the motion blurs less). For an
-/// instantaneous shutter, `t − open`: rays at time 0 then see the transform at the shutter time.
-pub(crate) fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
-    let span = shutter.1 - shutter.0;
-    if span > 0.0 {
-        (t - shutter.0) / span
-    } else {
-        t - shutter.0
     }
 }
 
@@ -275,7 +260,8 @@ pub fn prepare(
     }
     let props = *stage.properties();
     let shutter = scene.camera.shutter;
-    let camera_to_world = camera_motion(stage.environment().world_to_camera(), shutter)?;
+    let camera_to_world =
+        camera_motion(stage.environment().world_to_camera(), shutter).map_err(RenderError::Camera)?;
     let world_to_camera_open = camera_to_world.object_to_world(0.0).inverse();
     let (meshes, diced_st): (Vec<TriangleMesh>, Vec<Option<Vec<Vec2>>>) =
         dice_objects(scene, &props, world_to_camera_open, opts.max_triangles)?
@@ -287,12 +273,7 @@ pub fn prepare(
         .enumerate()
         .map(|(i, o)| Instance {
             mesh: i as u32,
-            transform: o
-                .transform
-                .samples
-                .iter()
-                .map(|(t, m)| (normalise_time(*t, shutter), Affine3A::from_mat4(*m)))
-                .collect(),
+            transform: object_motion(&o.transform.samples, shutter),
         })
         .collect();
     let (mut texturing, texture_warnings) = Texturing::new(
@@ -424,40 +405,6 @@ fn auto_camera_for(
     camera
 }
 
-/// Camera-to-world over the shutter (shutter-normalised time), from world-to-camera motion samples
-/// (the camera stage's, or another frame's).
-///
-/// # Errors
-/// [`RenderError::Camera`] when a sample's transform is singular or not finite.
-pub(crate) fn camera_motion(
-    world_to_camera: &[obscura_sdk::MotionSample],
-    shutter: (f32, f32),
-) -> Result<Motion, RenderError> {
-    let mut camera_to_world = Vec::new();
-    for s in world_to_camera {
-        let world_to_camera = glam_from_sdk(&s.world_to_camera);
-        let det = world_to_camera.determinant();
-        let inverse = world_to_camera.inverse();
-        if !world_to_camera.is_finite() || det == 0.0 || !det.is_finite() || !inverse.is_finite() {
-            let rows: Vec<String> = (0..4)
-                .map(|r| {
-                    let row = world_to_camera.row(r);
-                    format!("{} {} {} {}", row.x, row.y, row.z, row.w)
-                })
-                .collect();
-            return Err(RenderError::Camera(format!(
-                "the camera transform (world to camera) at shutter time {} cannot be inverted: determinant {det}, \
-                 rows [{}]; a Scale with a zero factor or a degenerate Transform/ConcatTransform before WorldBegin \
-                 collapses the camera",
-                s.time,
-                rows.join(" | ")
-            )));
-        }
-        camera_to_world.push((normalise_time(s.time, shutter), Affine3A::from_mat4(inverse)));
-    }
-    Ok(Motion::new(&camera_to_world))
-}
-
 /// Which sides camera rays see of each object. Curves and points face the camera by construction and
 /// blobs are diced without a defined winding, so they show both.
 fn camera_sides(scene: &Scene) -> Vec<obscura_scene::Sides> {
@@ -568,7 +515,7 @@ impl Prepared {
     }
 
     /// How many emissive triangles light sampling aims at (the emitters that neither move nor have
-    /// alpha cut-outs; see [`crate::light::emissive`]).
+    /// alpha cut-outs; see [`obscura_shading::light::emissive`]).
     #[must_use]
     pub fn emissive_triangles(&self) -> usize {
         self.shading.emissive.len()
@@ -1063,7 +1010,7 @@ impl<'a> TileIntegrator<'a> {
             albedo: Rgb::new(path.albedo.x, path.albedo.y, path.albedo.z),
             uv: path.uv,
             truth,
-            flow: crate::flow::FlowPixel::NONE,
+            flow: obscura_image::samples::FlowPixel::NONE,
         }
     }
 }
@@ -1138,17 +1085,6 @@ pub fn composite_deep(mut samples: Vec<DeepSample>, alive: u32) -> Vec<DeepSampl
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn motion_keys_outside_the_shutter_keep_their_place() {
-        // Regression: keys were clamped into [0, 1], so a shutter half as long as the motion blurred
-        // the whole move.
-        assert_eq!(normalise_time(1.0, (0.0, 0.5)), 2.0);
-        assert_eq!(normalise_time(-1.0, (0.0, 1.0)), -1.0);
-        assert_eq!(normalise_time(0.25, (0.0, 0.5)), 0.5);
-        // An instantaneous shutter at 0.3 sees the transform at scene time 0.3.
-        assert!((normalise_time(0.5, (0.3, 0.3)) - 0.2).abs() < 1e-6);
-    }
 
     #[test]
     fn deep_samples_composite_to_the_average_of_the_surviving_samples() {

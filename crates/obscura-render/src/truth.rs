@@ -11,42 +11,8 @@
 //! integers, stored as `UINT` EXR channels and never filtered: each pixel holds the IDs of the sample
 //! nearest its centre, the same sample as `Z`.
 
-use glam::Vec3;
 use obscura_scene::Scene;
 use serde_json::{Value, json};
-
-/// What one camera sample reports besides the beauty and RenderMan's own AOVs. A miss is
-/// [`Truth::EMPTY`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Truth {
-    /// Camera-space z of the hit at the ray's time (`cameraZ`); `+∞` for a miss.
-    pub camera_z: f32,
-    /// Distance from the camera ray's origin to the hit, in camera units (`distance`); `+∞` for a miss.
-    pub distance: f32,
-    /// The hit in camera space at the ray's time (`Pcamera`); 0 for a miss.
-    pub p_camera: Vec3,
-    /// The shading normal in camera space at the ray's time (`Ncamera`), unit; 0 for a miss.
-    pub n_camera: Vec3,
-    /// `objectId` (0: nothing hit).
-    pub object_id: u32,
-    /// `instanceId` (0: nothing hit).
-    pub instance_id: u32,
-    /// `materialId` (0: nothing hit).
-    pub material_id: u32,
-}
-
-impl Truth {
-    /// A miss: infinite depths, zero vectors, ID 0.
-    pub const EMPTY: Truth = Truth {
-        camera_z: f32::INFINITY,
-        distance: f32::INFINITY,
-        p_camera: Vec3::ZERO,
-        n_camera: Vec3::ZERO,
-        object_id: 0,
-        instance_id: 0,
-        material_id: 0,
-    };
-}
 
 /// The scene's IDs and names (see the module documentation).
 #[derive(Debug, Clone, PartialEq, Default)]

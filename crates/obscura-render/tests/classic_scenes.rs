@@ -65,7 +65,7 @@ const TEXELS: [[[u8; 3]; 4]; 2] = [
 /// Renders `rib` (read as `dir/t.rib`) at 16×8 with point lookups (the nearest texel, unfiltered):
 /// the albedo of every pixel, and the renderer's texture warnings.
 fn painted_albedo(dir: &Path, rib: &str) -> (Vec<[f32; 3]>, Vec<String>) {
-    use obscura_render::material::textured::TextureLookup;
+    use obscura_shading::material::textured::TextureLookup;
     let scene = parse_str(rib, &dir.join("t.rib").display().to_string(), dir).expect("reads");
     let opts = RenderOptions {
         samples_per_pixel: Some(4),

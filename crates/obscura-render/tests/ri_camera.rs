@@ -4,8 +4,8 @@
 use std::path::Path;
 
 use obscura_host::CameraStage;
+use obscura_image::raymap::trace_ray_map;
 use obscura_plugins::builtin_registry;
-use obscura_render::raymap::trace_ray_map;
 use obscura_scene::rib::parse_str;
 
 /// `DepthOfField fstop focallength focaldistance` is the thin lens: every sampled ray leaves the lens

@@ -5,8 +5,8 @@
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
+use obscura_image::film::Film;
 use obscura_plugins::builtin_registry;
-use obscura_render::film::Film;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_scene::rib::parse_str;
 

@@ -12,8 +12,6 @@ use std::sync::atomic::AtomicBool;
 use glam::{Mat4, Vec2, Vec3};
 use obscura_host::{Batch, CameraDesc, CameraStage};
 use obscura_plugins::builtin_registry;
-use obscura_render::integrator::PathOptions;
-use obscura_render::material::textured::TextureLookup;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_scene::texture::{ColorSpace, ImageSource, SurfaceMaps, TextureDesc, TextureSlot, Wrap};
 use obscura_scene::{Material, Mesh, MotionTransform, Object, Scene, Shape};
@@ -21,6 +19,8 @@ use obscura_sdk::{
     Format, ParamDecl, ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
     ProjectionFactory, ProjectionProperty, PropertyValue, Registry,
 };
+use obscura_shading::integrator::PathOptions;
+use obscura_shading::material::textured::TextureLookup;
 
 /// Half-width and depth of the plane `y = −1` (world = camera space: the camera looks down +Z).
 const HALF_WIDTH: f32 = 400.0;

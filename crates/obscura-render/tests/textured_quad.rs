@@ -9,9 +9,9 @@ use std::sync::atomic::AtomicBool;
 
 use obscura_host::CameraDesc;
 use obscura_plugins::builtin_registry;
-use obscura_render::integrator::PathOptions;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_sdk::Format;
+use obscura_shading::integrator::PathOptions;
 
 /// The texels, sRGB codes, row by row from the top.
 const TEXELS: [[[u8; 3]; 4]; 2] = [

@@ -23,7 +23,7 @@ fn pixel_value(x: u32, y: u32) -> SampleValues {
         camera_direction: Vec3::new(0.1, 0.2, 0.974_679_4),
         albedo: Rgb::new(0.01 * fx, 0.5, 0.02 * fy),
         uv: glam::Vec2::new(0.25 * fx, -fy),
-        truth: crate::truth::Truth {
+        truth: crate::samples::Truth {
             camera_z: 2.0 + fx,
             distance: 3.0 + fy,
             p_camera: Vec3::new(fx, fy, 7.0),
@@ -32,7 +32,7 @@ fn pixel_value(x: u32, y: u32) -> SampleValues {
             instance_id: 100 + y,
             material_id: 4_000_000_000,
         },
-        flow: crate::flow::FlowPixel::NONE,
+        flow: crate::samples::FlowPixel::NONE,
     }
 }
 
@@ -48,7 +48,7 @@ fn ground_truth_channels_are_named_and_ids_are_exact_integers() {
     };
     let mut f = film(5, 3, crop);
     let flow = (0..15)
-        .map(|i| crate::flow::FlowPixel {
+        .map(|i| crate::samples::FlowPixel {
             forward: [i as f32, -0.5],
             backward: [0.25, i as f32],
             forward_valid: 1.0,

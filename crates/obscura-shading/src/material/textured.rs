@@ -21,9 +21,9 @@ use obscura_scene::Material;
 use obscura_scene::texture::{AlphaMode, ImageSource, SurfaceMaps, TextureDesc, TextureSlot};
 use obscura_sdk::Rgb;
 
-use crate::ray::Hit;
 use crate::texture::footprint::{UvMap, cone_footprint};
 use crate::texture::{Footprint, Texture, image};
+use obscura_geometry::ray::Hit;
 
 /// How texture lookups are filtered.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -68,11 +68,11 @@ impl SurfaceAttributes {
     }
 
     /// The attributes of a diced primitive from its vertices' RenderMan texture coordinates
-    /// `(s, t)` ([`crate::dice::dice_with_st`]): one coordinate set `(s, 1 − t)`, the convention of
+    /// `(s, t)` ([`obscura_geometry::dice::dice_with_st`]): one coordinate set `(s, 1 − t)`, the convention of
     /// every reader's texture coordinates (a RIB polygon's `"st"` is read the same way). `None`
     /// unless there is one coordinate per vertex.
     #[must_use]
-    pub fn of_diced(mesh: &crate::ray::TriangleMesh, st: &[Vec2]) -> Option<Self> {
+    pub fn of_diced(mesh: &obscura_geometry::ray::TriangleMesh, st: &[Vec2]) -> Option<Self> {
         (st.len() == mesh.positions.len()).then(|| SurfaceAttributes {
             triangles: mesh.triangles.clone(),
             uvs: vec![st.iter().map(|p| Vec2::new(p.x, 1.0 - p.y)).collect()],

@@ -1,7 +1,7 @@
 //! Tests of [`super`] (material.rs).
 
 use super::*;
-use crate::rng::Rng;
+use obscura_geometry::rng::Rng;
 
 /// Uniform over the upper hemisphere, `z ≥ z_min`.
 fn random_dir_upper(rng: &mut Rng, z_min: f32) -> Vec3A {

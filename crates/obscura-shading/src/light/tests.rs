@@ -3,8 +3,8 @@
 use super::*;
 use crate::integrator::power_heuristic;
 use crate::material::cosine_hemisphere;
-use crate::rng::Rng;
 use glam::{Quat, Vec3};
+use obscura_geometry::rng::Rng;
 use obscura_sdk::Rgb;
 
 fn prepare(lights: Vec<Light>) -> Lights {

@@ -5,10 +5,10 @@ use obscura_scene::Material;
 use obscura_sdk::Rgb;
 
 use super::*;
-use crate::bvh::{Instance, SceneAccel};
 use crate::integrator::{PathOptions, ShadingScene, trace_path};
-use crate::ray::{Ray, Tracer};
-use crate::rng::Rng;
+use obscura_geometry::bvh::{Instance, SceneAccel};
+use obscura_geometry::ray::{Ray, Tracer};
+use obscura_geometry::rng::Rng;
 
 /// Radiance `L` of the emitter; albedo `ρ` of the plane; the emitter's half-side `a` and height `h`.
 const L: f32 = 2.0;

@@ -20,8 +20,8 @@ use obscura_scene::Exposure;
 use obscura_sdk::Rgb;
 
 use crate::filter::Filter;
-use crate::flow::FlowPixel;
-use crate::truth::Truth;
+use crate::samples::FlowPixel;
+use crate::samples::Truth;
 
 /// What one camera sample contributes. Ci already multiplied by the projection's tint (the renderer
 /// does that); everything else untinted.

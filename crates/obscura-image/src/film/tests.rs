@@ -45,12 +45,12 @@ fn hit(c: f32, z: f32) -> SampleValues {
         n: Vec3::new(0.0, 0.0, -1.0),
         p: Vec3::new(c, z, 1.0),
         camera_direction: Vec3::Z,
-        truth: crate::truth::Truth {
+        truth: crate::samples::Truth {
             camera_z: z,
             instance_id: (c * 1000.0) as u32,
-            ..crate::truth::Truth::EMPTY
+            ..crate::samples::Truth::EMPTY
         },
-        flow: crate::flow::FlowPixel::NONE,
+        flow: crate::samples::FlowPixel::NONE,
         ..SampleValues::EMPTY
     }
 }

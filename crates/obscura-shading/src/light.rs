@@ -55,7 +55,7 @@ mod classic;
 
 use self::classic::{PointLight, SpotBeam};
 use crate::material::{Frame, color, sanitize};
-use crate::ray::Ray;
+use obscura_geometry::ray::Ray;
 
 pub mod emissive;
 

@@ -8,7 +8,8 @@
 //! range the nearest sample holds (a NaN time takes the first sample). A single sample is used
 //! exactly as given, with its inverse computed once.
 
-use glam::{Affine3A, Quat, Vec3A};
+use glam::{Affine3A, Mat4, Quat, Vec3A};
+use obscura_sdk::{Matrix4, MotionSample};
 
 /// One decomposed motion sample.
 #[derive(Debug, Clone, Copy)]
@@ -105,12 +106,71 @@ impl Motion {
 
     /// The inverse transform at `time` (computed once for a static transform).
     #[inline]
-    pub(crate) fn world_to_object(&self, time: f32) -> Affine3A {
+    pub fn world_to_object(&self, time: f32) -> Affine3A {
         match self {
             Self::Static { to_object, .. } => *to_object,
             Self::Moving { .. } => self.object_to_world(time).inverse(),
         }
     }
+}
+
+/// A glam (column-vector) matrix from an SDK (row-vector) one.
+#[must_use]
+pub fn glam_from_sdk(m: &Matrix4) -> Mat4 {
+    Mat4::from_cols_array_2d(&m.0)
+}
+
+/// Maps scene times to shutter-normalised time: `(t − open)/(close − open)`, not clamped, so motion
+/// keys outside the shutter keep their place (a shutter shorter than the motion blurs less). For an
+/// instantaneous shutter, `t − open`: rays at time 0 then see the transform at the shutter time.
+#[must_use]
+pub fn normalise_time(t: f32, shutter: (f32, f32)) -> f32 {
+    let span = shutter.1 - shutter.0;
+    if span > 0.0 {
+        (t - shutter.0) / span
+    } else {
+        t - shutter.0
+    }
+}
+
+/// An object's motion over the shutter, from its transform samples in scene time.
+#[must_use]
+pub fn object_motion(samples: &[(f32, Mat4)], shutter: (f32, f32)) -> Vec<(f32, Affine3A)> {
+    (samples.iter())
+        .map(|(t, m)| (normalise_time(*t, shutter), Affine3A::from_mat4(*m)))
+        .collect()
+}
+
+/// Camera-to-world over the shutter (shutter-normalised time), from world-to-camera motion samples
+/// (the camera stage's, or another frame's).
+///
+/// # Errors
+/// A message naming the shutter time and the rows when a sample's transform is singular or not
+/// finite (the renderer reports it as a camera error).
+pub fn camera_motion(world_to_camera: &[MotionSample], shutter: (f32, f32)) -> Result<Motion, String> {
+    let mut camera_to_world = Vec::new();
+    for s in world_to_camera {
+        let world_to_camera = glam_from_sdk(&s.world_to_camera);
+        let det = world_to_camera.determinant();
+        let inverse = world_to_camera.inverse();
+        if !world_to_camera.is_finite() || det == 0.0 || !det.is_finite() || !inverse.is_finite() {
+            let rows: Vec<String> = (0..4)
+                .map(|r| {
+                    let row = world_to_camera.row(r);
+                    format!("{} {} {} {}", row.x, row.y, row.z, row.w)
+                })
+                .collect();
+            return Err(format!(
+                "the camera transform (world to camera) at shutter time {} cannot be inverted: determinant {det}, \
+                 rows [{}]; a Scale with a zero factor or a degenerate Transform/ConcatTransform before WorldBegin \
+                 collapses the camera",
+                s.time,
+                rows.join(" | ")
+            ));
+        }
+        camera_to_world.push((normalise_time(s.time, shutter), Affine3A::from_mat4(inverse)));
+    }
+    Ok(Motion::new(&camera_to_world))
 }
 
 /// The interpolation against an independent model; that model, `rotating_transform`, is
@@ -142,5 +202,16 @@ pub(crate) mod tests {
                 "time {time}: {got:?}"
             );
         }
+    }
+
+    #[test]
+    fn motion_keys_outside_the_shutter_keep_their_place() {
+        // Regression: keys were clamped into [0, 1], so a shutter half as long as the motion blurred
+        // the whole move.
+        assert_eq!(normalise_time(1.0, (0.0, 0.5)), 2.0);
+        assert_eq!(normalise_time(-1.0, (0.0, 1.0)), -1.0);
+        assert_eq!(normalise_time(0.25, (0.0, 0.5)), 0.5);
+        // An instantaneous shutter at 0.3 sees the transform at scene time 0.3.
+        assert!((normalise_time(0.5, (0.3, 0.3)) - 0.2).abs() < 1e-6);
     }
 }

@@ -47,8 +47,8 @@ use crate::light::Lights;
 use crate::light::emissive::EmissiveTriangles;
 use crate::material::textured::Texturing;
 use crate::material::{Bsdf, sanitize};
-use crate::ray::{Hit, Ray, Tracer};
-use crate::rng::Rng;
+use obscura_geometry::ray::{Hit, Ray, Tracer};
+use obscura_geometry::rng::Rng;
 
 /// What [`trace_path`] shades against: materials, which instance uses which, and the lights.
 #[derive(Debug, Clone, Default)]

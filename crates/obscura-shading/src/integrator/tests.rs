@@ -1,8 +1,8 @@
 //! Tests of [`super`] (integrator.rs).
 
 use super::*;
-use crate::rng::Rng;
 use glam::{Mat4, Quat, Vec3};
+use obscura_geometry::rng::Rng;
 use obscura_scene::Light;
 use obscura_sdk::Rgb;
 use proptest::prelude::{Just, ProptestConfig, Strategy, any, prop, prop_assert, prop_oneof, proptest};

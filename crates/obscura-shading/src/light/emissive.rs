@@ -26,7 +26,7 @@ use obscura_host::distribution::Distribution1D;
 use obscura_scene::Material;
 
 use crate::material::textured::Texturing;
-use crate::ray::{Hit, TriangleMesh};
+use obscura_geometry::ray::{Hit, TriangleMesh};
 
 /// One emissive triangle, world space.
 #[derive(Debug, Clone, Copy)]

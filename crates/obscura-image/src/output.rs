@@ -165,7 +165,7 @@ const RESERVED: [&str; 16] = [
 ];
 
 /// The EXR channel names of an AOV, in RenderMan's and Nuke's spelling.
-pub(crate) fn channel_names(aov: Aov) -> &'static [&'static str] {
+pub fn channel_names(aov: Aov) -> &'static [&'static str] {
     match aov {
         Aov::Ci => &["R", "G", "B"],
         Aov::Alpha => &["A"],
