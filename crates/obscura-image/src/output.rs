@@ -12,7 +12,7 @@ use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Compression, Encoding, FlatSamples, Image, IntegerBounds, Layer,
     LayerAttributes, LineOrder, Text, Vec2, WritableImage, f16,
 };
-use obscura_scene::Aov;
+use obscura_scene::{Aov, AovKind};
 
 use crate::film::{Film, SampleValues};
 
@@ -164,30 +164,6 @@ const RESERVED: [&str; 16] = [
     "multiView",
 ];
 
-/// The EXR channel names of an AOV, in RenderMan's and Nuke's spelling.
-pub fn channel_names(aov: Aov) -> &'static [&'static str] {
-    match aov {
-        Aov::Ci => &["R", "G", "B"],
-        Aov::Alpha => &["A"],
-        Aov::Z => &["Z"],
-        Aov::N => &["N.X", "N.Y", "N.Z"],
-        Aov::P => &["P.X", "P.Y", "P.Z"],
-        Aov::CameraDirection => &["cameraDirection.X", "cameraDirection.Y", "cameraDirection.Z"],
-        Aov::Albedo => &["albedo.R", "albedo.G", "albedo.B"],
-        Aov::Uv => &["uv.X", "uv.Y"],
-        Aov::CameraZ => &["cameraZ"],
-        Aov::Distance => &["distance"],
-        Aov::PCamera => &["Pcamera.X", "Pcamera.Y", "Pcamera.Z"],
-        Aov::NCamera => &["Ncamera.X", "Ncamera.Y", "Ncamera.Z"],
-        Aov::ObjectId => &["objectId"],
-        Aov::InstanceId => &["instanceId"],
-        Aov::MaterialId => &["materialId"],
-        Aov::FlowForward => &["flowForward.X", "flowForward.Y"],
-        Aov::FlowBackward => &["flowBackward.X", "flowBackward.Y"],
-        Aov::FlowValid => &["flowValid.forward", "flowValid.backward"],
-    }
-}
-
 /// The integer value of an ID AOV in a resolved pixel; `None` for the other AOVs.
 fn id_component(v: &SampleValues, aov: Aov) -> Option<u32> {
     match aov {
@@ -299,9 +275,9 @@ pub fn write_exr(
     let pixels = resolve(film);
     let mut channels: Vec<AnyChannel<FlatSamples>> = Vec::new();
     for aov in unique {
-        for (k, name) in channel_names(aov).iter().enumerate() {
+        for (k, name) in aov.channels().iter().enumerate() {
             let values = pixels.iter().map(|v| component(v, aov, k));
-            let samples = if id_component(&SampleValues::EMPTY, aov).is_some() {
+            let samples = if aov.spec().kind == AovKind::Id {
                 FlatSamples::U32(pixels.iter().filter_map(|v| id_component(v, aov)).collect())
             } else if half {
                 FlatSamples::F16(values.map(f16::from_f32).collect())

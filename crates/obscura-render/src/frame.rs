@@ -57,9 +57,9 @@ pub fn without_backward_flow(displays: &[Display], has_previous: bool) -> Vec<Di
     out
 }
 
-/// Runs the flow pass into `out`'s film when a display asks for flow: forward to the next frame's
-/// shutter open (or this frame's close), backward to the previous frame's open when there is one.
-/// Returns the pass's warnings (a projection without `unproject`).
+/// Runs the flow pass into `out`'s film: forward to the next frame's shutter open (or this frame's
+/// close), backward to the previous frame's open when there is one. Returns the pass's warnings (a
+/// projection without `unproject`).
 ///
 /// # Errors
 /// [`RenderError::Camera`] when a neighbour's camera transform is singular.
@@ -67,12 +67,8 @@ pub fn run_flow(
     scene: &Scene,
     prepared: &Prepared,
     out: &mut RenderOutput,
-    displays: &[Display],
     neighbours: Neighbours<'_>,
 ) -> Result<Vec<String>, RenderError> {
-    if !wants_flow(displays) {
-        return Ok(Vec::new());
-    }
     let forward = match neighbours.next {
         Some(next) => FlowTarget::new(next, 0.0)?,
         None => FlowTarget::new(scene, SHUTTER_CLOSE)?,

@@ -326,7 +326,7 @@ pub fn check_render(
         .map(|d| {
             d.aovs
                 .iter()
-                .map(|&a| obscura_image::output::channel_names(a).len() as u64)
+                .map(|&a| a.channels().len() as u64)
                 .sum::<u64>()
         })
         .max()

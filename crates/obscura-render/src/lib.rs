@@ -11,7 +11,8 @@
 //! | [`flow`] | optical flow through the projection's `unproject` |
 //! | [`truth`] | the scene's object, instance and material IDs |
 //! | [`metadata`], [`frame`] | per-frame camera JSON and ID sidecar; complete frames |
-//! | [`job`] | one `obscura render` from files to files |
+//! | [`pipeline`] | one frame from a scene to its files, for every front end, with a [`pipeline::Reporter`] |
+//! | [`job`] | what `obscura render` changes in a scene, its displays, the checks before any work |
 //! | [`limits`] | image size, memory, threads, samples and output files, checked before any work |
 //! | [`sequence`] | frame selections (`--frames 1-24`) and each frame's output path |
 
@@ -20,6 +21,7 @@ pub mod frame;
 pub mod job;
 pub mod limits;
 pub mod metadata;
+pub mod pipeline;
 pub mod render;
 pub mod sequence;
 pub mod truth;

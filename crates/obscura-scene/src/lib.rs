@@ -8,15 +8,20 @@
 //! RenderMan's row vectors is therefore read with `Mat4::from_cols_array(&rib16)` — the same sixteen
 //! numbers. Times in motion samples are in the scene's own units (those of `Shutter`); the renderer
 //! normalises them to the shutter interval.
+//!
+//! Every reader is opened frame by frame through [`source::SceneSource`] ([`source::open`]), and every
+//! output a display can ask for is a row of the AOV table ([`aov::AOVS`]).
 
 #![forbid(unsafe_code)]
 
+pub mod aov;
 pub mod classic;
 pub mod framing;
 pub mod gltf_scene;
 pub mod interior;
 pub mod obj;
 pub mod rib;
+pub mod source;
 pub mod texture;
 pub mod types;
 pub mod visibility;
@@ -24,6 +29,7 @@ pub mod visibility;
 #[cfg(test)]
 mod test_support;
 
+pub use aov::{AOVS, Aov, AovGroup, AovKind, AovSource, AovSpec};
 pub use classic::*;
 pub use types::*;
 pub use visibility::{ClipPlane, ClipSpace, Exposure, Sides, Visibility};
@@ -47,6 +53,9 @@ pub enum LoadError {
     /// The extension names no format we read.
     #[error("{0}: unknown scene format; expected .rib (.ribz, .rib.gz), .gltf, .glb or .obj")]
     Format(String),
+    /// A frame the file does not hold was asked for.
+    #[error("the scene holds no frame {0}")]
+    NoFrame(u32),
 }
 
 /// Reads a scene file as the images it holds: a RIB file's worlds, each with its frame (see

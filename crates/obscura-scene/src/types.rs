@@ -8,6 +8,7 @@ use glam::{Mat4, Vec2, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::{ParamList, Rgb};
 
+use crate::aov::Aov;
 use crate::classic::{BezierPatch, Blobby, Curves, NuPatch, Points};
 use crate::texture::{SurfaceMaps, TextureDesc};
 use crate::visibility::{ClipPlane, Exposure, Sides, Visibility};
@@ -401,105 +402,6 @@ pub enum DisplayDriver {
     /// `"tiff"` (and RenderMan's `"file"`, `"zfile"`, `"shadow"`): baseline TIFF, 8-bit colour or
     /// 32-bit float depth.
     Tiff,
-}
-
-/// One AOV a display writes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Aov {
-    /// Beauty, RGB (`rgb`, `Ci`).
-    Ci,
-    /// Coverage (`a`).
-    Alpha,
-    /// Depth in the projection's deep metric (`z`).
-    Z,
-    /// Shading normal, world space (`N`).
-    N,
-    /// Hit position, world space (`P`).
-    P,
-    /// The camera ray's direction, world space (`cameraDirection`).
-    CameraDirection,
-    /// Camera-space z of the hit, whatever the projection's deep metric (`cameraZ`).
-    CameraZ,
-    /// Distance from the camera ray's origin to the hit, along the ray (`distance`).
-    Distance,
-    /// Hit position, camera space at the ray's time (`Pcamera`).
-    PCamera,
-    /// Shading normal, camera space at the ray's time (`Ncamera`).
-    NCamera,
-    /// The hit object's ID, an integer (`objectId`; 0 = nothing hit).
-    ObjectId,
-    /// The hit instance's ID, an integer (`instanceId`; 0 = nothing hit).
-    InstanceId,
-    /// The hit material's ID, an integer (`materialId`; 0 = nothing hit).
-    MaterialId,
-    /// Raster displacement toward shutter close or the next frame (`flowForward`), pixels.
-    FlowForward,
-    /// Raster displacement toward the previous frame (`flowBackward`), pixels.
-    FlowBackward,
-    /// Where each flow is defined (`flowValid`: `.forward`, `.backward`, 1 or 0).
-    FlowValid,
-    /// The textured base colour at the first hit, linear RGB (`albedo`).
-    Albedo,
-    /// The first texture coordinate set at the first hit, as stored in the file (`uv`).
-    Uv,
-}
-
-impl Aov {
-    /// The ground-truth AOVs (everything but the beauty, alpha, `Z`, `N`, `P` and `cameraDirection`),
-    /// in the order `--aov all` adds them.
-    pub const GROUND_TRUTH: [Aov; 10] = [
-        Aov::CameraZ,
-        Aov::Distance,
-        Aov::PCamera,
-        Aov::NCamera,
-        Aov::ObjectId,
-        Aov::InstanceId,
-        Aov::MaterialId,
-        Aov::FlowForward,
-        Aov::FlowBackward,
-        Aov::FlowValid,
-    ];
-
-    /// The texture AOVs (issue 13), which `--aov all` adds after the ground-truth ones.
-    pub const TEXTURE: [Aov; 2] = [Aov::Albedo, Aov::Uv];
-
-    /// The name a `Display` channel list and `--aov` use for this AOV.
-    #[must_use]
-    pub fn name(self) -> &'static str {
-        match self {
-            Aov::Ci => "Ci",
-            Aov::Alpha => "a",
-            Aov::Z => "z",
-            Aov::N => "N",
-            Aov::P => "P",
-            Aov::CameraDirection => "cameraDirection",
-            Aov::CameraZ => "cameraZ",
-            Aov::Distance => "distance",
-            Aov::PCamera => "Pcamera",
-            Aov::NCamera => "Ncamera",
-            Aov::ObjectId => "objectId",
-            Aov::InstanceId => "instanceId",
-            Aov::MaterialId => "materialId",
-            Aov::FlowForward => "flowForward",
-            Aov::FlowBackward => "flowBackward",
-            Aov::FlowValid => "flowValid",
-            Aov::Albedo => "albedo",
-            Aov::Uv => "uv",
-        }
-    }
-
-    /// The AOV a single name means (the names of [`Aov::name`]), `None` for anything else.
-    #[must_use]
-    pub fn from_name(name: &str) -> Option<Aov> {
-        const RENDERMAN: [Aov; 6] = [Aov::Ci, Aov::Alpha, Aov::Z, Aov::N, Aov::P, Aov::CameraDirection];
-        (RENDERMAN.into_iter().chain(Aov::GROUND_TRUTH).chain(Aov::TEXTURE)).find(|a| a.name() == name)
-    }
-
-    /// True for the flow AOVs, which need the flow pass.
-    #[must_use]
-    pub fn is_flow(self) -> bool {
-        matches!(self, Aov::FlowForward | Aov::FlowBackward | Aov::FlowValid)
-    }
 }
 
 /// `Display "file" "driver" "channels"`.

@@ -56,7 +56,8 @@ fn ground_truth_channels_are_named_and_ids_are_exact_integers() {
         })
         .collect();
     f.set_flow(flow);
-    write_exr(&path, &f, &Aov::GROUND_TRUTH, true, 1.0, &[]).unwrap();
+    let ground_truth: Vec<Aov> = Aov::all_extra().filter(|a| a.is_ground_truth()).collect();
+    write_exr(&path, &f, &ground_truth, true, 1.0, &[]).unwrap();
     let image = read_back(&path);
     let layer = &image.layer_data;
     let mut names: Vec<String> = layer

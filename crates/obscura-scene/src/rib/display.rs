@@ -24,35 +24,19 @@ use std::path::{Path, PathBuf};
 use super::lex::Value;
 use super::request::{Req, get_string};
 use super::{Reader, RibError};
-use crate::types::{Aov, Display, DisplayDriver};
+use crate::aov::{AOVS, Aov};
+use crate::types::{Display, DisplayDriver};
 
-/// The names a `Display` mode may use.
-const CHANNELS: [(&str, &[Aov]); 25] = [
+/// RenderMan's mode words and depth aliases a `Display` mode may use beside the names of the AOV
+/// table ([`AOVS`]).
+const RIB_CHANNELS: [(&str, &[Aov]); 7] = [
     ("rgb", &[Aov::Ci]),
     ("rgba", &[Aov::Ci, Aov::Alpha]),
     ("rgbz", &[Aov::Ci, Aov::Z]),
     ("rgbaz", &[Aov::Ci, Aov::Alpha, Aov::Z]),
     ("az", &[Aov::Alpha, Aov::Z]),
-    ("Ci", &[Aov::Ci]),
-    ("a", &[Aov::Alpha]),
-    ("z", &[Aov::Z]),
     ("Z", &[Aov::Z]),
-    ("N", &[Aov::N]),
-    ("P", &[Aov::P]),
-    ("cameraDirection", &[Aov::CameraDirection]),
     ("depth", &[Aov::Z]),
-    ("cameraZ", &[Aov::CameraZ]),
-    ("distance", &[Aov::Distance]),
-    ("Pcamera", &[Aov::PCamera]),
-    ("Ncamera", &[Aov::NCamera]),
-    ("objectId", &[Aov::ObjectId]),
-    ("instanceId", &[Aov::InstanceId]),
-    ("materialId", &[Aov::MaterialId]),
-    ("flowForward", &[Aov::FlowForward]),
-    ("flowBackward", &[Aov::FlowBackward]),
-    ("flowValid", &[Aov::FlowValid]),
-    ("albedo", &[Aov::Albedo]),
-    ("uv", &[Aov::Uv]),
 ];
 
 /// Drivers that show the image in a window.
@@ -229,16 +213,19 @@ impl Reader {
         for channel in mode.split(',').map(str::trim).filter(|c| !c.is_empty()) {
             // "color Ci", "varying float s": the AOV's name is the last word.
             let bare = channel.split_whitespace().last().unwrap_or(channel);
-            match CHANNELS.iter().find(|(n, _)| *n == bare) {
-                Some((_, list)) => {
-                    for aov in list.iter() {
+            let table = Aov::from_name(bare).map(|a| std::slice::from_ref(&a.spec().aov));
+            match RIB_CHANNELS.iter().find(|(n, _)| *n == bare).map(|(_, list)| *list).or(table) {
+                Some(list) => {
+                    for aov in list {
                         if !aovs.contains(aov) {
                             aovs.push(*aov);
                         }
                     }
                 }
                 None => {
-                    let known: Vec<&str> = CHANNELS.iter().map(|(n, _)| *n).collect();
+                    let known: Vec<&str> = (RIB_CHANNELS.iter().map(|(n, _)| *n))
+                        .chain(AOVS.iter().map(|s| s.name))
+                        .collect();
                     self.warn(
                         r,
                         format!(

@@ -7,7 +7,8 @@ use obscura_sdk::{Format, ParamType, ParamValue, ScreenWindow};
 
 use super::*;
 use crate::rib::options::FILTERS;
-use crate::types::{Aov, Display, DisplayDriver, FilterKind, PixelFilter};
+use crate::aov::Aov;
+use crate::types::{Display, DisplayDriver, FilterKind, PixelFilter};
 
 #[test]
 fn default_scene_is_640_by_480() {
@@ -238,7 +239,7 @@ fn display_leaves_out_an_unknown_aov_with_a_warning_naming_it() {
         scene.warnings,
         [
             "t.rib:2: Display \"a.exr\": AOV \"Cs\" is not produced by this renderer, left out (known: rgb, \
-          rgba, rgbz, rgbaz, az, Ci, a, z, Z, N, P, cameraDirection, depth, cameraZ, distance, Pcamera, Ncamera, \
+          rgba, rgbz, rgbaz, az, Z, depth, Ci, a, z, N, P, cameraDirection, cameraZ, distance, Pcamera, Ncamera, \
           objectId, instanceId, materialId, flowForward, flowBackward, flowValid, albedo, uv)"
         ]
     );
