@@ -1015,22 +1015,6 @@ pub(crate) trait RayKernel {
 /// `limit` when it holds throughout.
 fn fold_1d(limit: f64, ok: impl Fn(f64) -> bool) -> f64 {
     const STEPS: usize = 4096;
-    let mut prev = 0.0;
-    for i in 1..=STEPS {
-        let x = limit * i as f64 / STEPS as f64;
-        if !ok(x) {
-            let (mut lo, mut hi) = (prev, x);
-            for _ in 0..60 {
-                let mid = 0.5 * (lo + hi);
-                if ok(mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            return lo;
-        }
-        prev = x;
-    }
-    limit
+    let points = (1..=STEPS).map(|i| limit * i as f64 / STEPS as f64);
+    solve::first_failure(points, ok).unwrap_or(limit)
 }
