@@ -554,7 +554,9 @@ impl RayKernel for Batch<'_> {
     }
 }
 
-fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+/// The angle between `a` and `b` (any lengths), accurate at any angle (unlike `acos` of the dot
+/// product near 0 and π).
+pub(crate) fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
     let c = [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],
