@@ -82,6 +82,30 @@ fn zero(line: usize) -> Number {
     }
 }
 
+/// Checks the list `values` (read at its line) holds one value per name, else says whose list it
+/// is and what it should hold.
+fn expect_names(
+    src: &Src<'_>,
+    (values, line): (&[Number], usize),
+    names: &[&str],
+    field: &str,
+    whose: &str,
+    noun: &str,
+) -> Result<(), CalibrationFileError> {
+    if values.len() == names.len() {
+        return Ok(());
+    }
+    Err(src.err(
+        line,
+        format!(
+            "{field}: {whose} has {} {noun} [{}], got {}",
+            names.len(),
+            names.join(" "),
+            values.len()
+        ),
+    ))
+}
+
 /// A camera entry's model fields as read, for the translation into a model.
 struct Entry<'a> {
     id: &'a str,
@@ -98,47 +122,29 @@ struct Entry<'a> {
 
 impl Entry<'_> {
     fn expect_intr(&self, src: &Src<'_>, names: &[&str]) -> Result<(), CalibrationFileError> {
-        let Entry {
-            id,
-            camera_model,
-            intr,
-            ..
-        } = self;
-        if intr.len() == names.len() {
-            Ok(())
-        } else {
-            Err(src.err(
-                self.intr_line,
-                format!(
-                    "{id}.intrinsics: a Kalibr {camera_model} camera has {} intrinsics [{}], got {}",
-                    names.len(),
-                    names.join(" "),
-                    intr.len()
-                ),
-            ))
-        }
+        let Entry { id, camera_model, .. } = self;
+        let (field, whose) = (
+            format!("{id}.intrinsics"),
+            format!("a Kalibr {camera_model} camera"),
+        );
+        expect_names(
+            src,
+            (&self.intr, self.intr_line),
+            names,
+            &field,
+            &whose,
+            "intrinsics",
+        )
     }
 
     fn expect_coeffs(&self, src: &Src<'_>, names: &[&str]) -> Result<(), CalibrationFileError> {
-        let Entry {
-            id,
-            distortion,
-            coeffs,
-            ..
-        } = self;
-        if coeffs.0.len() == names.len() {
-            Ok(())
-        } else {
-            Err(src.err(
-                coeffs.1,
-                format!(
-                    "{id}.distortion_coeffs: Kalibr's {distortion} distortion has {} coefficients [{}], got {}",
-                    names.len(),
-                    names.join(" "),
-                    coeffs.0.len()
-                ),
-            ))
-        }
+        let Entry { id, distortion, .. } = self;
+        let (field, whose) = (
+            format!("{id}.distortion_coeffs"),
+            format!("Kalibr's {distortion} distortion"),
+        );
+        let (coeffs, line) = &self.coeffs;
+        expect_names(src, (coeffs, *line), names, &field, &whose, "coefficients")
     }
 
     fn unsupported(&self, src: &Src<'_>) -> CalibrationFileError {
@@ -211,21 +217,19 @@ impl Entry<'_> {
                     _ => return Err(unsupported()),
                 }
             }
-            "ds" => {
-                expect_intr(&["xi", "alpha", "fu", "fv", "pu", "pv"])?;
+            // Both models lead with their two shape parameters, which the models' order puts last.
+            "ds" | "eucm" => {
+                let (model, [s0, s1]) = if self.camera_model == "ds" {
+                    ("DOUBLE_SPHERE", ["xi", "alpha"])
+                } else {
+                    ("EUCM", ["alpha", "beta"])
+                };
+                expect_intr(&[s0, s1, "fu", "fv", "pu", "pv"])?;
                 if distortion != "none" {
                     return Err(unsupported());
                 }
                 expect_coeffs(&[])?;
-                ("DOUBLE_SPHERE", vec![i(2), i(3), i(4), i(5), i(0), i(1)])
-            }
-            "eucm" => {
-                expect_intr(&["alpha", "beta", "fu", "fv", "pu", "pv"])?;
-                if distortion != "none" {
-                    return Err(unsupported());
-                }
-                expect_coeffs(&[])?;
-                ("EUCM", vec![i(2), i(3), i(4), i(5), i(0), i(1)])
+                (model, vec![i(2), i(3), i(4), i(5), i(0), i(1)])
             }
             other => {
                 return Err(src.err(
