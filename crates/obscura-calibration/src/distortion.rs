@@ -176,48 +176,26 @@ impl Distortion {
         if rd >= self.radial_fold_image || rd.is_nan() {
             return None;
         }
-        let (mut lo, mut hi) = (0.0, self.radial_max);
-        let mut r = match self.radial_table.as_ref().and_then(|t| t.seed(rd)) {
+        let (lo, hi) = (0.0, self.radial_max);
+        let r = match self.radial_table.as_ref().and_then(|t| t.seed(rd)) {
             Some(seed) if seed < hi => seed,
             _ => rd.min(0.5 * hi),
         };
-        let done = |r: f64, rr: f64, drr: f64| {
-            let k = r / rd;
-            let m = [md[0] * k, md[1] * k];
-            let cross = 2.0 * m[0] * m[1] * drr;
-            let j = [
-                [rr + 2.0 * m[0] * m[0] * drr, cross],
-                [cross, rr + 2.0 * m[1] * m[1] * drr],
-            ];
-            Some((m, j))
-        };
-        for _ in 0..solve::MAX_ITERATIONS {
+        let radius = |r: f64| {
             let q = r * r;
             let (rr, drr) = self.radial(q);
-            let (f, df) = (r * rr, rr + 2.0 * q * drr);
-            let e = f - rd;
-            if e == 0.0 {
-                return done(r, rr, drr);
-            }
-            if e < 0.0 {
-                lo = r;
-            } else {
-                hi = r;
-            }
-            let newton = r - e / df;
-            let next = if df > 0.0 && newton > lo && newton < hi {
-                newton
-            } else if hi.is_finite() {
-                0.5 * (lo + hi)
-            } else {
-                2.0 * r.max(1.0)
-            };
-            if (next - r).abs() <= 1e-12 * next {
-                return done(next, rr, drr);
-            }
-            r = next;
-        }
-        None
+            (r * rr, rr + 2.0 * q * drr, (rr, drr))
+        };
+        let stop = |r: f64, next: f64, _, _| (next - r).abs() <= 1e-12 * next;
+        let (r, (rr, drr)) = solve::newton_1d(radius, rd, [lo, hi], r, stop).ok()?;
+        let k = r / rd;
+        let m = [md[0] * k, md[1] * k];
+        let cross = 2.0 * m[0] * m[1] * drr;
+        let j = [
+            [rr + 2.0 * m[0] * m[0] * drr, cross],
+            [cross, rr + 2.0 * m[1] * m[1] * drr],
+        ];
+        Some((m, j))
     }
 
     /// Two-dimensional Newton for `g(m) = target`, `g` given with its Jacobian, from `m`, with
@@ -515,27 +493,10 @@ const NEWTON_2D_ITERATIONS: usize = 40;
 /// calibration any more, so the valid set ends there.
 fn fold(limit: f64, ok: impl Fn(f64) -> bool) -> f64 {
     let end = limit.min(1e6);
-    let mut prev = 0.0;
-    let mut r = 1e-4f64.min(end);
-    loop {
-        if !ok(r) {
-            let (mut lo, mut hi) = (prev, r);
-            for _ in 0..60 {
-                let mid = 0.5 * (lo + hi);
-                if ok(mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            return lo;
-        }
-        if r >= end {
-            return end;
-        }
-        prev = r;
-        r = (r * 1.02).min(end);
-    }
+    let radii = std::iter::successors(Some(1e-4f64.min(end)), |&r| {
+        (r < end).then(|| (r * 1.02).min(end))
+    });
+    solve::first_failure(radii, ok).unwrap_or(end)
 }
 
 /// OpenCV's tilted-sensor projection (`computeTiltProjectionMatrix`): a homography of the

@@ -60,8 +60,9 @@ impl PixelConvention {
     }
 }
 
-/// One model the `model` parameter names: its parameters in the source library's order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// One model the `model` parameter names: its parameters in the source library's order, and how
+/// [`CameraModel::new`] builds it from them.
+#[derive(Debug, Clone, Copy)]
 pub struct ModelInfo {
     /// The name (COLMAP's for ids 0–17).
     pub name: &'static str,
@@ -73,7 +74,23 @@ pub struct ModelInfo {
     pub convention: PixelConvention,
     /// True for the models that take `polynomial`/`inversePolynomial`.
     pub polynomials: bool,
+    /// The model's stages from its parameters.
+    build: Build,
 }
+
+/// Each name stands once in [`MODELS`], so it identifies the entry (the builder, a function
+/// pointer, has no meaningful equality of its own).
+impl PartialEq for ModelInfo {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl Eq for ModelInfo {}
+
+/// A model's builder: its pipeline stages from its parameters, whose count, finiteness and
+/// polynomials [`CameraModel::new`] has already checked against the table.
+type Build = fn(&Args<'_>) -> Result<Stages, String>;
 
 const fn info(
     name: &'static str,
@@ -81,6 +98,7 @@ const fn info(
     counts: &'static [usize],
     convention: PixelConvention,
     polynomials: bool,
+    build: Build,
 ) -> ModelInfo {
     ModelInfo {
         name,
@@ -88,6 +106,7 @@ const fn info(
         counts,
         convention,
         polynomials,
+        build,
     }
 }
 
@@ -95,28 +114,81 @@ use PixelConvention::{Colmap as C, OpenCv as O};
 
 /// Every model, COLMAP's ids 0–17 first in id order.
 pub const MODELS: [ModelInfo; 25] = [
-    info("SIMPLE_PINHOLE", "f, cx, cy", &[3], C, false),
-    info("PINHOLE", "fx, fy, cx, cy", &[4], C, false),
-    info("SIMPLE_RADIAL", "f, cx, cy, k", &[4], C, false),
-    info("RADIAL", "f, cx, cy, k1, k2", &[5], C, false),
-    info("OPENCV", "fx, fy, cx, cy, k1, k2, p1, p2", &[8], C, false),
-    info("OPENCV_FISHEYE", "fx, fy, cx, cy, k1, k2, k3, k4", &[8], C, false),
+    info("SIMPLE_PINHOLE", "f, cx, cy", &[3], C, false, |s| s.focal()),
+    info("PINHOLE", "fx, fy, cx, cy", &[4], C, false, |s| s.focals()),
+    info(
+        "SIMPLE_RADIAL",
+        "f, cx, cy, k",
+        &[4],
+        C,
+        false,
+        radial_perspective,
+    ),
+    info("RADIAL", "f, cx, cy, k1, k2", &[5], C, false, radial_perspective),
+    info("OPENCV", "fx, fy, cx, cy, k1, k2, p1, p2", &[8], C, false, |s| {
+        let d = Distortion::new(radial(&s.p[4..6]), [0.0; 3], [s.p[6], s.p[7]], [0.0; 4], false);
+        Ok(s.focals()?.distorted(d))
+    }),
+    info(
+        "OPENCV_FISHEYE",
+        "fx, fy, cx, cy, k1, k2, k3, k4",
+        &[8],
+        C,
+        false,
+        kannala_brandt,
+    ),
     info(
         "FULL_OPENCV",
         "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6",
         &[12],
         C,
         false,
+        |s| {
+            let p = s.p;
+            let d = Distortion::new(
+                radial(&[p[4], p[5], p[8]]),
+                [p[9], p[10], p[11]],
+                [p[6], p[7]],
+                [0.0; 4],
+                false,
+            );
+            Ok(s.focals()?.distorted(d))
+        },
     ),
-    info("FOV", "fx, fy, cx, cy, omega", &[5], C, false),
-    info("SIMPLE_RADIAL_FISHEYE", "f, cx, cy, k", &[4], C, false),
-    info("RADIAL_FISHEYE", "f, cx, cy, k1, k2", &[5], C, false),
+    info("FOV", "fx, fy, cx, cy, omega", &[5], C, false, fov),
+    info(
+        "SIMPLE_RADIAL_FISHEYE",
+        "f, cx, cy, k",
+        &[4],
+        C,
+        false,
+        radial_fisheye,
+    ),
+    info(
+        "RADIAL_FISHEYE",
+        "f, cx, cy, k1, k2",
+        &[5],
+        C,
+        false,
+        radial_fisheye,
+    ),
     info(
         "THIN_PRISM_FISHEYE",
         "fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, sx1, sy1",
         &[12],
         C,
         false,
+        |s| {
+            let p = s.p;
+            let d = Distortion::new(
+                radial(&[p[4], p[5], p[8], p[9]]),
+                [0.0; 3],
+                [p[6], p[7]],
+                [p[10], 0.0, p[11], 0.0],
+                false,
+            );
+            Ok(s.focals()?.distorted(d).lift(Lift::Equidistant))
+        },
     ),
     info(
         "RAD_TAN_THIN_PRISM_FISHEYE",
@@ -124,19 +196,48 @@ pub const MODELS: [ModelInfo; 25] = [
         &[16],
         C,
         false,
+        |s| {
+            let p = s.p;
+            // Aria's p0 multiplies (r² + 2x²) (OpenCV's p2), its p1 (r² + 2y²) (OpenCV's p1).
+            let d = Distortion::new(
+                radial(&p[4..10]),
+                [0.0; 3],
+                [p[11], p[10]],
+                [p[12], p[13], p[14], p[15]],
+                true,
+            );
+            Ok(s.focals()?.distorted(d).lift(Lift::Equidistant))
+        },
     ),
-    info("SIMPLE_DIVISION", "f, cx, cy, k", &[4], C, false),
-    info("DIVISION", "fx, fy, cx, cy, k", &[5], C, false),
-    info("SIMPLE_FISHEYE", "f, cx, cy", &[3], C, false),
-    info("FISHEYE", "fx, fy, cx, cy", &[4], C, false),
-    info("EUCM", "fx, fy, cx, cy, alpha, beta", &[6], C, false),
-    info("EQUIRECTANGULAR", "w, h", &[2], C, false),
+    info("SIMPLE_DIVISION", "f, cx, cy, k", &[4], C, false, |s| {
+        Ok(s.focal()?.lift(Lift::Division { k: s.p[3] }))
+    }),
+    info("DIVISION", "fx, fy, cx, cy, k", &[5], C, false, |s| {
+        Ok(s.focals()?.lift(Lift::Division { k: s.p[4] }))
+    }),
+    info("SIMPLE_FISHEYE", "f, cx, cy", &[3], C, false, |s| {
+        Ok(s.focal()?.lift(Lift::Equidistant))
+    }),
+    info("FISHEYE", "fx, fy, cx, cy", &[4], C, false, |s| {
+        Ok(s.focals()?.lift(Lift::Equidistant))
+    }),
+    info("EUCM", "fx, fy, cx, cy, alpha, beta", &[6], C, false, |s| {
+        let stages = s.focals()?;
+        let alpha = s.within("alpha", s.p[4], 0.0, 1.0)?;
+        let beta = s.positive("beta", s.p[5])?;
+        Ok(stages.lift(Lift::Unified { alpha, beta }))
+    }),
+    info("EQUIRECTANGULAR", "w, h", &[2], C, false, |s| {
+        let (w, h) = (s.positive("w", s.p[0])?, s.positive("h", s.p[1])?);
+        Ok(Stages::new(solve::I2, [0.0, 0.0]).lift(Lift::Equirect { w, h }))
+    }),
     info(
         "OPENCV_PINHOLE",
         "fx, fy, cx, cy, k1, k2, p1, p2 [, k3 [, k4, k5, k6 [, s1, s2, s3, s4 [, taux, tauy]]]]",
         &[8, 9, 12, 16, 18],
         O,
         false,
+        opencv_pinhole,
     ),
     info(
         "OPENCV_OMNIDIR",
@@ -144,12 +245,43 @@ pub const MODELS: [ModelInfo; 25] = [
         &[10],
         O,
         false,
+        opencv_omnidir,
     ),
-    info("UCM", "fx, fy, cx, cy, alpha", &[5], O, false),
-    info("DOUBLE_SPHERE", "fx, fy, cx, cy, xi, alpha", &[6], O, false),
-    info("KANNALA_BRANDT", "fx, fy, cx, cy, k1, k2, k3, k4", &[8], O, false),
-    info("OCAMCALIB", "xc, yc, c, d, e", &[5], O, true),
-    info("FTHETA", "cx, cy [, maxAngle [, c, d, e]]", &[2, 3, 6], O, true),
+    info("UCM", "fx, fy, cx, cy, alpha", &[5], O, false, |s| {
+        let stages = s.focals()?;
+        let alpha = s.within("alpha", s.p[4], 0.0, 1.0)?;
+        Ok(stages.lift(Lift::Unified { alpha, beta: 1.0 }))
+    }),
+    info(
+        "DOUBLE_SPHERE",
+        "fx, fy, cx, cy, xi, alpha",
+        &[6],
+        O,
+        false,
+        |s| {
+            let stages = s.focals()?;
+            let xi = s.within("xi", s.p[4], -1.0, 1.0)?;
+            let alpha = s.within("alpha", s.p[5], 0.0, 1.0)?;
+            Ok(stages.lift(Lift::DoubleSphere { xi, alpha }))
+        },
+    ),
+    info(
+        "KANNALA_BRANDT",
+        "fx, fy, cx, cy, k1, k2, k3, k4",
+        &[8],
+        O,
+        false,
+        kannala_brandt,
+    ),
+    info("OCAMCALIB", "xc, yc, c, d, e", &[5], O, true, ocamcalib),
+    info(
+        "FTHETA",
+        "cx, cy [, maxAngle [, c, d, e]]",
+        &[2, 3, 6],
+        O,
+        true,
+        ftheta,
+    ),
 ];
 
 /// The names of [`MODELS`], in order.
@@ -167,6 +299,266 @@ pub const MODEL_NAMES: [&str; 25] = {
 #[must_use]
 pub fn model_info(name: &str) -> Option<&'static ModelInfo> {
     MODELS.iter().find(|m| m.name == name)
+}
+
+/// A model's parameters as [`CameraModel::new`] received them, for its [`Build`].
+struct Args<'a> {
+    /// The model's name, for messages.
+    model: &'a str,
+    /// `params`, in the source library's order.
+    p: &'a [f64],
+    polynomial: &'a [f64],
+    inverse_polynomial: &'a [f64],
+    /// The calibration image's size, in pixels.
+    width: f64,
+    height: f64,
+}
+
+/// What a [`Build`] makes: the stages of the pipeline in the module documentation.
+struct Stages {
+    a: Mat2,
+    c: [f64; 2],
+    tilt: Option<Tilt>,
+    distortion: Option<Distortion>,
+    lift: Lift,
+}
+
+impl Stages {
+    /// The affine map alone, with a pinhole lift.
+    fn new(a: Mat2, c: [f64; 2]) -> Self {
+        Stages {
+            a,
+            c,
+            tilt: None,
+            distortion: None,
+            lift: Lift::Perspective,
+        }
+    }
+
+    fn distorted(self, distortion: Distortion) -> Self {
+        Stages {
+            distortion: Some(distortion),
+            ..self
+        }
+    }
+
+    fn lift(self, lift: Lift) -> Self {
+        Stages { lift, ..self }
+    }
+}
+
+impl Args<'_> {
+    /// Checks a value is positive.
+    fn positive(&self, name: &str, x: f64) -> Result<f64, String> {
+        if x > 0.0 {
+            Ok(x)
+        } else {
+            Err(format!("model {}: {name} must be > 0, got {x}", self.model))
+        }
+    }
+
+    fn within(&self, name: &str, x: f64, lo: f64, hi: f64) -> Result<f64, String> {
+        if (lo..=hi).contains(&x) {
+            Ok(x)
+        } else {
+            Err(format!(
+                "model {}: {name} must lie in [{lo}, {hi}], got {x}",
+                self.model
+            ))
+        }
+    }
+
+    /// The stages of COLMAP's `f, cx, cy, …` models: one focal length.
+    fn focal(&self) -> Result<Stages, String> {
+        let f = self.positive("f", self.p[0])?;
+        Ok(Stages::new(diag(f, f), [self.p[1], self.p[2]]))
+    }
+
+    /// The stages of the `fx, fy, cx, cy, …` models.
+    fn focals(&self) -> Result<Stages, String> {
+        let a = diag(self.positive("fx", self.p[0])?, self.positive("fy", self.p[1])?);
+        Ok(Stages::new(a, [self.p[2], self.p[3]]))
+    }
+}
+
+fn diag(fx: f64, fy: f64) -> Mat2 {
+    [[fx, 0.0], [0.0, fy]]
+}
+
+/// The numerator coefficients of a radial distortion whose leading ones are `k`.
+fn radial(k: &[f64]) -> [f64; 6] {
+    let mut n = [0.0; 6];
+    n[..k.len()].copy_from_slice(k);
+    n
+}
+
+/// A purely radial polynomial distortion.
+fn plain(k: &[f64]) -> Distortion {
+    Distortion::new(radial(k), [0.0; 3], [0.0; 2], [0.0; 4], false)
+}
+
+/// SIMPLE_RADIAL and RADIAL.
+fn radial_perspective(s: &Args<'_>) -> Result<Stages, String> {
+    Ok(s.focal()?.distorted(plain(&s.p[3..])))
+}
+
+/// SIMPLE_RADIAL_FISHEYE and RADIAL_FISHEYE.
+fn radial_fisheye(s: &Args<'_>) -> Result<Stages, String> {
+    Ok(radial_perspective(s)?.lift(Lift::Equidistant))
+}
+
+/// OPENCV_FISHEYE and KANNALA_BRANDT.
+fn kannala_brandt(s: &Args<'_>) -> Result<Stages, String> {
+    Ok(s.focals()?.distorted(plain(&s.p[4..8])).lift(Lift::Equidistant))
+}
+
+fn fov(s: &Args<'_>) -> Result<Stages, String> {
+    let omega = s.p[4];
+    if !(omega > 0.0 && omega < std::f64::consts::PI) {
+        return Err(format!(
+            "model FOV: omega must lie in (0, π) radians, got {omega}"
+        ));
+    }
+    let c = 2.0 * (0.5 * omega).tan();
+    Ok(s.focals()?.lift(Lift::Fov { omega, c }))
+}
+
+fn opencv_pinhole(s: &Args<'_>) -> Result<Stages, String> {
+    let p = s.p;
+    let k = |i: usize| p.get(i).copied().unwrap_or(0.0);
+    let d = Distortion::new(
+        radial(&[k(4), k(5), k(8)]),
+        [k(9), k(10), k(11)],
+        [k(6), k(7)],
+        [k(12), k(13), k(14), k(15)],
+        false,
+    );
+    let tilt = if p.len() == 18 {
+        Some(Tilt::new(p[16], p[17]).ok_or_else(|| {
+            format!(
+                "model {}: the sensor tilt taux {}, tauy {} is degenerate",
+                s.model, p[16], p[17]
+            )
+        })?)
+    } else {
+        None
+    };
+    Ok(Stages {
+        tilt,
+        ..s.focals()?.distorted(d)
+    })
+}
+
+fn opencv_omnidir(s: &Args<'_>) -> Result<Stages, String> {
+    let p = s.p;
+    let a = [[s.positive("fx", p[0])?, p[4]], [0.0, s.positive("fy", p[1])?]];
+    let xi = p[5];
+    if xi < 0.0 {
+        return Err(format!("model {}: xi must be ≥ 0, got {xi}", s.model));
+    }
+    let d = Distortion::new(radial(&p[6..8]), [0.0; 3], [p[8], p[9]], [0.0; 4], false);
+    Ok(Stages::new(a, [p[2], p[3]]).distorted(d).lift(Lift::Mei { xi }))
+}
+
+fn ocamcalib(s: &Args<'_>) -> Result<Stages, String> {
+    let (model, polynomial) = (s.model, s.polynomial);
+    let (xc, yc, cc, dd, ee) = (s.p[0], s.p[1], s.p[2], s.p[3], s.p[4]);
+    if polynomial.is_empty() {
+        return Err(format!(
+            "model {model} needs polynomial (OCamCalib's pol a0 a1 … aN, ascending, without the count)"
+        ));
+    }
+    if polynomial[0] >= 0.0 {
+        return Err(format!(
+            "model {model}: pol's a0 must be < 0 (OCamCalib's camera looks down its −z axis), got {}",
+            polynomial[0]
+        ));
+    }
+    // OCamCalib: row = c·x + d·y + xc, column = e·x + y + yc, with (x, y) its sensor
+    // frame. With m = (y, x) (x right, y down): u = m.x + e·m.y + yc, v = d·m.x + c·m.y + xc.
+    let a = [[1.0, ee], [dd, cc]];
+    let rho_limit = 2.0 * s.width.hypot(s.height);
+    let pol = polynomial.to_vec();
+    let rho_max = fold_1d(rho_limit, |r| {
+        let (pv, dp) = solve::poly(&pol, r);
+        -pv + r * dp > 0.0 && pv.is_finite()
+    });
+    let lift = Lift::OCam {
+        pol,
+        invpol: s.inverse_polynomial.to_vec(),
+        rho_max,
+    };
+    Ok(Stages::new(a, [yc, xc]).lift(lift))
+}
+
+fn ftheta(s: &Args<'_>) -> Result<Stages, String> {
+    let (model, p) = (s.model, s.p);
+    let max_angle = if p.len() >= 3 { p[2] } else { std::f64::consts::PI };
+    if max_angle <= 0.0 {
+        return Err(format!(
+            "model {model}: maxAngle must be > 0 radians, got {max_angle}"
+        ));
+    }
+    let (cc, dd, ee) = if p.len() == 6 {
+        (p[3], p[4], p[5])
+    } else {
+        (1.0, 0.0, 0.0)
+    };
+    let a = [[cc, dd], [ee, 1.0]];
+    let (bw, fw) = (
+        (!s.polynomial.is_empty()).then(|| s.polynomial.to_vec()),
+        (!s.inverse_polynomial.is_empty()).then(|| s.inverse_polynomial.to_vec()),
+    );
+    for (poly, what) in [
+        (&bw, "polynomial (pixel distance → angle)"),
+        (&fw, "inversePolynomial (angle → pixel distance)"),
+    ] {
+        if let Some(c) = poly
+            && c[0].abs() > 1e-6
+        {
+            return Err(format!(
+                "model {model}: {what} must be 0 at 0 (its constant term is {})",
+                c[0]
+            ));
+        }
+    }
+    let theta_limit = max_angle.min(std::f64::consts::PI);
+    let rho_limit = 2.0 * s.width.hypot(s.height);
+    let (rho_max, theta_max) = match (&bw, &fw) {
+        (Some(b), _) => {
+            let r = fold_1d(rho_limit, |r| {
+                let (t, dt) = solve::poly(b, r);
+                dt > 0.0 && t <= theta_limit
+            });
+            (r, solve::poly(b, r).0.min(theta_limit))
+        }
+        (None, Some(f)) => {
+            let t = fold_1d(theta_limit, |t| {
+                let (r, dr) = solve::poly(f, t);
+                dr > 0.0 && r <= rho_limit
+            });
+            (solve::poly(f, t).0, t)
+        }
+        (None, None) => {
+            return Err(format!(
+                "model {model} needs polynomial (backward: pixel distance → angle) or inversePolynomial (forward: angle → pixel distance)"
+            ));
+        }
+    };
+    let fw = fw.map(|c| {
+        let mut f = Forward::new(c);
+        if bw.is_none() {
+            f.tabulate(theta_max);
+        }
+        f
+    });
+    let lift = Lift::FTheta {
+        bw,
+        fw,
+        rho_max,
+        theta_max,
+    };
+    Ok(Stages::new(a, [p[0], p[1]]).lift(lift))
 }
 
 /// A calibrated camera model, ready to map pixels to rays and back, exactly.
@@ -189,23 +581,6 @@ pub struct PixelRay {
     pub v: [f64; 3],
     /// `∂v/∂u` and `∂v/∂v` as the two columns of a 3×2 matrix, row-major.
     pub dv: [[f64; 2]; 3],
-}
-
-/// Checks a value is positive.
-fn positive(model: &str, name: &str, x: f64) -> Result<f64, String> {
-    if x > 0.0 {
-        Ok(x)
-    } else {
-        Err(format!("model {model}: {name} must be > 0, got {x}"))
-    }
-}
-
-fn within(model: &str, name: &str, x: f64, lo: f64, hi: f64) -> Result<f64, String> {
-    if (lo..=hi).contains(&x) {
-        Ok(x)
-    } else {
-        Err(format!("model {model}: {name} must lie in [{lo}, {hi}], got {x}"))
-    }
 }
 
 impl CameraModel {
@@ -251,277 +626,21 @@ impl CameraModel {
                 "model {model} takes no polynomial or inversePolynomial (only OCAMCALIB and FTHETA do)"
             ));
         }
-        let p = params;
-        let diag = |fx: f64, fy: f64| [[fx, 0.0], [0.0, fy]];
-        let zero6 = [0.0; 6];
-        let radial = |k: &[f64]| {
-            let mut n = zero6;
-            n[..k.len()].copy_from_slice(k);
-            n
+        let args = Args {
+            model,
+            p: params,
+            polynomial,
+            inverse_polynomial,
+            width,
+            height,
         };
-        let plain = |k: &[f64]| Distortion::new(radial(k), [0.0; 3], [0.0; 2], [0.0; 4], false);
-        let focal1 = |f: f64| positive(model, "f", f).map(|f| diag(f, f));
-        let focal2 =
-            |fx: f64, fy: f64| Ok::<_, String>(diag(positive(model, "fx", fx)?, positive(model, "fy", fy)?));
-        let mut tilt = None;
-        let (a, c, distortion, lift) = match info.name {
-            "SIMPLE_PINHOLE" => (focal1(p[0])?, [p[1], p[2]], None, Lift::Perspective),
-            "PINHOLE" => (focal2(p[0], p[1])?, [p[2], p[3]], None, Lift::Perspective),
-            "SIMPLE_RADIAL" | "RADIAL" => (
-                focal1(p[0])?,
-                [p[1], p[2]],
-                Some(plain(&p[3..])),
-                Lift::Perspective,
-            ),
-            "OPENCV" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                Some(Distortion::new(
-                    radial(&p[4..6]),
-                    [0.0; 3],
-                    [p[6], p[7]],
-                    [0.0; 4],
-                    false,
-                )),
-                Lift::Perspective,
-            ),
-            "OPENCV_FISHEYE" | "KANNALA_BRANDT" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                Some(plain(&p[4..8])),
-                Lift::Equidistant,
-            ),
-            "FULL_OPENCV" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                Some(Distortion::new(
-                    radial(&[p[4], p[5], p[8]]),
-                    [p[9], p[10], p[11]],
-                    [p[6], p[7]],
-                    [0.0; 4],
-                    false,
-                )),
-                Lift::Perspective,
-            ),
-            "FOV" => {
-                let omega = p[4];
-                if !(omega > 0.0 && omega < std::f64::consts::PI) {
-                    return Err(format!(
-                        "model FOV: omega must lie in (0, π) radians, got {omega}"
-                    ));
-                }
-                let lift = Lift::Fov {
-                    omega,
-                    c: 2.0 * (0.5 * omega).tan(),
-                };
-                (focal2(p[0], p[1])?, [p[2], p[3]], None, lift)
-            }
-            "SIMPLE_RADIAL_FISHEYE" | "RADIAL_FISHEYE" => (
-                focal1(p[0])?,
-                [p[1], p[2]],
-                Some(plain(&p[3..])),
-                Lift::Equidistant,
-            ),
-            "THIN_PRISM_FISHEYE" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                Some(Distortion::new(
-                    radial(&[p[4], p[5], p[8], p[9]]),
-                    [0.0; 3],
-                    [p[6], p[7]],
-                    [p[10], 0.0, p[11], 0.0],
-                    false,
-                )),
-                Lift::Equidistant,
-            ),
-            "RAD_TAN_THIN_PRISM_FISHEYE" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                // Aria's p0 multiplies (r² + 2x²) (OpenCV's p2), its p1 (r² + 2y²) (OpenCV's p1).
-                Some(Distortion::new(
-                    radial(&p[4..10]),
-                    [0.0; 3],
-                    [p[11], p[10]],
-                    [p[12], p[13], p[14], p[15]],
-                    true,
-                )),
-                Lift::Equidistant,
-            ),
-            "SIMPLE_DIVISION" => (focal1(p[0])?, [p[1], p[2]], None, Lift::Division { k: p[3] }),
-            "DIVISION" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                None,
-                Lift::Division { k: p[4] },
-            ),
-            "SIMPLE_FISHEYE" => (focal1(p[0])?, [p[1], p[2]], None, Lift::Equidistant),
-            "FISHEYE" => (focal2(p[0], p[1])?, [p[2], p[3]], None, Lift::Equidistant),
-            "EUCM" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                None,
-                Lift::Unified {
-                    alpha: within(model, "alpha", p[4], 0.0, 1.0)?,
-                    beta: positive(model, "beta", p[5])?,
-                },
-            ),
-            "EQUIRECTANGULAR" => (
-                solve::I2,
-                [0.0, 0.0],
-                None,
-                Lift::Equirect {
-                    w: positive(model, "w", p[0])?,
-                    h: positive(model, "h", p[1])?,
-                },
-            ),
-            "OPENCV_PINHOLE" => {
-                let k = |i: usize| p.get(i).copied().unwrap_or(0.0);
-                let d = Distortion::new(
-                    radial(&[k(4), k(5), k(8)]),
-                    [k(9), k(10), k(11)],
-                    [k(6), k(7)],
-                    [k(12), k(13), k(14), k(15)],
-                    false,
-                );
-                if p.len() == 18 {
-                    tilt = Some(Tilt::new(p[16], p[17]).ok_or_else(|| {
-                        format!(
-                            "model {model}: the sensor tilt taux {}, tauy {} is degenerate",
-                            p[16], p[17]
-                        )
-                    })?);
-                }
-                (focal2(p[0], p[1])?, [p[2], p[3]], Some(d), Lift::Perspective)
-            }
-            "OPENCV_OMNIDIR" => {
-                let a = [
-                    [positive(model, "fx", p[0])?, p[4]],
-                    [0.0, positive(model, "fy", p[1])?],
-                ];
-                let xi = p[5];
-                if xi < 0.0 {
-                    return Err(format!("model {model}: xi must be ≥ 0, got {xi}"));
-                }
-                let d = Distortion::new(radial(&p[6..8]), [0.0; 3], [p[8], p[9]], [0.0; 4], false);
-                (a, [p[2], p[3]], Some(d), Lift::Mei { xi })
-            }
-            "UCM" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                None,
-                Lift::Unified {
-                    alpha: within(model, "alpha", p[4], 0.0, 1.0)?,
-                    beta: 1.0,
-                },
-            ),
-            "DOUBLE_SPHERE" => (
-                focal2(p[0], p[1])?,
-                [p[2], p[3]],
-                None,
-                Lift::DoubleSphere {
-                    xi: within(model, "xi", p[4], -1.0, 1.0)?,
-                    alpha: within(model, "alpha", p[5], 0.0, 1.0)?,
-                },
-            ),
-            "OCAMCALIB" => {
-                let (xc, yc, cc, dd, ee) = (p[0], p[1], p[2], p[3], p[4]);
-                if polynomial.is_empty() {
-                    return Err(format!(
-                        "model {model} needs polynomial (OCamCalib's pol a0 a1 … aN, ascending, without the count)"
-                    ));
-                }
-                if polynomial[0] >= 0.0 {
-                    return Err(format!(
-                        "model {model}: pol's a0 must be < 0 (OCamCalib's camera looks down its −z axis), got {}",
-                        polynomial[0]
-                    ));
-                }
-                // OCamCalib: row = c·x + d·y + xc, column = e·x + y + yc, with (x, y) its sensor
-                // frame. With m = (y, x) (x right, y down): u = m.x + e·m.y + yc, v = d·m.x + c·m.y + xc.
-                let a = [[1.0, ee], [dd, cc]];
-                let rho_limit = 2.0 * width.hypot(height);
-                let pol = polynomial.to_vec();
-                let rho_max = fold_1d(rho_limit, |r| {
-                    let (pv, dp) = solve::poly(&pol, r);
-                    -pv + r * dp > 0.0 && pv.is_finite()
-                });
-                let lift = Lift::OCam {
-                    pol,
-                    invpol: inverse_polynomial.to_vec(),
-                    rho_max,
-                };
-                (a, [yc, xc], None, lift)
-            }
-            "FTHETA" => {
-                let max_angle = if p.len() >= 3 { p[2] } else { std::f64::consts::PI };
-                if max_angle <= 0.0 {
-                    return Err(format!(
-                        "model {model}: maxAngle must be > 0 radians, got {max_angle}"
-                    ));
-                }
-                let (cc, dd, ee) = if p.len() == 6 {
-                    (p[3], p[4], p[5])
-                } else {
-                    (1.0, 0.0, 0.0)
-                };
-                let a = [[cc, dd], [ee, 1.0]];
-                let (bw, fw) = (
-                    (!polynomial.is_empty()).then(|| polynomial.to_vec()),
-                    (!inverse_polynomial.is_empty()).then(|| inverse_polynomial.to_vec()),
-                );
-                for (poly, what) in [
-                    (&bw, "polynomial (pixel distance → angle)"),
-                    (&fw, "inversePolynomial (angle → pixel distance)"),
-                ] {
-                    if let Some(c) = poly
-                        && c[0].abs() > 1e-6
-                    {
-                        return Err(format!(
-                            "model {model}: {what} must be 0 at 0 (its constant term is {})",
-                            c[0]
-                        ));
-                    }
-                }
-                let theta_limit = max_angle.min(std::f64::consts::PI);
-                let rho_limit = 2.0 * width.hypot(height);
-                let (rho_max, theta_max) = match (&bw, &fw) {
-                    (Some(b), _) => {
-                        let r = fold_1d(rho_limit, |r| {
-                            let (t, dt) = solve::poly(b, r);
-                            dt > 0.0 && t <= theta_limit
-                        });
-                        (r, solve::poly(b, r).0.min(theta_limit))
-                    }
-                    (None, Some(f)) => {
-                        let t = fold_1d(theta_limit, |t| {
-                            let (r, dr) = solve::poly(f, t);
-                            dr > 0.0 && r <= rho_limit
-                        });
-                        (solve::poly(f, t).0, t)
-                    }
-                    (None, None) => {
-                        return Err(format!(
-                            "model {model} needs polynomial (backward: pixel distance → angle) or inversePolynomial (forward: angle → pixel distance)"
-                        ));
-                    }
-                };
-                let fw = fw.map(|c| {
-                    let mut f = Forward::new(c);
-                    if bw.is_none() {
-                        f.tabulate(theta_max);
-                    }
-                    f
-                });
-                let lift = Lift::FTheta {
-                    bw,
-                    fw,
-                    rho_max,
-                    theta_max,
-                };
-                (a, [p[0], p[1]], None, lift)
-            }
-            other => unreachable!("model {other} is listed in MODELS but not built"),
-        };
+        let Stages {
+            a,
+            c,
+            tilt,
+            distortion,
+            lift,
+        } = (info.build)(&args)?;
         let a_inv =
             inv2(&a).ok_or_else(|| format!("model {model}: the intrinsic matrix {a:?} is singular"))?;
         if a[0][0] * a[1][1] - a[0][1] * a[1][0] < 0.0 {
@@ -1015,22 +1134,6 @@ pub(crate) trait RayKernel {
 /// `limit` when it holds throughout.
 fn fold_1d(limit: f64, ok: impl Fn(f64) -> bool) -> f64 {
     const STEPS: usize = 4096;
-    let mut prev = 0.0;
-    for i in 1..=STEPS {
-        let x = limit * i as f64 / STEPS as f64;
-        if !ok(x) {
-            let (mut lo, mut hi) = (prev, x);
-            for _ in 0..60 {
-                let mid = 0.5 * (lo + hi);
-                if ok(mid) {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            return lo;
-        }
-        prev = x;
-    }
-    limit
+    let points = (1..=STEPS).map(|i| limit * i as f64 / STEPS as f64);
+    solve::first_failure(points, ok).unwrap_or(limit)
 }

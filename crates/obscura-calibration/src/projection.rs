@@ -109,6 +109,7 @@ use obscura_sdk::{
 
 use crate::NAME;
 use crate::models::{CHUNK, CameraModel, LaneRay, MODEL_NAMES, MODELS, PixelConvention, PixelRay, RayKernel};
+use crate::solve;
 
 /// The default camera: a 90° (horizontal) pinhole on a 640×480 image.
 const DEFAULT_PARAMS: [f32; 4] = [320.0, 320.0, 320.0, 240.0];
@@ -326,18 +327,7 @@ impl CalibratedCamera {
         let mut total = 0.0;
         for e in ends {
             let at = |f: f64| self.raster_ray(pp[0] + f * (e[0] - pp[0]), pp[1] + f * (e[1] - pp[1]));
-            let ray = at(1.0).or_else(|| {
-                let (mut lo, mut hi) = (0.0, 1.0);
-                for _ in 0..50 {
-                    let mid = 0.5 * (lo + hi);
-                    if at(mid).is_some() {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                at(lo)
-            });
+            let ray = at(1.0).or_else(|| at(solve::bisect(0.0, 1.0, 50, |f| at(f).is_some())));
             if let Some(d) = ray {
                 total += angle_between(axis, d);
             }
@@ -564,7 +554,9 @@ impl RayKernel for Batch<'_> {
     }
 }
 
-fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+/// The angle between `a` and `b` (any lengths), accurate at any angle (unlike `acos` of the dot
+/// product near 0 and π).
+pub(crate) fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
     let c = [
         a[1] * b[2] - a[2] * b[1],
         a[2] * b[0] - a[0] * b[2],

@@ -1,5 +1,5 @@
-//! Small f64 numerics shared by the models: polynomials, 2×2 matrices, and a safeguarded Newton
-//! solver for monotone functions of one variable.
+//! Small f64 numerics shared by the models: polynomials, 2×2 matrices, and the one-dimensional
+//! solvers every model uses: a safeguarded Newton for monotone functions and a bisection.
 
 /// A 2×2 matrix, row-major: `[[a, b], [c, d]]`.
 pub(crate) type Mat2 = [[f64; 2]; 2];
@@ -120,20 +120,57 @@ pub(crate) fn solve_increasing(
 pub(crate) fn solve_bracketed(
     f: impl Fn(f64) -> (f64, f64),
     target: f64,
-    mut lo: f64,
-    mut hi: f64,
+    lo: f64,
+    hi: f64,
     guess: f64,
 ) -> f64 {
-    let mut x = if guess > lo && guess < hi {
+    let start = if guess > lo && guess < hi {
         guess
     } else {
         0.5 * (lo + hi)
     };
-    for _ in 0..MAX_ITERATIONS {
+    let f = |x| {
         let (fx, dfx) = f(x);
+        (fx, dfx, ())
+    };
+    match newton_1d(f, target, [lo, hi], start, to_last_bits) {
+        Ok((x, ())) | Err(x) => x,
+    }
+}
+
+/// [`newton_1d`]'s stopping rule for solutions to the last bits: the step, or the bracket, is
+/// within a few ulps of the next iterate.
+#[inline(always)]
+pub(crate) fn to_last_bits(x: f64, next: f64, lo: f64, hi: f64) -> bool {
+    let tol = 4.0 * f64::EPSILON * next.abs().max(1e-300);
+    (next - x).abs() <= tol || hi - lo <= tol
+}
+
+/// The safeguarded Newton iteration every one-dimensional solve of the crate runs: `f(x) = target`
+/// on `bracket`, where `f` (value, derivative and whatever the caller wants kept from that
+/// evaluation) is increasing, from `x` inside the bracket.
+///
+/// Each evaluation shrinks the bracket to the side the root is on; a Newton step that would leave
+/// it (or a derivative that is not positive) is replaced by bisection, which is what guarantees
+/// convergence where Newton alone would overshoot a fold. An infinite upper end is pushed out by
+/// doubling instead. `stop(x, next, lo, hi)` ends the iteration at `next`.
+///
+/// Returns the root with the extra data of the last evaluation (at `x`, not at the root: callers
+/// that want the derivative there accept its first-order error rather than pay for one more
+/// evaluation), or `Err` with the last iterate after [`MAX_ITERATIONS`].
+#[inline]
+pub(crate) fn newton_1d<T>(
+    f: impl Fn(f64) -> (f64, f64, T),
+    target: f64,
+    [mut lo, mut hi]: [f64; 2],
+    mut x: f64,
+    stop: impl Fn(f64, f64, f64, f64) -> bool,
+) -> Result<(f64, T), f64> {
+    for _ in 0..MAX_ITERATIONS {
+        let (fx, dfx, kept) = f(x);
         let r = fx - target;
         if r == 0.0 {
-            return x;
+            return Ok((x, kept));
         }
         if r < 0.0 {
             lo = x;
@@ -143,16 +180,46 @@ pub(crate) fn solve_bracketed(
         let newton = x - r / dfx;
         let next = if dfx > 0.0 && newton > lo && newton < hi {
             newton
-        } else {
+        } else if hi.is_finite() {
             0.5 * (lo + hi)
+        } else {
+            2.0 * x.max(1.0)
         };
-        let tol = 4.0 * f64::EPSILON * next.abs().max(1e-300);
-        if (next - x).abs() <= tol || hi - lo <= tol {
-            return next;
+        if stop(x, next, lo, hi) {
+            return Ok((next, kept));
         }
         x = next;
     }
-    x
+    Err(x)
+}
+
+/// Bisects `[lo, hi]` `steps` times toward the boundary of `ok`, which holds at `lo` and fails at
+/// `hi`; returns the last point known to hold.
+pub(crate) fn bisect(mut lo: f64, mut hi: f64, steps: usize, ok: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..steps {
+        let mid = 0.5 * (lo + hi);
+        if ok(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// The first point where `ok` fails: `points` (increasing, after 0) are scanned for the first
+/// failure, then the gap before it is bisected to the last bits. `None` when `ok` holds at every
+/// point. A scan comes first because `ok` need not fail monotonically: bisecting the whole range
+/// could land past a first, narrow failure.
+pub(crate) fn first_failure(points: impl IntoIterator<Item = f64>, ok: impl Fn(f64) -> bool) -> Option<f64> {
+    let mut prev = 0.0;
+    for x in points {
+        if !ok(x) {
+            return Some(bisect(prev, x, 60, ok));
+        }
+        prev = x;
+    }
+    None
 }
 
 /// Samples of the inverse of an increasing function with their slopes: `x_i` with

@@ -200,15 +200,47 @@ fn unit(v: [f64; 3]) -> [f64; 3] {
 }
 
 fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let (a, b) = (unit(a), unit(b));
-    let c = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-        .sqrt()
-        .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+    crate::projection::angle_between(unit(a), unit(b))
+}
+
+/// OpenCV `projectPoints`' distorted normalised point (rational, thin prism and tilt) of the
+/// perspective point `(a, b)`, for the OpenCV models' `params`.
+fn opencv_distorted(p: &[f64], a: f64, b: f64) -> (f64, f64) {
+    let r2 = a * a + b * b;
+    let k = |i: usize| p.get(i).copied().unwrap_or(0.0);
+    let (k1, k2c, p1, p2, k3, k4, k5, k6) = (k(4), k(5), k(6), k(7), k(8), k(9), k(10), k(11));
+    let (s1, s2, s3, s4) = (k(12), k(13), k(14), k(15));
+    let radial = (1.0 + k1 * r2 + k2c * r2 * r2 + k3 * r2 * r2 * r2)
+        / (1.0 + k4 * r2 + k5 * r2 * r2 + k6 * r2 * r2 * r2);
+    let mut xd = a * radial + 2.0 * p1 * a * b + p2 * (r2 + 2.0 * a * a) + s1 * r2 + s2 * r2 * r2;
+    let mut yd = b * radial + p1 * (r2 + 2.0 * b * b) + 2.0 * p2 * a * b + s3 * r2 + s4 * r2 * r2;
+    if p.len() == 18 {
+        // OpenCV's tilt: R = Ry(τy)·Rx(τx), H = [[R33, 0, −R13], [0, R33, −R23], [0, 0, 1]]·R.
+        let (tx, ty) = (p[16], p[17]);
+        let (ctx, stx, cty, sty) = (tx.cos(), tx.sin(), ty.cos(), ty.sin());
+        let r = [
+            [cty, sty * stx, -sty * ctx],
+            [0.0, ctx, stx],
+            [sty, -cty * stx, cty * ctx],
+        ];
+        let h = [
+            [
+                r[2][2] * r[0][0] - r[0][2] * r[2][0],
+                r[2][2] * r[0][1] - r[0][2] * r[2][1],
+                0.0,
+            ],
+            [
+                r[2][2] * r[1][0] - r[1][2] * r[2][0],
+                r[2][2] * r[1][1] - r[1][2] * r[2][1],
+                0.0,
+            ],
+            [r[2][0], r[2][1], r[2][2]],
+        ];
+        let hv = |i: usize| h[i][0] * xd + h[i][1] * yd + h[i][2];
+        let w = hv(2);
+        (xd, yd) = (hv(0) / w, hv(1) / w);
+    }
+    (xd, yd)
 }
 
 /// The forward projection of each model written out independently, straight from the source
@@ -240,39 +272,7 @@ fn reference_pixel(c: &Case, x: f64, y: f64, z: f64) -> Option<[f64; 2]> {
             k_f(p[0], p[1], p[2], a * (1.0 + rad), b * (1.0 + rad))
         }
         "OPENCV" | "FULL_OPENCV" | "OPENCV_PINHOLE" => {
-            let k = |i: usize| p.get(i).copied().unwrap_or(0.0);
-            let (k1, k2c, p1, p2, k3, k4, k5, k6) = (k(4), k(5), k(6), k(7), k(8), k(9), k(10), k(11));
-            let (s1, s2, s3, s4) = (k(12), k(13), k(14), k(15));
-            let radial = (1.0 + k1 * r2 + k2c * r2 * r2 + k3 * r2 * r2 * r2)
-                / (1.0 + k4 * r2 + k5 * r2 * r2 + k6 * r2 * r2 * r2);
-            let mut xd = a * radial + 2.0 * p1 * a * b + p2 * (r2 + 2.0 * a * a) + s1 * r2 + s2 * r2 * r2;
-            let mut yd = b * radial + p1 * (r2 + 2.0 * b * b) + 2.0 * p2 * a * b + s3 * r2 + s4 * r2 * r2;
-            if p.len() == 18 {
-                // OpenCV's tilt: R = Ry(τy)·Rx(τx), H = [[R33, 0, −R13], [0, R33, −R23], [0, 0, 1]]·R.
-                let (tx, ty) = (p[16], p[17]);
-                let (ctx, stx, cty, sty) = (tx.cos(), tx.sin(), ty.cos(), ty.sin());
-                let r = [
-                    [cty, sty * stx, -sty * ctx],
-                    [0.0, ctx, stx],
-                    [sty, -cty * stx, cty * ctx],
-                ];
-                let h = [
-                    [
-                        r[2][2] * r[0][0] - r[0][2] * r[2][0],
-                        r[2][2] * r[0][1] - r[0][2] * r[2][1],
-                        0.0,
-                    ],
-                    [
-                        r[2][2] * r[1][0] - r[1][2] * r[2][0],
-                        r[2][2] * r[1][1] - r[1][2] * r[2][1],
-                        0.0,
-                    ],
-                    [r[2][0], r[2][1], r[2][2]],
-                ];
-                let hv = |i: usize| h[i][0] * xd + h[i][1] * yd + h[i][2];
-                let w = hv(2);
-                (xd, yd) = (hv(0) / w, hv(1) / w);
-            }
+            let (xd, yd) = opencv_distorted(p, a, b);
             k2(xd, yd)
         }
         "OPENCV_FISHEYE" | "KANNALA_BRANDT" => {

@@ -42,6 +42,19 @@ fn assert_error(e: &CalibrationFileError, file: &str, line: usize, words: &[&str
     }
 }
 
+/// The EuRoC MAV dataset's cam0 (fx fy cx cy k1 k2 p1 p2) as the COLMAP, ROS and Kalibr fixtures
+/// write it.
+const EUROC_CAM0: [f64; 8] = [
+    458.654,
+    457.296,
+    367.215,
+    248.375,
+    -0.28340811,
+    0.07395907,
+    0.00019359,
+    1.76187114e-05,
+];
+
 // ----- COLMAP -------------------------------------------------------------------------------------
 
 #[test]
@@ -59,19 +72,7 @@ fn colmap_takes_the_first_camera_and_says_which() {
     );
     assert_eq!(c.model, "OPENCV");
     assert_eq!((c.width, c.height), (752, 480));
-    assert_eq!(
-        values(&c),
-        [
-            458.654,
-            457.296,
-            367.215,
-            248.375,
-            -0.28340811,
-            0.07395907,
-            0.00019359,
-            1.76187114e-05
-        ]
-    );
+    assert_eq!(values(&c), EUROC_CAM0);
     assert_eq!(texts(&c)[7], "1.76187114e-05");
     assert_eq!(c.pixel_convention, PixelConvention::Colmap);
     assert_eq!(c.source, format!("{}:4", path.display()));
@@ -348,20 +349,7 @@ fn ros_camera_info_reads_as_opencv() {
                 distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [-0.28340811, 0.07395907, 0.00019359, 1.76187114e-05, 0]\n";
     let c = parse(text, "cam0.yaml", None).unwrap();
     assert_eq!(c.model, "OPENCV_PINHOLE");
-    assert_eq!(
-        values(&c),
-        [
-            458.654,
-            457.296,
-            367.215,
-            248.375,
-            -0.28340811,
-            0.07395907,
-            0.00019359,
-            1.76187114e-05,
-            0.0
-        ]
-    );
+    assert_eq!(values(&c), [&EUROC_CAM0[..], &[0.0]].concat());
     let fisheye = text
         .replace("plumb_bob", "equidistant")
         .replace("cols: 5", "cols: 4")
@@ -381,21 +369,7 @@ type KalibrCase = (&'static str, &'static str, (u32, u32), &'static [f64]);
 fn kalibr_models_are_reordered_into_the_models_order() {
     let path = fixture("camchain.yaml");
     let cases: [KalibrCase; 5] = [
-        (
-            "cam0",
-            "OPENCV",
-            (752, 480),
-            &[
-                458.654,
-                457.296,
-                367.215,
-                248.375,
-                -0.28340811,
-                0.07395907,
-                0.00019359,
-                1.76187114e-05,
-            ],
-        ),
+        ("cam0", "OPENCV", (752, 480), &EUROC_CAM0),
         (
             "cam1",
             "OPENCV_FISHEYE",

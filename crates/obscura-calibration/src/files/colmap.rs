@@ -6,7 +6,7 @@
 //! order. Pixel coordinates follow COLMAP's convention: the image corner is (0, 0) and the top-left
 //! pixel centre (0.5, 0.5).
 
-use super::{Calibration, CalibrationFileError, FileFormat, Number, PixelConvention, Src, choose_camera};
+use super::{Calibration, CalibrationFileError, FileFormat, Number, Src, choose_camera};
 
 /// COLMAP's camera models (`src/colmap/sensor/models.h`, ids 0–17 in this order) and their parameters.
 pub const MODELS: [(&str, &[&str]); 18] = [
@@ -162,19 +162,7 @@ fn read_line(src: &Src<'_>, line: &Line<'_>) -> Result<Calibration, CalibrationF
         .map(|(v, name)| src.number(v, n, &format!("PARAMS {name}")))
         .collect::<Result<Vec<Number>, _>>()?;
     Ok(Calibration {
-        file: src.file.to_string(),
-        format: FileFormat::Colmap,
         camera: Some(id.to_string()),
-        cameras: Vec::new(),
-        first_by_default: false,
-        width,
-        height,
-        model: model.to_string(),
-        params,
-        polynomial: Vec::new(),
-        inverse_polynomial: Vec::new(),
-        pixel_convention: PixelConvention::Colmap,
-        source: format!("{}:{n}", src.file),
-        notes: Vec::new(),
+        ..src.calibration(FileFormat::Colmap, n, model, [width, height], params)
     })
 }

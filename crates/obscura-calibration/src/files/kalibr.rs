@@ -20,8 +20,8 @@
 //! followed by radtan, as OpenCV's omnidir. Kalibr (aslam-cv) measures pixels as OpenCV does, centres
 //! at integer coordinates: `pixelConvention` `opencv`.
 
-use super::tree::{Node, Value};
-use super::{Calibration, CalibrationFileError, FileFormat, Number, PixelConvention, Src, choose_camera};
+use super::tree::Node;
+use super::{Calibration, CalibrationFileError, FileFormat, Number, Src, choose_camera};
 
 /// True when `root` is a mapping holding at least one camera entry (a mapping with `camera_model` or
 /// `intrinsics`).
@@ -69,17 +69,7 @@ fn list_field(
             format!("{id}.{key}: expected a list ({what}), got {}", node.describe()),
         )
     })?;
-    let values = items
-        .iter()
-        .enumerate()
-        .map(|(i, n)| match &n.value {
-            Value::Scalar { text, quoted: false } => src.number(text, n.line, &format!("{id}.{key}[{i}]")),
-            _ => Err(src.err(
-                n.line,
-                format!("{id}.{key}[{i}]: expected a number, got {}", n.describe()),
-            )),
-        })
-        .collect::<Result<Vec<_>, _>>()?;
+    let values = src.numbers(items, &format!("{id}.{key}"))?;
     Ok((values, node.line))
 }
 
@@ -89,6 +79,169 @@ fn zero(line: usize) -> Number {
         text: "0".into(),
         value: 0.0,
         line,
+    }
+}
+
+/// Checks the list `values` (read at its line) holds one value per name, else says whose list it
+/// is and what it should hold.
+fn expect_names(
+    src: &Src<'_>,
+    (values, line): (&[Number], usize),
+    names: &[&str],
+    field: &str,
+    whose: &str,
+    noun: &str,
+) -> Result<(), CalibrationFileError> {
+    if values.len() == names.len() {
+        return Ok(());
+    }
+    Err(src.err(
+        line,
+        format!(
+            "{field}: {whose} has {} {noun} [{}], got {}",
+            names.len(),
+            names.join(" "),
+            values.len()
+        ),
+    ))
+}
+
+/// A camera entry's model fields as read, for the translation into a model.
+struct Entry<'a> {
+    id: &'a str,
+    camera_model: &'a str,
+    model_line: usize,
+    /// Kalibr's distortion model, `equi` spelled out.
+    distortion: &'a str,
+    dist_line: usize,
+    intr: Vec<Number>,
+    intr_line: usize,
+    /// The distortion coefficients and their line.
+    coeffs: (Vec<Number>, usize),
+}
+
+impl Entry<'_> {
+    fn expect_intr(&self, src: &Src<'_>, names: &[&str]) -> Result<(), CalibrationFileError> {
+        let Entry { id, camera_model, .. } = self;
+        let (field, whose) = (
+            format!("{id}.intrinsics"),
+            format!("a Kalibr {camera_model} camera"),
+        );
+        expect_names(
+            src,
+            (&self.intr, self.intr_line),
+            names,
+            &field,
+            &whose,
+            "intrinsics",
+        )
+    }
+
+    fn expect_coeffs(&self, src: &Src<'_>, names: &[&str]) -> Result<(), CalibrationFileError> {
+        let Entry { id, distortion, .. } = self;
+        let (field, whose) = (
+            format!("{id}.distortion_coeffs"),
+            format!("Kalibr's {distortion} distortion"),
+        );
+        let (coeffs, line) = &self.coeffs;
+        expect_names(src, (coeffs, *line), names, &field, &whose, "coefficients")
+    }
+
+    fn unsupported(&self, src: &Src<'_>) -> CalibrationFileError {
+        let Entry {
+            id,
+            camera_model,
+            distortion,
+            ..
+        } = self;
+        src.err(
+            if *distortion == "none" {
+                self.model_line
+            } else {
+                self.dist_line
+            },
+            format!(
+                "{id}: Kalibr's {camera_model}-{distortion} is not supported; supported: pinhole-none, \
+                 pinhole-radtan, pinhole-equi, pinhole-fov, omni-none, omni-radtan, ds-none, eucm-none"
+            ),
+        )
+    }
+
+    /// The model and its parameters in its order, from Kalibr's intrinsics and coefficients (see
+    /// the module's table).
+    fn model(&self, src: &Src<'_>) -> Result<(&'static str, Vec<Number>), CalibrationFileError> {
+        let (id, distortion) = (self.id, self.distortion);
+        let (intr_line, dist_line) = (self.intr_line, self.dist_line);
+        let expect_intr = |names: &[&str]| self.expect_intr(src, names);
+        let expect_coeffs = |names: &[&str]| self.expect_coeffs(src, names);
+        let unsupported = || self.unsupported(src);
+        let i = |k: usize| self.intr[k].clone();
+        let (model, mut params) = match self.camera_model {
+            "pinhole" => {
+                expect_intr(&["fu", "fv", "pu", "pv"])?;
+                let base = vec![i(0), i(1), i(2), i(3)];
+                match distortion {
+                    "none" => {
+                        expect_coeffs(&[])?;
+                        ("PINHOLE", base)
+                    }
+                    "radtan" => {
+                        expect_coeffs(&["k1", "k2", "r1", "r2"])?;
+                        ("OPENCV", base)
+                    }
+                    "equidistant" => {
+                        expect_coeffs(&["k1", "k2", "k3", "k4"])?;
+                        ("OPENCV_FISHEYE", base)
+                    }
+                    "fov" => {
+                        expect_coeffs(&["w"])?;
+                        ("FOV", base)
+                    }
+                    _ => return Err(unsupported()),
+                }
+            }
+            "omni" => {
+                expect_intr(&["xi", "fu", "fv", "pu", "pv"])?;
+                let base = vec![i(1), i(2), i(3), i(4), zero(intr_line), i(0)];
+                match distortion {
+                    "none" => {
+                        expect_coeffs(&[])?;
+                        let mut p = base;
+                        p.extend((0..4).map(|_| zero(dist_line)));
+                        ("OPENCV_OMNIDIR", p)
+                    }
+                    "radtan" => {
+                        expect_coeffs(&["k1", "k2", "r1", "r2"])?;
+                        ("OPENCV_OMNIDIR", base)
+                    }
+                    _ => return Err(unsupported()),
+                }
+            }
+            // Both models lead with their two shape parameters, which the models' order puts last.
+            "ds" | "eucm" => {
+                let (model, [s0, s1]) = if self.camera_model == "ds" {
+                    ("DOUBLE_SPHERE", ["xi", "alpha"])
+                } else {
+                    ("EUCM", ["alpha", "beta"])
+                };
+                expect_intr(&[s0, s1, "fu", "fv", "pu", "pv"])?;
+                if distortion != "none" {
+                    return Err(unsupported());
+                }
+                expect_coeffs(&[])?;
+                (model, vec![i(2), i(3), i(4), i(5), i(0), i(1)])
+            }
+            other => {
+                return Err(src.err(
+                    self.model_line,
+                    format!("{id}.camera_model: unknown Kalibr camera model \"{other}\"; expected pinhole, omni, ds or eucm"),
+                ));
+            }
+        };
+        if !matches!(distortion, "none") {
+            params.extend(self.coeffs.0.iter().cloned());
+        }
+        Ok((model, params))
     }
 }
 
@@ -137,121 +290,21 @@ pub(crate) fn read(
     let width = src.size(&res[0].text, res[0].line, &format!("{id}.resolution width"))?;
     let height = src.size(&res[1].text, res[1].line, &format!("{id}.resolution height"))?;
 
-    let distortion = match distortion {
-        "equi" | "equidistant" => "equidistant",
-        other => other,
+    let entry = Entry {
+        id,
+        camera_model,
+        model_line,
+        distortion: match distortion {
+            "equi" | "equidistant" => "equidistant",
+            other => other,
+        },
+        dist_line,
+        intr,
+        intr_line,
+        coeffs,
     };
-    let expect_intr = |names: &[&str]| -> Result<(), CalibrationFileError> {
-        if intr.len() == names.len() {
-            Ok(())
-        } else {
-            Err(src.err(
-                intr_line,
-                format!(
-                    "{id}.intrinsics: a Kalibr {camera_model} camera has {} intrinsics [{}], got {}",
-                    names.len(),
-                    names.join(" "),
-                    intr.len()
-                ),
-            ))
-        }
-    };
-    let expect_coeffs = |names: &[&str]| -> Result<(), CalibrationFileError> {
-        if coeffs.0.len() == names.len() {
-            Ok(())
-        } else {
-            Err(src.err(
-                coeffs.1,
-                format!(
-                    "{id}.distortion_coeffs: Kalibr's {distortion} distortion has {} coefficients [{}], got {}",
-                    names.len(),
-                    names.join(" "),
-                    coeffs.0.len()
-                ),
-            ))
-        }
-    };
-    let unsupported = || {
-        src.err(
-            if distortion == "none" {
-                model_line
-            } else {
-                dist_line
-            },
-            format!(
-                "{id}: Kalibr's {camera_model}-{distortion} is not supported; supported: pinhole-none, \
-                 pinhole-radtan, pinhole-equi, pinhole-fov, omni-none, omni-radtan, ds-none, eucm-none"
-            ),
-        )
-    };
-    let i = |k: usize| intr[k].clone();
-    let (model, mut params) = match camera_model {
-        "pinhole" => {
-            expect_intr(&["fu", "fv", "pu", "pv"])?;
-            let base = vec![i(0), i(1), i(2), i(3)];
-            match distortion {
-                "none" => {
-                    expect_coeffs(&[])?;
-                    ("PINHOLE", base)
-                }
-                "radtan" => {
-                    expect_coeffs(&["k1", "k2", "r1", "r2"])?;
-                    ("OPENCV", base)
-                }
-                "equidistant" => {
-                    expect_coeffs(&["k1", "k2", "k3", "k4"])?;
-                    ("OPENCV_FISHEYE", base)
-                }
-                "fov" => {
-                    expect_coeffs(&["w"])?;
-                    ("FOV", base)
-                }
-                _ => return Err(unsupported()),
-            }
-        }
-        "omni" => {
-            expect_intr(&["xi", "fu", "fv", "pu", "pv"])?;
-            let base = vec![i(1), i(2), i(3), i(4), zero(intr_line), i(0)];
-            match distortion {
-                "none" => {
-                    expect_coeffs(&[])?;
-                    let mut p = base;
-                    p.extend((0..4).map(|_| zero(dist_line)));
-                    ("OPENCV_OMNIDIR", p)
-                }
-                "radtan" => {
-                    expect_coeffs(&["k1", "k2", "r1", "r2"])?;
-                    ("OPENCV_OMNIDIR", base)
-                }
-                _ => return Err(unsupported()),
-            }
-        }
-        "ds" => {
-            expect_intr(&["xi", "alpha", "fu", "fv", "pu", "pv"])?;
-            if distortion != "none" {
-                return Err(unsupported());
-            }
-            expect_coeffs(&[])?;
-            ("DOUBLE_SPHERE", vec![i(2), i(3), i(4), i(5), i(0), i(1)])
-        }
-        "eucm" => {
-            expect_intr(&["alpha", "beta", "fu", "fv", "pu", "pv"])?;
-            if distortion != "none" {
-                return Err(unsupported());
-            }
-            expect_coeffs(&[])?;
-            ("EUCM", vec![i(2), i(3), i(4), i(5), i(0), i(1)])
-        }
-        other => {
-            return Err(src.err(
-                model_line,
-                format!("{id}.camera_model: unknown Kalibr camera model \"{other}\"; expected pinhole, omni, ds or eucm"),
-            ));
-        }
-    };
-    if !matches!(distortion, "none") {
-        params.extend(coeffs.0);
-    }
+    let (model, params) = entry.model(src)?;
+    let distortion = entry.distortion;
     let mut notes = vec![format!(
         "Kalibr {camera_model}-{distortion} read as {model}, intrinsics reordered to the model's order"
     )];
@@ -264,19 +317,10 @@ pub(crate) fn read(
         ));
     }
     Ok(Calibration {
-        file: src.file.to_string(),
-        format: FileFormat::Kalibr,
         camera: Some(id.clone()),
         cameras: ids,
         first_by_default: by_default,
-        width,
-        height,
-        model: model.to_string(),
-        params,
-        polynomial: Vec::new(),
-        inverse_polynomial: Vec::new(),
-        pixel_convention: PixelConvention::OpenCv,
-        source: format!("{}:{}", src.file, cam.line),
         notes,
+        ..src.calibration(FileFormat::Kalibr, cam.line, model, [width, height], params)
     })
 }

@@ -18,6 +18,8 @@ use std::path::Path;
 
 use obscura_sdk::ParamList;
 
+use tree::{Node, Value};
+
 pub mod colmap;
 pub mod kalibr;
 pub mod ocamcalib;
@@ -258,6 +260,52 @@ impl Src<'_> {
             value,
             line,
         })
+    }
+
+    /// Reads a list's `items` as numbers; `what` names the list (items are `what[i]`).
+    pub fn numbers(&self, items: &[Node], what: &str) -> Result<Vec<Number>, CalibrationFileError> {
+        items
+            .iter()
+            .enumerate()
+            .map(|(i, n)| match &n.value {
+                Value::Scalar { text, quoted: false } => self.number(text, n.line, &format!("{what}[{i}]")),
+                _ => Err(self.err(
+                    n.line,
+                    format!("{what}[{i}]: expected a number, got {}", n.describe()),
+                )),
+            })
+            .collect()
+    }
+
+    /// The camera read from this file, its entry at `line`: a single camera of `format`'s own pixel
+    /// convention, without polynomials or notes; readers of files that differ set those fields.
+    pub fn calibration(
+        &self,
+        format: FileFormat,
+        line: usize,
+        model: &str,
+        [width, height]: [u32; 2],
+        params: Vec<Number>,
+    ) -> Calibration {
+        Calibration {
+            file: self.file.to_string(),
+            format,
+            camera: None,
+            cameras: Vec::new(),
+            first_by_default: false,
+            width,
+            height,
+            model: model.to_string(),
+            params,
+            polynomial: Vec::new(),
+            inverse_polynomial: Vec::new(),
+            pixel_convention: match format {
+                FileFormat::Colmap => PixelConvention::Colmap,
+                FileFormat::OpenCv | FileFormat::Kalibr | FileFormat::OCamCalib => PixelConvention::OpenCv,
+            },
+            source: format!("{}:{line}", self.file),
+            notes: Vec::new(),
+        }
     }
 
     /// Reads `text` as an image size in pixels (a positive integer); `what` names the field.

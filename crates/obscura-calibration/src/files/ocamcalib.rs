@@ -17,7 +17,7 @@
 //! indices (they feed `cvRemap` directly), so `pixelConvention` is `opencv`; the MATLAB toolbox that
 //! calibrated counts pixels from 1, an offset the file format itself carries.
 
-use super::{Calibration, CalibrationFileError, FileFormat, Number, PixelConvention, Src, single_camera};
+use super::{Calibration, CalibrationFileError, FileFormat, Number, Src, single_camera};
 
 struct Tokens<'a> {
     items: Vec<(&'a str, usize)>,
@@ -132,19 +132,15 @@ pub(crate) fn read(
         ));
     }
     Ok(Calibration {
-        file: src.file.to_string(),
-        format: FileFormat::OCamCalib,
-        camera: None,
-        cameras: Vec::new(),
-        first_by_default: false,
-        width,
-        height,
-        model: "OCAMCALIB".to_string(),
-        params,
         polynomial,
         inverse_polynomial,
-        pixel_convention: PixelConvention::OpenCv,
-        source: format!("{}:{first_line}", src.file),
         notes: vec!["OCamCalib's image size is written height width; the resolution is width height".into()],
+        ..src.calibration(
+            FileFormat::OCamCalib,
+            first_line,
+            "OCAMCALIB",
+            [width, height],
+            params,
+        )
     })
 }

@@ -19,7 +19,7 @@
 //! coordinates (`pixelConvention` `opencv`).
 
 use super::tree::{Node, Value};
-use super::{Calibration, CalibrationFileError, FileFormat, Number, PixelConvention, Src, single_camera};
+use super::{Calibration, CalibrationFileError, FileFormat, Number, Src, single_camera};
 
 /// A matrix as written: its shape and values in row-major order.
 struct Matrix {
@@ -42,20 +42,6 @@ fn count(src: &Src<'_>, node: &Node, what: &str) -> Result<usize, CalibrationFil
                 format!("{what}: expected a non-negative integer, got {}", node.describe()),
             )
         })
-}
-
-fn numbers(src: &Src<'_>, items: &[Node], what: &str) -> Result<Vec<Number>, CalibrationFileError> {
-    items
-        .iter()
-        .enumerate()
-        .map(|(i, n)| match &n.value {
-            Value::Scalar { text, quoted: false } => src.number(text, n.line, &format!("{what}[{i}]")),
-            _ => Err(src.err(
-                n.line,
-                format!("{what}[{i}]: expected a number, got {}", n.describe()),
-            )),
-        })
-        .collect()
 }
 
 /// Reads an OpenCV matrix: an `opencv-matrix` mapping, or a plain list (a column), or a list of rows.
@@ -98,7 +84,7 @@ fn matrix(src: &Src<'_>, node: &Node, name: &str) -> Result<Matrix, CalibrationF
                     ),
                 )
             })?;
-            let data = numbers(src, items, &format!("{name}.data"))?;
+            let data = src.numbers(items, &format!("{name}.data"))?;
             if data.len() != rows * cols {
                 return Err(src.err(
                     data_node.line,
@@ -125,7 +111,7 @@ fn matrix(src: &Src<'_>, node: &Node, name: &str) -> Result<Matrix, CalibrationF
                         ),
                     ));
                 }
-                data.extend(numbers(src, row_items, &format!("{name}[{r}]"))?);
+                data.extend(src.numbers(row_items, &format!("{name}[{r}]"))?);
             }
             Ok(Matrix {
                 rows: items.len(),
@@ -136,7 +122,7 @@ fn matrix(src: &Src<'_>, node: &Node, name: &str) -> Result<Matrix, CalibrationF
         Value::Seq(items) => Ok(Matrix {
             rows: items.len(),
             cols: 1,
-            data: numbers(src, items, name)?,
+            data: src.numbers(items, name)?,
         }),
         Value::Scalar { .. } => Err(src.err(
             node.line,
@@ -148,38 +134,8 @@ fn matrix(src: &Src<'_>, node: &Node, name: &str) -> Result<Matrix, CalibrationF
     }
 }
 
-/// Reads an OpenCV (or ROS `camera_info`) calibration from its parsed tree.
-///
-/// # Errors
-/// The line and field at fault: a missing or malformed `image_width`, `image_height`,
-/// `camera_matrix` (3×3, zero skew, last row 0 0 1, positive focal lengths) or
-/// `distortion_coefficients` (a row or column of 0, 4, 5, 8, 12 or 14; 4 for a fisheye), or
-/// `--camera` given for this single-camera file.
-pub(crate) fn read(
-    src: &Src<'_>,
-    root: &Node,
-    camera: Option<&str>,
-) -> Result<Calibration, CalibrationFileError> {
-    single_camera(src, "OpenCV calibration", camera)?;
-    if root.entries().is_none() {
-        return Err(src.err(
-            root.line,
-            format!(
-                "expected a mapping of calibration fields, got {}",
-                root.describe()
-            ),
-        ));
-    }
-    let w = field(src, root, "image_width", "the calibration image width in pixels")?;
-    let h = field(
-        src,
-        root,
-        "image_height",
-        "the calibration image height in pixels",
-    )?;
-    let width = src.size(w.text().unwrap_or_default(), w.line, "image_width")?;
-    let height = src.size(h.text().unwrap_or_default(), h.line, "image_height")?;
-
+/// Reads and checks `camera_matrix`: 3×3, `[fx 0 cx; 0 fy cy; 0 0 1]` with positive focal lengths.
+fn camera_matrix<'a>(src: &Src<'_>, root: &'a Node) -> Result<(&'a Node, Matrix), CalibrationFileError> {
     let k_node = field(src, root, "camera_matrix", "the 3x3 camera matrix")?;
     let k = matrix(src, k_node, "camera_matrix")?;
     if (k.rows, k.cols) != (3, 3) {
@@ -222,6 +178,71 @@ pub(crate) fn read(
             ));
         }
     }
+    Ok((k_node, k))
+}
+
+/// Whether the file is a `cv::fisheye` calibration: its `fisheye_model` flag, else ROS's
+/// `distortion_model`.
+fn is_fisheye(src: &Src<'_>, root: &Node) -> Result<bool, CalibrationFileError> {
+    match (
+        root.get_ignore_case("fisheye_model"),
+        root.get_ignore_case("distortion_model"),
+    ) {
+        (Some(f), _) => match f.text().unwrap_or_default().trim() {
+            "0" | "false" | "False" => Ok(false),
+            "1" | "true" | "True" => Ok(true),
+            _ => Err(src.err(
+                f.line,
+                format!("fisheye_model: expected 0 or 1, got {}", f.describe()),
+            )),
+        },
+        (None, Some(m)) => match m.text().unwrap_or_default().trim() {
+            "plumb_bob" | "rational_polynomial" | "" => Ok(false),
+            "equidistant" | "fisheye" => Ok(true),
+            other => Err(src.err(
+                m.line,
+                format!(
+                    "distortion_model: \"{other}\" is not read here; expected plumb_bob, rational_polynomial or equidistant"
+                ),
+            )),
+        },
+        (None, None) => Ok(false),
+    }
+}
+
+/// Reads an OpenCV (or ROS `camera_info`) calibration from its parsed tree.
+///
+/// # Errors
+/// The line and field at fault: a missing or malformed `image_width`, `image_height`,
+/// `camera_matrix` (3×3, zero skew, last row 0 0 1, positive focal lengths) or
+/// `distortion_coefficients` (a row or column of 0, 4, 5, 8, 12 or 14; 4 for a fisheye), or
+/// `--camera` given for this single-camera file.
+pub(crate) fn read(
+    src: &Src<'_>,
+    root: &Node,
+    camera: Option<&str>,
+) -> Result<Calibration, CalibrationFileError> {
+    single_camera(src, "OpenCV calibration", camera)?;
+    if root.entries().is_none() {
+        return Err(src.err(
+            root.line,
+            format!(
+                "expected a mapping of calibration fields, got {}",
+                root.describe()
+            ),
+        ));
+    }
+    let w = field(src, root, "image_width", "the calibration image width in pixels")?;
+    let h = field(
+        src,
+        root,
+        "image_height",
+        "the calibration image height in pixels",
+    )?;
+    let width = src.size(w.text().unwrap_or_default(), w.line, "image_width")?;
+    let height = src.size(h.text().unwrap_or_default(), h.line, "image_height")?;
+
+    let (k_node, k) = camera_matrix(src, root)?;
 
     let d_node = field(
         src,
@@ -241,37 +262,7 @@ pub(crate) fn read(
     }
 
     let mut notes = Vec::new();
-    let fisheye = match (
-        root.get_ignore_case("fisheye_model"),
-        root.get_ignore_case("distortion_model"),
-    ) {
-        (Some(f), _) => {
-            let t = f.text().unwrap_or_default().trim();
-            match t {
-                "0" | "false" | "False" => false,
-                "1" | "true" | "True" => true,
-                _ => {
-                    return Err(src.err(
-                        f.line,
-                        format!("fisheye_model: expected 0 or 1, got {}", f.describe()),
-                    ));
-                }
-            }
-        }
-        (None, Some(m)) => match m.text().unwrap_or_default().trim() {
-            "plumb_bob" | "rational_polynomial" | "" => false,
-            "equidistant" | "fisheye" => true,
-            other => {
-                return Err(src.err(
-                    m.line,
-                    format!(
-                        "distortion_model: \"{other}\" is not read here; expected plumb_bob, rational_polynomial or equidistant"
-                    ),
-                ));
-            }
-        },
-        (None, None) => false,
-    };
+    let fisheye = is_fisheye(src, root)?;
     let n = d.data.len();
     let model = if fisheye {
         if n != 4 {
@@ -307,19 +298,7 @@ pub(crate) fn read(
     ];
     params.extend(d.data);
     Ok(Calibration {
-        file: src.file.to_string(),
-        format: FileFormat::OpenCv,
-        camera: None,
-        cameras: Vec::new(),
-        first_by_default: false,
-        width,
-        height,
-        model: model.to_string(),
-        params,
-        polynomial: Vec::new(),
-        inverse_polynomial: Vec::new(),
-        pixel_convention: PixelConvention::OpenCv,
-        source: format!("{}:{}", src.file, k_node.line),
         notes,
+        ..src.calibration(FileFormat::OpenCv, k_node.line, model, [width, height], params)
     })
 }
