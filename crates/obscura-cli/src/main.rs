@@ -5,12 +5,11 @@
 // there are RIB and shell notation, not rustdoc links or HTML.
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use crate::args::{crop_window, load_calibration, parse_format};
-use crate::params::{merge_param_args, param_list};
+use crate::params::merge_param_args;
 use clap::{Args, Parser, Subcommand};
 use obscura_host::aperture::ApertureDesc;
 use obscura_host::shutter::ShutterDesc;
@@ -19,19 +18,16 @@ use obscura_image::raymap::{trace_ray_map, write_exr};
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all};
 use obscura_plugins::{builtin_registry, isolate};
-use obscura_render::job::{self, CALIBRATED, Calibrated, Overrides};
+use obscura_render::job::{self, CALIBRATED, Calibrated};
 use obscura_render::limits::{self, OutputKind};
-use obscura_render::render::{RenderOptions, prepare};
-use obscura_render::sequence::{FrameSpec, sequence_displays};
-use obscura_scene::rib::Frame;
-use obscura_sdk::{Format, ParamList, ScreenWindow};
-use obscura_shading::integrator::PathOptions;
+use obscura_render::sequence::FrameSpec;
+use obscura_sdk::{Format, ScreenWindow};
 
-mod animation;
 mod args;
 mod check;
 mod lens;
 mod params;
+mod render;
 mod signals;
 mod stdout;
 mod stmap;
@@ -139,10 +135,10 @@ struct RenderArgs {
     /// materialId, flowForward, flowBackward, flowValid (ground truth), albedo, uv (textures), or all
     /// of them with 'all'.
     /// Repeatable or comma-separated. IDs and flow also write <image>.ids.json and <image>.camera.json.
-    #[arg(long = "aov", value_name = "NAME", value_delimiter = ',', value_parser = animation::parse_aovs)]
+    #[arg(long = "aov", value_name = "NAME", value_delimiter = ',', value_parser = render::parse_aovs)]
     aovs: Vec<Vec<obscura_scene::Aov>>,
     /// Frames per second of an animated scene (glTF): frame N is posed at (N − 1)/fps seconds.
-    #[arg(long, default_value_t = 24.0, value_parser = animation::parse_fps)]
+    #[arg(long, default_value_t = 24.0, value_parser = render::parse_fps)]
     fps: f32,
 }
 
@@ -332,326 +328,6 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     Ok(())
 }
 
-fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
-    if let Some(n) = a.threads {
-        limits::check_threads(n).map_err(|e| e.to_string())?;
-    }
-    if let Some(output) = &a.output {
-        // Before the scene is read: a bad -o is known at once.
-        let kind = OutputKind::of_path(output).unwrap_or(OutputKind::Exr);
-        limits::check_output(output, kind).map_err(|e| e.to_string())?;
-    }
-    let (width, height) = a.format.unwrap_or(job::DEFAULT_FORMAT);
-    let (frames, base_dir) =
-        job::load_frames(a.scene.as_deref(), Format::new(width, height)).map_err(|e| e.to_string())?;
-    let calibration = a
-        .calibration
-        .as_deref()
-        .map(|path| load_calibration(path, a.camera.as_deref(), a.quiet))
-        .transpose()?;
-    if let Some(n) = a.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .map_err(|e| e.to_string())?;
-    }
-    // An animated scene (glTF) is posed per frame (frame 1 without --frames), so its flow reaches the
-    // next.
-    if let [still] = frames.as_slice()
-        && !still.numbered
-        && still.scene.animation_seconds.is_some()
-        && let Some(path) = a.scene.as_deref()
-    {
-        let mut scene = still.scene.clone();
-        let (mut registry, overrides) = configure(a, search, &mut scene, calibration)?;
-        let displays = image_displays(a, &scene);
-        let opts = render_options(a, &displays);
-        let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
-        let job = animation::Animation {
-            path,
-            fps: a.fps,
-            format: Format::new(width, height),
-            overrides: &overrides,
-            projection: &scene.projection,
-            base_dir: &base_dir,
-            displays: &displays,
-            opts: &opts,
-            quiet: a.quiet,
-        };
-        // From here a signal finishes the frame in flight and writes what is rendered.
-        let _cancellable = signals::Cancellable::enter();
-        return job.render(&frames, &mut registry);
-    }
-    let jobs = frame_jobs(a.frames.as_ref(), &frames)?;
-    let lists = sequence_displays(
-        &jobs
-            .iter()
-            .map(|&(n, i)| (n, image_displays(a, &frames[i].scene)))
-            .collect::<Vec<_>>(),
-    );
-    // Each image renders once; a still selected as several frames is written as each of them.
-    let mut images: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
-    images.dedup();
-    for image in images {
-        let frame = &frames[image];
-        if !a.quiet && frames.len() > 1 {
-            outln!("frame {} ({})", frame.number, frame.world);
-        }
-        let writes: Vec<(u32, &[obscura_scene::Display])> = jobs
-            .iter()
-            .zip(&lists)
-            .filter(|(j, _)| j.1 == image)
-            .map(|(j, l)| (j.0, l.as_slice()))
-            .collect();
-        render_image(
-            a,
-            search,
-            frame.scene.clone(),
-            &base_dir,
-            calibration.clone(),
-            &writes,
-        )?;
-    }
-    Ok(())
-}
-
-/// The displays of one image: the scene's (or `-o`'s) with the `--aov`s added; a still has no
-/// previous frame, so no backward flow.
-fn image_displays(a: &RenderArgs, scene: &obscura_scene::Scene) -> Vec<obscura_scene::Display> {
-    let mut displays = job::displays(scene, a.output.as_deref());
-    let aovs: Vec<obscura_scene::Aov> = a.aovs.iter().flatten().copied().collect();
-    obscura_render::frame::add_aovs(&mut displays, &aovs);
-    if scene.animation_seconds.is_none() {
-        displays = obscura_render::frame::without_backward_flow(&displays, false);
-    }
-    displays
-}
-
-/// The render options of the command line for these displays.
-fn render_options(a: &RenderArgs, displays: &[obscura_scene::Display]) -> RenderOptions {
-    RenderOptions {
-        samples_per_pixel: a.spp,
-        seed: a.seed,
-        path: PathOptions {
-            max_depth: a.max_depth,
-            ..PathOptions::default()
-        },
-        deep: job::wants_deep(displays),
-        max_triangles: a.max_triangles,
-        ..RenderOptions::default()
-    }
-}
-
-/// The most frames a still scene is written as: each is a file.
-const MAX_STILL_FRAMES: u64 = 100_000;
-
-/// The images to render as (frame number, index into `frames`), in file order: with `--frames`, the
-/// images of the frames it selects; a still (one image the file does not number) is each selected
-/// frame; without `--frames`, every image.
-fn frame_jobs(spec: Option<&FrameSpec>, frames: &[Frame]) -> Result<Vec<(u32, usize)>, String> {
-    if let [still] = frames
-        && !still.numbered
-    {
-        if let Some(s) = spec.filter(|s| s.len() > MAX_STILL_FRAMES) {
-            return Err(format!(
-                "--frames {s} selects {} frames of a scene without frames of its own (at most {MAX_STILL_FRAMES}: each is written as a file)",
-                s.len()
-            ));
-        }
-        return Ok(match spec {
-            Some(s) => s.frames().map(|n| (n, 0)).collect(),
-            None => vec![(still.number, 0)],
-        });
-    }
-    let numbers: Vec<u32> = frames.iter().map(|f| f.number).collect();
-    let picked = match spec {
-        Some(s) => s.select(&numbers)?,
-        None => numbers.clone(),
-    };
-    Ok(frames
-        .iter()
-        .enumerate()
-        .filter(|(_, f)| picked.contains(&f.number))
-        .map(|(i, f)| (f.number, i))
-        .collect())
-}
-
-/// The command line's overrides applied to `scene` (its projection loaded first, so that `--param`
-/// is read against its table); warnings printed unless `--quiet`.
-fn configure(
-    a: &RenderArgs,
-    search: &PluginSearch,
-    scene: &mut obscura_scene::Scene,
-    calibration: Option<Calibrated>,
-) -> Result<(obscura_sdk::Registry, Overrides), String> {
-    let mut registry = builtin_registry();
-    let mut overrides = Overrides {
-        format: a.format,
-        crop: a.crop.as_deref().map(crop_window),
-        projection: a.projection.clone(),
-        calibration,
-        params: ParamList::new(),
-    };
-    let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
-    let factory = registry.find(&projection).map_err(|e| e.to_string())?;
-    overrides.params =
-        param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
-    overrides.apply(scene).map_err(|e| e.to_string())?;
-    scene.projection = projection;
-    // Warnings are printed even with --quiet, which only silences progress, summaries and notes.
-    if let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format)) {
-        eprintln!("warning: {w}");
-    }
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok((registry, overrides))
-}
-
-/// Renders one image and writes it as each of `writes` (frame number, displays): the scene with the
-/// command line's overrides, through its projection, with its flow pass and ground-truth sidecars.
-fn render_image(
-    a: &RenderArgs,
-    search: &PluginSearch,
-    mut scene: obscura_scene::Scene,
-    base_dir: &std::path::Path,
-    calibration: Option<Calibrated>,
-    writes: &[(u32, &[obscura_scene::Display])],
-) -> Result<(), String> {
-    let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
-    let first: &[obscura_scene::Display] = writes.first().map_or(&[], |w| w.1);
-    let scene_size = match &a.scene {
-        Some(path) => format!("{}: Format", path.display()),
-        None => "the built-in scene's Format".to_string(),
-    };
-    let source = size_source(a.format, a.calibration.as_deref(), &scene_size);
-    for &(_, displays) in writes {
-        job::check_render(&scene, displays, a.spp, &source).map_err(|e| e.to_string())?;
-    }
-    let opts = render_options(a, first);
-    let prepared = prepare(&scene, &mut registry, base_dir, &opts).map_err(|e| e.to_string())?;
-    // Warnings are printed even with --quiet, which only silences progress and summaries.
-    for w in prepared.stage().setup_warnings() {
-        eprintln!("{w}");
-    }
-    for w in prepared.texture_warnings() {
-        eprintln!("warning: {w}");
-    }
-    if !prepared.info().is_empty() {
-        eprintln!("info: {}", prepared.info());
-    }
-    // From here a signal finishes the tiles in flight and writes what is rendered.
-    let cancellable = signals::Cancellable::enter();
-    let bar = (!a.quiet && std::io::stderr().is_terminal()).then(|| {
-        let b = indicatif::ProgressBar::new(0);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{bar:40} {pos}/{len} tiles  {elapsed} elapsed, ETA {eta}",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        b
-    });
-    let progress = |done: usize, total: usize| {
-        if let Some(b) = &bar {
-            b.set_length(total as u64);
-            b.set_position(done as u64);
-        }
-    };
-    let mut out = prepared.render(&opts, &progress, &job::CANCEL);
-    if let Some(b) = &bar {
-        b.finish_and_clear();
-    }
-    let flow_warnings = obscura_render::frame::run_flow(
-        &scene,
-        &prepared,
-        &mut out,
-        first,
-        obscura_render::frame::Neighbours::default(),
-    )
-    .map_err(|e| e.to_string())?;
-    for w in flow_warnings {
-        eprintln!("{w}");
-    }
-    let mut attributes = vec![("obscura:projection", scene.projection.clone())];
-    if let Some(note) = out.stats.partial_note() {
-        attributes.push(("obscura:partial", note));
-    }
-    attributes.extend(
-        obscura_render::frame::header_attributes(&scene, &prepared, None).map_err(|e| e.to_string())?,
-    );
-    // Sidecars go with ground truth: a display with a ground-truth AOV.
-    let sidecars = (first.iter()).any(|d| {
-        d.aovs
-            .iter()
-            .any(|x| obscura_scene::Aov::GROUND_TRUTH.contains(x))
-    });
-    let mut written = Vec::new();
-    for &(frame, displays) in writes {
-        written.extend(
-            job::write_displays(displays, &out, scene.camera.format.pixel_aspect, &attributes)
-                .map_err(|e| e.to_string())?,
-        );
-        if sidecars {
-            let number = a.frames.is_some().then_some(frame);
-            written.extend(obscura_render::frame::write_sidecars(
-                &scene,
-                &prepared,
-                displays,
-                number,
-                out.stats.cancelled,
-            )?);
-        }
-    }
-    drop(cancellable);
-    let s = &out.stats;
-    if let Some(w) = s.contract.warning(&scene.projection) {
-        eprintln!("{w}");
-    }
-    if !a.quiet {
-        let frame = s.render_seconds.max(1e-9);
-        outln!(
-            "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, {} lost to failed project calls, \
-             {:.1} Mrays/s traced (camera, bounce and shadow rays); \
-             camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
-            scene.camera.pixels().width(),
-            scene.camera.pixels().height(),
-            scene.projection,
-            frame,
-            s.setup_seconds,
-            s.triangles,
-            s.contract.samples,
-            s.contract.culled,
-            s.contract.lost(),
-            s.rays_traced as f64 / frame * 1e-6,
-            100.0 * s.camera_stage_seconds
-                / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
-            100.0 * s.sampling_seconds
-                / (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9),
-            if s.cancelled {
-                format!("; interrupted after {} of {} tiles", s.tiles.0, s.tiles.1)
-            } else if s.flow_seconds > 0.0 {
-                format!("; flow pass {:.3} s", s.flow_seconds)
-            } else {
-                String::new()
-            }
-        );
-        for p in &written {
-            outln!("wrote {}", p.display());
-        }
-    }
-    if s.cancelled {
-        return Err(format!(
-            "interrupted: wrote the {} of {} tiles that were rendered (marked in the EXR header as obscura:partial)",
-            s.tiles.0, s.tiles.1
-        ));
-    }
-    if let Some(signal) = signals::received() {
-        eprintln!("note: signal {signal} arrived after every tile was rendered; the outputs are complete");
-    }
-    Ok(())
-}
-
 /// `obscura plugins [NAME]`: a NAME that is not built in (or a path) is loaded as a plugin first.
 /// `obscura plugins [NAME] [--names]`: one projection (a built-in, or a plugin found by name or
 /// path), or every built-in and every plugin library along the plugin path. A library that does not
@@ -719,7 +395,7 @@ fn main() -> ExitCode {
     let search = PluginSearch::from_env(&cli.plugin_path).with_isolation(isolation);
     let result = match &cli.command {
         Command::Rays(a) => rays(a, &search),
-        Command::Render(a) => render(a, &search),
+        Command::Render(a) => render::render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
         Command::Check(a) => match check::run(a, &search) {

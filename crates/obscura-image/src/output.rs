@@ -165,7 +165,8 @@ const RESERVED: [&str; 16] = [
 ];
 
 /// The integer value of an ID AOV in a resolved pixel; `None` for the other AOVs.
-fn id_component(v: &SampleValues, aov: Aov) -> Option<u32> {
+#[must_use]
+pub fn id_component(v: &SampleValues, aov: Aov) -> Option<u32> {
     match aov {
         Aov::ObjectId => Some(v.truth.object_id),
         Aov::InstanceId => Some(v.truth.instance_id),
@@ -174,8 +175,10 @@ fn id_component(v: &SampleValues, aov: Aov) -> Option<u32> {
     }
 }
 
-/// Component `k` of `aov` in a resolved pixel.
-fn component(v: &SampleValues, aov: Aov, k: usize) -> f32 {
+/// Component `k` of `aov` in a resolved pixel (`k` below its number of channels): what each AOV of the
+/// table ([`obscura_scene::AOVS`]) takes from the film. An ID is its integer as `f32`.
+#[must_use]
+pub fn component(v: &SampleValues, aov: Aov, k: usize) -> f32 {
     match aov {
         Aov::Ci => [v.ci.r, v.ci.g, v.ci.b][k],
         Aov::Alpha => v.alpha,

@@ -1,15 +1,21 @@
 //! `obscura.stmap`, `obscura.check` and `obscura.render`: the CLI's jobs on `Camera`s, returning
-//! numpy arrays and dicts instead of files.
+//! numpy arrays and dicts (and, for `render`, the same files as the CLI on request).
 
 use std::path::PathBuf;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Duration;
 
 use numpy::PyArrayMethods;
 use obscura_check::{CheckOptions, check_registered};
+use obscura_image::film::Film;
+use obscura_image::output::{component, id_component};
 use obscura_image::stmap::compute_stmap;
+use obscura_render::frame::{Neighbours, add_aovs, without_backward_flow};
 use obscura_render::job::{self, load_scene};
-use obscura_render::render::{RenderOptions, prepare};
+use obscura_render::pipeline::{FrameJob, FrameWrite, Message, Reporter, Sidecars, render_frame};
+use obscura_render::render::RenderOptions;
+use obscura_scene::{AOVS, Aov, AovGroup, AovKind};
 use obscura_sdk::Format;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -98,29 +104,71 @@ pub fn check<'py>(
     Ok(dict)
 }
 
-/// The AOVs `render` returns: name and components.
-const AOVS: [(&str, usize); 8] = [
-    ("beauty", 3),
-    ("alpha", 1),
-    ("z", 1),
-    ("N", 3),
-    ("P", 3),
-    ("cameraDirection", 3),
-    ("albedo", 3),
-    ("uv", 2),
-];
+/// The AOVs `render` returns without `aovs`: RenderMan's own and the textures' (rows of the AOV
+/// table, under their array names).
+fn default_aovs() -> Vec<Aov> {
+    (AOVS.iter())
+        .filter(|s| s.group != AovGroup::GroundTruth)
+        .map(|s| s.aov)
+        .collect()
+}
 
-/// Renders a scene (RIB, glTF, OBJ; None for the built-in one) and returns its AOVs as numpy arrays
-/// over the crop window: `beauty` (H×W×3, linear, premultiplied), `alpha`, `z` (the projection's
-/// deep metric, inf where nothing was hit), `N`, `P` (world space), `cameraDirection` (H×W×3),
-/// `albedo` (H×W×3: the footprint-filtered base colour at the first hit, linear), `uv` (H×W×2: the
-/// first texture coordinate set as stored in the file), and `stats`.
+/// The AOV of an array name (`beauty`, `alpha`, `cameraZ`: the AOV table's Python names).
+fn aov_named(name: &str) -> PyResult<Aov> {
+    (AOVS.iter())
+        .find(|s| s.array == name)
+        .map(|s| s.aov)
+        .ok_or_else(|| {
+            let names: Vec<&str> = AOVS.iter().map(|s| s.array).collect();
+            PyValueError::new_err(format!(
+                "aovs: unknown AOV {name:?}; expected some of {}",
+                names.join(", ")
+            ))
+        })
+}
+
+/// Python's reporter: progress counters and the cancel flag the calling thread polls, and the
+/// messages, returned in `stats["warnings"]`.
+#[derive(Default)]
+struct Polled {
+    done: AtomicUsize,
+    total: AtomicUsize,
+    cancel: AtomicBool,
+    messages: Mutex<Vec<String>>,
+}
+
+impl Reporter for Polled {
+    fn message(&self, kind: Message, text: &str) {
+        if let Ok(mut m) = self.messages.lock() {
+            m.push(kind.line(text));
+        }
+    }
+    fn progress(&self, done: usize, total: usize) {
+        self.done.store(done, Ordering::Relaxed);
+        self.total.store(total, Ordering::Relaxed);
+    }
+    fn cancel(&self) -> &AtomicBool {
+        &self.cancel
+    }
+}
+
+/// Renders a scene (RIB, glTF, OBJ; None for the built-in one) through the same frame pipeline as
+/// `obscura render` and returns its AOVs as numpy arrays over the crop window: by default `beauty`
+/// (H×W×3, linear, premultiplied), `alpha`, `z` (the projection's deep metric, inf where nothing was
+/// hit), `N`, `P` (world space), `cameraDirection` (H×W×3), `albedo` (H×W×3: the footprint-filtered
+/// base colour at the first hit, linear), `uv` (H×W×2: the first texture coordinate set as stored in
+/// the file), and `stats`. `aovs` selects AOVs by these names, ground truth included
+/// (`cameraZ`, `Pcamera`, `objectId` as uint32, `flowForward` (runs the flow pass), …).
 /// `camera` replaces the scene's camera (its projection, parameters, format and options;
-/// the scene's camera transform is kept unless the camera has its own `world_to_camera`). `aovs`
-/// selects AOVs (default all). `progress(done_tiles, total_tiles)` is called from the calling
-/// thread about ten times a second; Ctrl-C (KeyboardInterrupt) stops the render and raises.
+/// the scene's camera transform is kept unless the camera has its own `world_to_camera`).
+/// `output` writes the files `obscura render -o output` writes (an EXR, its PNG preview, and the ID and
+/// camera sidecars when a ground-truth AOV is asked for), with `aovs` added as `--aov` adds them;
+/// `write=True` without `output` writes the scene's own displays (else `render.exr`), as
+/// `obscura render` does; `stats["written"]` lists the files. `progress(done_tiles, total_tiles)` is
+/// called from the calling thread about ten times a second; Ctrl-C (KeyboardInterrupt) stops the
+/// render and raises.
 #[pyfunction]
-#[pyo3(signature = (scene = None, camera = None, spp = None, aovs = None, seed = 0, max_depth = 6, progress = None))]
+#[pyo3(signature = (scene = None, camera = None, spp = None, aovs = None, seed = 0, max_depth = 6, progress = None, output = None, write = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -131,20 +179,12 @@ pub fn render<'py>(
     seed: u32,
     max_depth: u32,
     progress: Option<Bound<'py, PyAny>>,
+    output: Option<PathBuf>,
+    write: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let wanted: Vec<(&str, usize)> = match &aovs {
-        None => AOVS.to_vec(),
-        Some(list) => list
-            .iter()
-            .map(|a| {
-                AOVS.iter().find(|(n, _)| n == a).copied().ok_or_else(|| {
-                    PyValueError::new_err(format!(
-                        "aovs: unknown AOV {a:?}; expected some of {}",
-                        AOVS.map(|(n, _)| n).join(", ")
-                    ))
-                })
-            })
-            .collect::<PyResult<_>>()?,
+    let wanted: Vec<Aov> = match &aovs {
+        None => default_aovs(),
+        Some(list) => list.iter().map(|a| aov_named(a)).collect::<PyResult<_>>()?,
     };
     if spp == Some(0) {
         return Err(PyValueError::new_err(
@@ -166,6 +206,15 @@ pub fn render<'py>(
         sc.projection = c.stage.name().to_string();
         sc.projection_params = c.params.clone();
     }
+    let displays = if write || output.is_some() {
+        let mut d = job::displays(&sc, output.as_deref());
+        if aovs.is_some() {
+            add_aovs(&mut d, &wanted);
+        }
+        without_backward_flow(&d, false)
+    } else {
+        Vec::new()
+    };
     let opts = RenderOptions {
         samples_per_pixel: spp,
         seed,
@@ -175,96 +224,118 @@ pub fn render<'py>(
         },
         ..RenderOptions::default()
     };
-    let prepared = {
-        let mut reg = registry()?;
-        let reg_ref: &mut obscura_sdk::Registry = &mut reg;
-        py.detach(|| prepare(&sc, reg_ref, &base_dir, &opts))
-            .map_err(|e| PyValueError::new_err(e.to_string()))?
+    let writes = [FrameWrite {
+        number: None,
+        displays: &displays,
+    }];
+    let size_source = match &scene {
+        Some(path) => format!("{}: Format", path.display()),
+        None => "the built-in scene's Format".to_string(),
     };
+    let frame = FrameJob {
+        scene: &sc,
+        base_dir: &base_dir,
+        writes: if displays.is_empty() { &[] } else { &writes },
+        also: &wanted,
+        neighbours: Neighbours::default(),
+        options: &opts,
+        header_frame: None,
+        sidecars: Sidecars::WithGroundTruth,
+        size_source: &size_source,
+    };
+    let reporter = Polled::default();
     let pool = pool()?;
-    let cancel = AtomicBool::new(false);
-    let (done, total) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let mut reg = registry()?;
+    let reg_ref: &mut obscura_sdk::Registry = &mut reg;
     let mut failure: Option<PyErr> = None;
-    let out = std::thread::scope(|s| {
-        let worker = s.spawn(|| {
-            pool.install(|| {
-                prepared.render(
-                    &opts,
-                    &|d, t| {
-                        done.store(d, Ordering::Relaxed);
-                        total.store(t, Ordering::Relaxed);
-                    },
-                    &cancel,
-                )
-            })
-        });
+    let result = std::thread::scope(|s| {
+        let worker = s.spawn(|| pool.install(|| render_frame(&frame, reg_ref, &reporter)));
         while !worker.is_finished() {
             py.detach(|| std::thread::sleep(Duration::from_millis(100)));
             if failure.is_none() {
                 let step = py.check_signals().and_then(|()| match &progress {
                     Some(cb) => cb
-                        .call1((done.load(Ordering::Relaxed), total.load(Ordering::Relaxed)))
+                        .call1((
+                            reporter.done.load(Ordering::Relaxed),
+                            reporter.total.load(Ordering::Relaxed),
+                        ))
                         .map(|_| ()),
                     None => Ok(()),
                 });
                 if let Err(e) = step {
-                    cancel.store(true, Ordering::SeqCst);
+                    reporter.cancel.store(true, Ordering::SeqCst);
                     failure = Some(e);
                 }
             }
         }
         worker.join()
     });
-    let out = out.map_err(|_| PyRuntimeError::new_err("the render panicked"))?;
+    let result = result
+        .map_err(|_| PyRuntimeError::new_err("the render panicked"))?
+        .map_err(|e| PyValueError::new_err(e.to_string()))?;
     if let Some(e) = failure {
         return Err(e);
     }
+    let out = &result.output;
     if let Some(cb) = &progress {
         cb.call1((out.stats.tiles.0, out.stats.tiles.1))?;
     }
-    let crop = out.film.crop();
-    let (w, h) = (crop.width() as usize, crop.height() as usize);
-    let d = PyDict::new(py);
-    for (name, comps) in wanted {
-        let arr = if comps == 1 {
-            zeros::<f32>(py, &[h, w])
-        } else {
-            zeros::<f32>(py, &[h, w, comps])
-        };
-        {
-            let mut rw = arr.readwrite();
-            let s = rw
-                .as_slice_mut()
-                .map_err(|_| PyRuntimeError::new_err("output not contiguous"))?;
-            for y in 0..h {
-                for x in 0..w {
-                    let v = out.film.pixel(crop.x0 + x as u32, crop.y0 + y as u32);
-                    let i = (y * w + x) * comps;
-                    let v3 = |v: glam::Vec3| [v.x, v.y, v.z];
-                    match name {
-                        "beauty" => s[i..i + 3].copy_from_slice(&[v.ci.r, v.ci.g, v.ci.b]),
-                        "alpha" => s[i] = v.alpha,
-                        "z" => s[i] = v.z,
-                        "N" => s[i..i + 3].copy_from_slice(&v3(v.n)),
-                        "P" => s[i..i + 3].copy_from_slice(&v3(v.p)),
-                        "albedo" => s[i..i + 3].copy_from_slice(&[v.albedo.r, v.albedo.g, v.albedo.b]),
-                        "uv" => s[i..i + 2].copy_from_slice(&[v.uv.x, v.uv.y]),
-                        _ => s[i..i + 3].copy_from_slice(&v3(v.camera_direction)),
-                    }
-                }
-            }
-        }
-        d.set_item(name, arr)?;
-    }
+    let d = aov_arrays(py, &out.film, &wanted)?;
     let st = PyDict::new(py);
     st.set_item("render_seconds", out.stats.render_seconds)?;
     st.set_item("setup_seconds", out.stats.setup_seconds)?;
+    st.set_item("flow_seconds", out.stats.flow_seconds)?;
     st.set_item("triangles", out.stats.triangles)?;
     st.set_item("camera_samples", out.stats.contract.samples)?;
     st.set_item("culled", out.stats.contract.culled)?;
     st.set_item("contract_violations", out.stats.contract.violations())?;
     st.set_item("rays_traced", out.stats.rays_traced)?;
     st.set_item("cancelled", out.stats.cancelled)?;
+    let written: Vec<String> = result.written.iter().map(|p| p.display().to_string()).collect();
+    st.set_item("written", written)?;
+    st.set_item(
+        "warnings",
+        reporter.messages.lock().map(|m| m.clone()).unwrap_or_default(),
+    )?;
     d.set_item("stats", st)?;
+    Ok(d)
+}
+
+/// The film's `aovs` over the crop window as numpy arrays (H×W for one channel, H×W×C otherwise),
+/// keyed by their array names; IDs as uint32, the rest float32.
+fn aov_arrays<'py>(py: Python<'py>, film: &Film, aovs: &[Aov]) -> PyResult<Bound<'py, PyDict>> {
+    let crop = film.crop();
+    let (w, h) = (crop.width() as usize, crop.height() as usize);
+    let pixels: Vec<_> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| film.pixel(crop.x0 + x as u32, crop.y0 + y as u32))
+        .collect();
+    let d = PyDict::new(py);
+    for &aov in aovs {
+        let comps = aov.channels().len();
+        let dims: &[usize] = if comps == 1 { &[h, w] } else { &[h, w, comps] };
+        let not_contiguous = || PyRuntimeError::new_err("output not contiguous");
+        if aov.spec().kind == AovKind::Id {
+            let arr = zeros::<u32>(py, dims);
+            let mut rw = arr.readwrite();
+            let s = rw.as_slice_mut().map_err(|_| not_contiguous())?;
+            for (o, v) in s.iter_mut().zip(&pixels) {
+                *o = id_component(v, aov).unwrap_or(0);
+            }
+            drop(rw);
+            d.set_item(aov.spec().array, arr)?;
+        } else {
+            let arr = zeros::<f32>(py, dims);
+            let mut rw = arr.readwrite();
+            let s = rw.as_slice_mut().map_err(|_| not_contiguous())?;
+            for (o, v) in s.chunks_exact_mut(comps).zip(&pixels) {
+                for (k, c) in o.iter_mut().enumerate() {
+                    *c = component(v, aov, k);
+                }
+            }
+            drop(rw);
+            d.set_item(aov.spec().array, arr)?;
+        }
+    }
     Ok(d)
 }

@@ -11,6 +11,7 @@ use std::sync::atomic::AtomicBool;
 use obscura_calibration::files::{Calibration, CalibrationFileError};
 use obscura_host::{CameraDesc, CropWindow};
 use obscura_scene::rib::Frame;
+use obscura_scene::source::{Images, SceneSource};
 use obscura_scene::{Aov, Display, DisplayDriver, LoadError, Scene};
 use obscura_sdk::{DeclarationError, Format, ParamList};
 
@@ -49,30 +50,28 @@ pub fn load_scene(path: Option<&Path>, format: Format) -> Result<(Scene, PathBuf
     })
 }
 
-/// Reads the scene at `path` (or the built-in scene) as the images it holds — a RIB file's worlds
-/// with their frames, one image otherwise — and the directory its relative paths are read from.
+/// Opens the scene at `path` frame by frame ([`SceneSource`]), or the built-in scene
+/// ([`DEFAULT_SCENE`]) without one: a RIB file's images, a glTF animation posed at `fps` frames per
+/// second, one image otherwise.
+///
+/// `format` is the image size of a scene whose file does not set one (glTF, OBJ); RIB sets its own.
 ///
 /// # Errors
 /// As [`load_scene`].
-pub fn load_frames(path: Option<&Path>, format: Format) -> Result<(Vec<Frame>, PathBuf), LoadError> {
-    Ok(match path {
+pub fn open_scene(path: Option<&Path>, format: Format, fps: f32) -> Result<Box<dyn SceneSource>, LoadError> {
+    match path {
         None => {
             let (scene, dir) = load_scene(None, format)?;
-            (
-                vec![Frame {
-                    number: 1,
-                    numbered: false,
-                    world: String::new(),
-                    scene,
-                }],
-                dir,
-            )
+            let still = Frame {
+                number: 1,
+                numbered: false,
+                world: String::new(),
+                scene,
+            };
+            Ok(Box::new(Images::new(vec![still], dir)))
         }
-        Some(path) => (
-            obscura_scene::load_frames(path, CameraDesc::new(format))?,
-            path.parent().map(Path::to_path_buf).unwrap_or_default(),
-        ),
-    })
+        Some(path) => obscura_scene::source::open(path, CameraDesc::new(format), fps),
+    }
 }
 
 /// A real camera read from a calibration file (`--calibration FILE [--camera ID]`): the file's
@@ -323,12 +322,7 @@ pub fn check_render(
     }
     let channels = displays
         .iter()
-        .map(|d| {
-            d.aovs
-                .iter()
-                .map(|&a| a.channels().len() as u64)
-                .sum::<u64>()
-        })
+        .map(|d| d.aovs.iter().map(|&a| a.channels().len() as u64).sum::<u64>())
         .max()
         .unwrap_or(0);
     let pixels = scene.camera.pixels().len() as u64;

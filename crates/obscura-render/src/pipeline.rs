@@ -72,6 +72,9 @@ pub trait Reporter: Sync {
     /// Set to stop the render after the tiles in flight; what is rendered is still written, marked
     /// partial.
     fn cancel(&self) -> &AtomicBool;
+    /// The scene is prepared and the tiles start: from here a cancelled frame still writes what it
+    /// has (a command's signal handler switches from ending the process to setting the cancel flag).
+    fn rendering(&self) {}
     /// The render's tiles are all done (or cancelled): a progress bar may clear itself.
     fn rendered(&self) {}
 }
@@ -175,7 +178,12 @@ pub fn render_frame(
     if !prepared.info().is_empty() {
         reporter.message(Message::Info, prepared.info());
     }
-    let mut out = prepared.render(&options, &|done, total| reporter.progress(done, total), reporter.cancel());
+    reporter.rendering();
+    let mut out = prepared.render(
+        &options,
+        &|done, total| reporter.progress(done, total),
+        reporter.cancel(),
+    );
     reporter.rendered();
     let flow_aovs = first.iter().flat_map(|d| d.aovs.iter()).chain(job.also);
     if flow_aovs.clone().any(|a| a.is_flow()) {

@@ -217,8 +217,16 @@ def render(
     seed: int = 0,
     max_depth: int = 6,
     progress: Optional[Callable[[int, int], Any]] = None,
+    output: Optional[Union[str, PathLike[str]]] = None,
+    write: bool = False,
 ) -> Dict[str, Any]:
     """Renders a scene (RIB, glTF, OBJ; None for the built-in one) through ``camera`` (default the
-    scene's) and returns ``beauty`` (H×W×3), ``alpha``, ``z``, ``N``, ``P``, ``cameraDirection``,
-    ``albedo`` (H×W×3), ``uv`` (H×W×2) and ``stats``. ``progress(done, total)`` is called with tile counts; Ctrl-C raises
-    KeyboardInterrupt."""
+    scene's), with the same frame pipeline as ``obscura render``, and returns ``beauty`` (H×W×3),
+    ``alpha``, ``z``, ``N``, ``P``, ``cameraDirection``, ``albedo`` (H×W×3), ``uv`` (H×W×2) and
+    ``stats``; ``aovs`` picks among these and the ground truth (``cameraZ``, ``distance``,
+    ``Pcamera``, ``Ncamera``, ``objectId``/``instanceId``/``materialId`` as uint32, ``flowForward``,
+    ``flowBackward``, ``flowValid``). ``output`` writes the files ``obscura render -o output --aov
+    …`` writes (EXR, PNG preview, ID and camera sidecars with ground truth); ``write=True`` writes
+    the scene's own displays (else ``render.exr``). ``stats["written"]`` lists the files and
+    ``stats["warnings"]`` the messages. ``progress(done, total)`` is called with tile counts; Ctrl-C
+    raises KeyboardInterrupt."""

@@ -214,7 +214,12 @@ impl Reader {
             // "color Ci", "varying float s": the AOV's name is the last word.
             let bare = channel.split_whitespace().last().unwrap_or(channel);
             let table = Aov::from_name(bare).map(|a| std::slice::from_ref(&a.spec().aov));
-            match RIB_CHANNELS.iter().find(|(n, _)| *n == bare).map(|(_, list)| *list).or(table) {
+            match RIB_CHANNELS
+                .iter()
+                .find(|(n, _)| *n == bare)
+                .map(|(_, list)| *list)
+                .or(table)
+            {
                 Some(list) => {
                     for aov in list {
                         if !aovs.contains(aov) {

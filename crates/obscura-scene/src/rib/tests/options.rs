@@ -6,8 +6,8 @@ use obscura_host::CropWindow;
 use obscura_sdk::{Format, ParamType, ParamValue, ScreenWindow};
 
 use super::*;
-use crate::rib::options::FILTERS;
 use crate::aov::Aov;
+use crate::rib::options::FILTERS;
 use crate::types::{Display, DisplayDriver, FilterKind, PixelFilter};
 
 #[test]
