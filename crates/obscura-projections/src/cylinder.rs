@@ -30,16 +30,11 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::{
-    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
-};
+use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, ValueRange, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_spherical, finite_f64, hsweep_param, sin_cos, spherical_field_of_view,
-    spherical_property,
+    AzimuthSweep, SphericalClip, boxed_spherical, hsweep_param, sin_cos, spherical_field_of_view,
 };
-use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrCylinderCamera";
@@ -57,29 +52,14 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct CylinderCameraFactory;
 
-impl ProjectionFactory for CylinderCameraFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "cylindrical panorama: azimuth u*hsweep/2, height v*tan(vsweep/2) on the unit cylinder"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
+projection_factory!(
+    CylinderCameraFactory,
+    "cylindrical panorama: azimuth u*hsweep/2, height v*tan(vsweep/2) on the unit cylinder",
+    |env, p| {
         let cylinder = CylinderCamera::new(env, p.float("hsweep")?, p.float("vsweep")?);
         boxed_spherical(NAME, env, cylinder)
     }
-}
+);
 
 /// The cylindrical panorama (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -129,18 +109,11 @@ impl CylinderCamera {
     }
 }
 
-impl Projection for CylinderCamera {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, self.fov)
-    }
+spherical_projection!(CylinderCamera, |camera: &CylinderCamera| camera.fov);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (x, y, z) = finite_f64(point)?;
+impl CylinderCamera {
+    /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
+    fn screen_of(&self, x: f64, y: f64, z: f64) -> Option<Point2> {
         let rho = x.hypot(z);
         if rho == 0.0 {
             return None;
@@ -153,9 +126,10 @@ impl Projection for CylinderCamera {
 mod tests {
     use super::*;
     use crate::testing::{
-        self, assert_refused, assert_spherical_ray_length, check_centred_roundtrip, keeps_contract, ray_at,
+        self, assert_refused, assert_spherical_ray_length, assert_sweeps_keep_contract,
+        check_centred_roundtrip, ray_at,
     };
-    use obscura_sdk::Format;
+    use obscura_sdk::{Format, Projection, ProjectionProperty, PropertyValue};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
@@ -217,20 +191,7 @@ mod tests {
 
     #[test]
     fn keeps_the_contract() {
-        let cases = [
-            (Format::new(48, 24), vec![]),
-            (
-                Format::new(40, 30),
-                vec![("float hsweep", "150"), ("float vsweep", "160")],
-            ),
-            (
-                Format::new(30, 40),
-                vec![("float hsweep", "360"), ("float vsweep", "20")],
-            ),
-        ];
-        for (_, stats) in keeps_contract(&CylinderCameraFactory, &cases) {
-            stats.assert_complete(1000);
-        }
+        assert_sweeps_keep_contract(&CylinderCameraFactory, [("150", "160"), ("360", "20")]);
     }
 
     #[test]

@@ -191,6 +191,20 @@ pub fn direction_angles(x: f64, y: f64, z: f64) -> (f64, f64) {
     (x.atan2(z), y.atan2(x.hypot(z)))
 }
 
+/// The angle in radians between the directions `a` and `b`, not necessarily unit:
+/// `atan2(|a × b|, a·b)`, accurate at every size (`acos` of the dot product is not, near 0 and π).
+#[must_use]
+pub fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+    let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    sin.atan2(cos)
+}
+
 /// The components of `point` in f64; `None` when one is not finite (every inverse starts here).
 #[must_use]
 pub fn finite_f64(point: Vec3) -> Option<(f64, f64, f64)> {
@@ -343,13 +357,13 @@ pub fn rim_cos_floor(step: f64) -> f32 {
 
 /// The error for a screen window without area.
 pub(crate) fn degenerate_window(plugin: &str, w: ScreenWindow) -> PluginError {
-    PluginError::Invalid {
-        plugin: plugin.to_string(),
-        message: format!(
+    crate::invalid(
+        plugin,
+        format!(
             "the screen window ({}, {}, {}, {}) has no area; a panoramic projection needs one",
             w.left, w.right, w.bottom, w.top
         ),
-    }
+    )
 }
 
 /// The end of a panoramic factory's `create`: `camera`, boxed, with DeepMetric RayLength set in `env`;

@@ -2,8 +2,8 @@
 //! and properties.
 
 use super::*;
-use crate::testing::{self, ContractTest, assert_contract, assert_refused};
-use obscura_sdk::Format;
+use crate::testing::{self, ContractTest, assert_contract, assert_lens_properties, assert_refused};
+use obscura_sdk::{Format, ParamList, ProjectionFactory};
 use proptest::prelude::*;
 
 fn try_make(params: &[(&str, &str)], format: Format) -> Result<Box<dyn Projection>, PluginError> {
@@ -705,18 +705,7 @@ fn properties_are_honest() {
         ],
         format,
     );
-    assert_eq!(
-        lens.property(ProjectionProperty::FStop),
-        Some(PropertyValue::Float(8.0))
-    );
-    assert_eq!(
-        lens.property(ProjectionProperty::FocalLength),
-        Some(PropertyValue::Float(0.05))
-    );
-    assert_eq!(
-        lens.property(ProjectionProperty::FocalDistance),
-        Some(PropertyValue::Float(3.0))
-    );
+    assert_lens_properties(lens.as_ref(), 8.0, 0.05, 3.0);
     // dofMult multiplies the lens radius: R = 2·0.05/(2·16).
     let (r, _, _) = one(lens.as_ref(), Point2::ZERO, Point2::new(1.0, 0.0), 0.0);
     assert!((r.origin.x - 2.0 * 0.05 / 32.0).abs() < 1e-9);
