@@ -33,7 +33,7 @@ use std::sync::LazyLock;
 use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, ValueRange, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_spherical, hsweep_param, sin_cos, spherical_field_of_view,
+    AzimuthSweep, SphericalClip, boxed_sweep, hsweep_param, sin_cos, spherical_field_of_view,
 };
 
 /// The name scenes use.
@@ -55,10 +55,7 @@ pub struct CylinderCameraFactory;
 projection_factory!(
     CylinderCameraFactory,
     "cylindrical panorama: azimuth u*hsweep/2, height v*tan(vsweep/2) on the unit cylinder",
-    |env, p| {
-        let cylinder = CylinderCamera::new(env, p.float("hsweep")?, p.float("vsweep")?);
-        boxed_spherical(NAME, env, cylinder)
-    }
+    |env, p| boxed_sweep(NAME, env, p, CylinderCamera::new)
 );
 
 /// The cylindrical panorama (see the module documentation for its mapping).
@@ -127,7 +124,7 @@ mod tests {
     use super::*;
     use crate::testing::{
         self, assert_refused, assert_spherical_ray_length, assert_sweeps_keep_contract,
-        check_centred_roundtrip, ray_at,
+        check_sweep_roundtrip, ray_at,
     };
     use obscura_sdk::{Format, Projection, ProjectionProperty, PropertyValue};
     use proptest::prelude::*;
@@ -158,9 +155,7 @@ mod tests {
             u in -1.0f32..=1.0, v in -1.0f32..=1.0, depth in 0.01f32..1000.0,
             hsweep in 1.0f32..=360.0, vsweep in 1.0f32..175.0,
         ) {
-            let format = Format::new(300, 200);
-            let (p, env) = make(&[("float hsweep", &hsweep.to_string()), ("float vsweep", &vsweep.to_string())], format);
-            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
+            check_sweep_roundtrip(&CylinderCameraFactory, (hsweep, vsweep), u, v, depth)?;
         }
     }
 

@@ -52,7 +52,7 @@
 //! `max_dist = far` ([`SphericalClip`]).
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, PluginError, Point2, Projection, ProjectionEnvironment,
+    DeepMetric, DicingHint, ParamDecl, Params, PluginError, Point2, Projection, ProjectionEnvironment,
     ProjectionProperty, PropertyValue, RayGeometry, ScreenWindow, ValueRange, Vec3,
 };
 
@@ -379,6 +379,21 @@ pub fn boxed_spherical<P: Projection + 'static>(
     let camera = camera.ok_or_else(|| degenerate_window(plugin, env.screen_window()))?;
     env.set_deep_metric(DeepMetric::RayLength);
     Ok(Box::new(camera))
+}
+
+/// The end of the factory of a panorama made from `hsweep` and `vsweep` alone (the latitude–longitude
+/// grid, the cylinder): `new` of the two sweeps in degrees, then [`boxed_spherical`].
+///
+/// # Errors
+/// A parameter lookup error when `p` lacks either sweep, and those of [`boxed_spherical`].
+pub fn boxed_sweep<P: Projection + 'static>(
+    plugin: &str,
+    env: &mut ProjectionEnvironment,
+    p: &Params,
+    new: fn(&ProjectionEnvironment, f32, f32) -> Option<P>,
+) -> Result<Box<dyn Projection>, PluginError> {
+    let camera = new(env, p.float("hsweep")?, p.float("vsweep")?);
+    boxed_spherical(plugin, env, camera)
 }
 
 /// The `hsweep` parameter: degrees of azimuth across the window's width, in `(0, 360]`, default 360.

@@ -41,7 +41,7 @@ use std::sync::LazyLock;
 use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_spherical, direction_angles, hsweep_param, lat_long_field_of_view,
+    AzimuthSweep, SphericalClip, boxed_sweep, direction_angles, hsweep_param, lat_long_field_of_view,
     radians_toward_zero, sin_cos, vsweep_param,
 };
 
@@ -57,10 +57,7 @@ pub struct SphereCameraFactory;
 projection_factory!(
     SphereCameraFactory,
     "latitude-longitude panorama: azimuth u*hsweep/2, elevation v*vsweep/2 over the window (equirectangular)",
-    |env, p| {
-        let sphere = SphereCamera::new(env, p.float("hsweep")?, p.float("vsweep")?);
-        boxed_spherical(NAME, env, sphere)
-    }
+    |env, p| boxed_sweep(NAME, env, p, SphereCamera::new)
 );
 
 /// The spherical panorama (see the module documentation for its mapping).
@@ -123,7 +120,7 @@ mod tests {
     use super::*;
     use crate::testing::{
         self, assert_refused, assert_spherical_ray_length, assert_sweeps_keep_contract,
-        check_centred_roundtrip, ray_at,
+        check_sweep_roundtrip, ray_at,
     };
     use obscura_sdk::{
         Format, ParamList, Projection, ProjectionFactory, ProjectionProperty, PropertyValue, ScreenWindow,
@@ -159,9 +156,7 @@ mod tests {
             u in -1.0f32..=1.0, v in -1.0f32..=1.0, depth in 0.01f32..1000.0,
             hsweep in 1.0f32..=360.0, vsweep in 1.0f32..=180.0,
         ) {
-            let format = Format::new(300, 200);
-            let (p, env) = make(&[("float hsweep", &hsweep.to_string()), ("float vsweep", &vsweep.to_string())], format);
-            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
+            check_sweep_roundtrip(&SphereCameraFactory, (hsweep, vsweep), u, v, depth)?;
         }
     }
 

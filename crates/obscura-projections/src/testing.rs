@@ -94,6 +94,24 @@ pub fn check_centred_roundtrip(
     Ok(())
 }
 
+/// [`check_centred_roundtrip`] on the panorama `factory` makes with `(hsweep, vsweep)` degrees for a
+/// 300 × 200 image.
+pub fn check_sweep_roundtrip(
+    factory: &dyn ProjectionFactory,
+    (hsweep, vsweep): (f32, f32),
+    u: f32,
+    v: f32,
+    depth: f32,
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    let (hsweep, vsweep) = (hsweep.to_string(), vsweep.to_string());
+    let params = [
+        ("float hsweep", hsweep.as_str()),
+        ("float vsweep", vsweep.as_str()),
+    ];
+    let (p, env) = make_env(factory, &params, Format::new(300, 200));
+    check_centred_roundtrip(p.as_ref(), &env, u, v, depth)
+}
+
 /// Checks that `factory` refuses each `(declaration, value, needle)` (made for `format`) with an error
 /// that starts with `"{plugin}: "` and contains `needle`.
 pub fn assert_refused(
