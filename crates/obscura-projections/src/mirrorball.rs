@@ -445,19 +445,13 @@ mod tests {
             assert_eq!(p.property(ProjectionProperty::FStop), None);
         }
         assert_spherical_ray_length(make(Format::new(8, 8)).as_ref(), None, Some(360.0));
-        let err = testing::try_make(&MirrorBallFactory, &[("float fov", "90")], Format::new(8, 8))
-            .err()
-            .unwrap()
-            .to_string();
+        let err = testing::refusal(&MirrorBallFactory, &[("float fov", "90")], Format::new(8, 8));
         assert!(err.starts_with("MirrorBall: unknown parameter \"fov\""), "{err}");
-        let err = testing::try_make(
+        let err = testing::refusal(
             &MirrorBallFactory,
             &[("string orientation", "sideways")],
             Format::new(8, 8),
-        )
-        .err()
-        .unwrap()
-        .to_string();
+        );
         assert!(
             err.starts_with("MirrorBall:") && err.contains("orientation"),
             "{err}"

@@ -92,7 +92,7 @@ impl Projection for Orthographic {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::project_points;
+    use crate::testing::{assert_camera_z, project_points};
     use obscura_sdk::{Format, ParamList, ProjectionFactory, ScreenWindow};
     use proptest::prelude::*;
 
@@ -143,14 +143,7 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let p = make(&[]);
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Orthographic))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        assert_camera_z(p.as_ref(), DicingHint::Orthographic, None);
         assert_eq!(p.property(ProjectionProperty::FieldOfView), None);
         assert_eq!(p.property(ProjectionProperty::FStop), None);
         let lens = make(&[("float fStop", "2"), ("float focalLength", "1")]);

@@ -257,7 +257,9 @@ impl Projection for Panini {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{self, ContractTest, assert_contract, check_centred_roundtrip, ray_at};
+    use crate::testing::{
+        self, ContractTest, assert_camera_z, assert_contract, check_centred_roundtrip, ray_at,
+    };
     use obscura_sdk::{Format, ParamList, ProjectionFactory};
     use proptest::prelude::*;
 
@@ -338,14 +340,7 @@ mod tests {
             assert!((a.ray_spread / b.ray_spread - 1.0).abs() < 1e-4, "{s:?}");
             assert!((a.min_dist / b.min_dist - 1.0).abs() < 1e-5, "{s:?}");
         }
-        assert_eq!(
-            pan.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Perspective))
-        );
-        assert_eq!(
-            pan.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        assert_camera_z(pan.as_ref(), DicingHint::Perspective, None);
         let Some(PropertyValue::Float(f)) = pan.property(ProjectionProperty::FieldOfView) else {
             panic!()
         };

@@ -299,7 +299,8 @@ mod avx2 {
 mod tests {
     use super::*;
     use crate::testing::{
-        self, angle, assert_lens_properties, assert_refused, pixel_centre_rays, project_points,
+        self, angle, assert_camera_z, assert_lens_properties, assert_refused, pixel_centre_rays,
+        project_points,
     };
     use obscura_sdk::{Format, ParamList, ProjectionFactory};
     use proptest::prelude::*;
@@ -454,18 +455,7 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let pin = make(&[("float fov", &["45"])], Format::new(8, 8));
-        assert_eq!(
-            pin.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Perspective))
-        );
-        assert_eq!(
-            pin.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(45.0))
-        );
-        assert_eq!(
-            pin.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        assert_camera_z(pin.as_ref(), DicingHint::Perspective, Some(45.0));
         assert_eq!(pin.property(ProjectionProperty::FStop), None);
         let lens = make(
             &[

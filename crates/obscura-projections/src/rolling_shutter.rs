@@ -452,18 +452,7 @@ mod tests {
             ],
             Format::new(8, 8),
         );
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Perspective))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(40.0))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        crate::testing::assert_camera_z(p.as_ref(), DicingHint::Perspective, Some(40.0));
         assert_eq!(env.deep_metric(), DeepMetric::CameraZ);
         assert_eq!(
             p.property(ProjectionProperty::FStop),

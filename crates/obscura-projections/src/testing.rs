@@ -50,6 +50,15 @@ pub fn try_make(
     try_create(factory, &split_param_list(params), format).0
 }
 
+/// The error `factory` gives for `(declaration, value)` pairs (made for `format`), as the host shows it;
+/// panics when the factory accepts them.
+pub fn refusal(factory: &dyn ProjectionFactory, params: &[(&str, &str)], format: Format) -> String {
+    try_make(factory, params, format)
+        .err()
+        .unwrap_or_else(|| panic!("{params:?} was accepted"))
+        .to_string()
+}
+
 /// The projection `factory` makes from `(declaration, value)` pairs for `format`, and the environment
 /// after it; panics when the factory refuses.
 pub fn make_env(
@@ -122,10 +131,7 @@ pub fn assert_refused(
 ) {
     let prefix = format!("{plugin}: ");
     for (decl, val, needle) in cases {
-        let err = try_make(factory, &[(decl, val)], format)
-            .err()
-            .unwrap_or_else(|| panic!("{decl} {val} was accepted"))
-            .to_string();
+        let err = refusal(factory, &[(decl, val)], format);
         assert!(err.starts_with(&prefix), "{err}");
         assert!(err.contains(needle), "{decl} {val}: {err}");
     }
@@ -149,6 +155,25 @@ pub fn assert_spherical_ray_length(
     if let Some(env) = env {
         assert_eq!(env.deep_metric(), DeepMetric::RayLength);
     }
+    if let Some(fov) = fov {
+        assert_eq!(
+            p.property(ProjectionProperty::FieldOfView),
+            Some(PropertyValue::Float(fov))
+        );
+    }
+}
+
+/// Checks the property answers of a camera whose depth is camera z (a pinhole, a thin lens, parallel
+/// rays): DicingHint `hint` and DeepMetric CameraZ; when given, FieldOfView exactly `fov`.
+pub fn assert_camera_z(p: &dyn Projection, hint: DicingHint, fov: Option<f32>) {
+    assert_eq!(
+        p.property(ProjectionProperty::DicingHint),
+        Some(PropertyValue::DicingHint(hint))
+    );
+    assert_eq!(
+        p.property(ProjectionProperty::DeepMetric),
+        Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
+    );
     if let Some(fov) = fov {
         assert_eq!(
             p.property(ProjectionProperty::FieldOfView),

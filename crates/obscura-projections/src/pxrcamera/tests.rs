@@ -2,7 +2,9 @@
 //! and properties.
 
 use super::*;
-use crate::testing::{self, ContractTest, assert_contract, assert_lens_properties, assert_refused};
+use crate::testing::{
+    self, ContractTest, assert_camera_z, assert_contract, assert_lens_properties, assert_refused,
+};
 use obscura_sdk::{Format, ParamList, ProjectionFactory};
 use proptest::prelude::*;
 
@@ -683,18 +685,7 @@ fn the_contract_holds_for_several_configurations() {
 fn properties_are_honest() {
     let format = Format::new(8, 8);
     let pin = make(&[("float fov", "50"), ("float fovEnd", "35")], format);
-    assert_eq!(
-        pin.property(ProjectionProperty::DicingHint),
-        Some(PropertyValue::DicingHint(DicingHint::Perspective))
-    );
-    assert_eq!(
-        pin.property(ProjectionProperty::DeepMetric),
-        Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-    );
-    assert_eq!(
-        pin.property(ProjectionProperty::FieldOfView),
-        Some(PropertyValue::Float(35.0))
-    );
+    assert_camera_z(pin.as_ref(), DicingHint::Perspective, Some(35.0));
     // RenderMan's default fStop 16 without a focal length is a pinhole.
     assert_eq!(pin.property(ProjectionProperty::FStop), None);
     let lens = make(
