@@ -194,17 +194,23 @@ impl Projection for Perspective {
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
         let rays = self.rays;
         let d = self.zoom.d;
         match (self.zoom.fov_end.is_some(), self.has_depth_of_field()) {
-            (false, false) => pinhole_batch(&rays, c.screen, d, c.rays),
+            (false, false) => {
+                let c = ctx.parts_mut();
+                pinhole_batch(&rays, c.screen, d, c.rays);
+            }
             (false, true) => screen::map_rays_with_aperture(ctx, |s, a| rays.thin_lens(s, a, d)),
-            (true, _) => simd::run(|| {
-                for (((r, s), a), t) in c.rays.iter_mut().zip(c.screen).zip(c.aperture).zip(c.time.iter()) {
-                    *r = rays.ray(*s, *a, self.screen_distance_at(*t));
-                }
-            }),
+            (true, _) => {
+                let c = ctx.parts_mut();
+                simd::run(|| {
+                    for (((r, s), a), t) in c.rays.iter_mut().zip(c.screen).zip(c.aperture).zip(c.time.iter())
+                    {
+                        *r = rays.ray(*s, *a, self.screen_distance_at(*t));
+                    }
+                });
+            }
         }
     }
 
