@@ -7,6 +7,7 @@
 use std::hint::black_box;
 
 use divan::{Bencher, counter::ItemsCount};
+use obscura_projections::panorama::SphericalClip;
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
 use obscura_sdk::{Point2, RayGeometry, Vec3};
 
@@ -188,14 +189,11 @@ fn reference_scalar_per_ray(bencher: Bencher, n: usize) {
 #[divan::bench(args = BATCHES)]
 fn reference_store_bandwidth(bencher: Bencher, n: usize) {
     let mut batch = Batch::new(n, Aperture::Square);
-    let ray = RayGeometry {
-        origin: Vec3::ZERO,
-        origin_radius: 0.0,
-        direction: Vec3::Z,
-        ray_spread: 0.001,
-        min_dist: 0.1,
-        max_dist: f32::INFINITY,
+    let clip = SphericalClip {
+        near: 0.1,
+        far: f32::INFINITY,
     };
+    let ray = clip.centred_ray(Vec3::Z, 0.001);
     bencher.counter(ItemsCount::new(n)).bench_local(|| {
         batch.rays.fill(black_box(ray));
         black_box(&batch.rays);

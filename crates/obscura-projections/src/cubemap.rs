@@ -52,13 +52,9 @@
 use std::f32::consts::FRAC_PI_4;
 use std::sync::LazyLock;
 
-use obscura_sdk::{
-    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
-};
+use obscura_sdk::{DeepMetric, ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
 
-use crate::panorama::{SphericalClip, SweepWindow, finite_f64, spherical_property};
-use crate::simd;
+use crate::panorama::{SphericalClip, SweepWindow};
 
 /// The name scenes use.
 pub const NAME: &str = "EquiangularCubemapFace";
@@ -124,33 +120,17 @@ impl Face {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct CubemapFaceFactory;
 
-impl ProjectionFactory for CubemapFaceFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "one face of Google's equi-angular cube map: D = normalize(F + tan(u pi/4) R + tan(v pi/4) U)"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let face = Face::parse(p.string("face")?).ok_or_else(|| PluginError::Invalid {
-            plugin: NAME.into(),
-            message: "parameter \"face\": expected one of +X, -X, +Y, -Y, +Z, -Z".into(),
+projection_factory!(
+    CubemapFaceFactory,
+    "one face of Google's equi-angular cube map: D = normalize(F + tan(u pi/4) R + tan(v pi/4) U)",
+    |env, p| {
+        let face = Face::parse(p.string("face")?).ok_or_else(|| {
+            crate::invalid(NAME, "parameter \"face\": expected one of +X, -X, +Y, -Y, +Z, -Z")
         })?;
         env.set_deep_metric(DeepMetric::RayLength);
         Ok(Box::new(CubemapFace::new(env, face)))
     }
-}
+);
 
 /// One equi-angular cube-map face (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -218,18 +198,11 @@ fn tan_quarter_turn(t: f32) -> f32 {
     (if far { 1.0 / tan } else { tan }).copysign(t)
 }
 
-impl Projection for CubemapFace {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, 90.0)
-    }
+spherical_projection!(CubemapFace, |_: &CubemapFace| 90.0);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (x, y, z) = finite_f64(point)?;
+impl CubemapFace {
+    /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
+    fn screen_of(&self, x: f64, y: f64, z: f64) -> Option<Point2> {
         let dot = |v: Vec3| x * f64::from(v.x) + y * f64::from(v.y) + z * f64::from(v.z);
         let [f, r, up] = self.basis;
         let pf = dot(f);
@@ -247,7 +220,7 @@ impl Projection for CubemapFace {
 mod tests {
     use super::*;
     use crate::testing::{self, ContractTest, angle, assert_contract, assert_spherical_ray_length, ray_at};
-    use obscura_sdk::Format;
+    use obscura_sdk::{Format, Projection};
     use proptest::prelude::*;
 
     fn make(face: &str, format: Format) -> Box<dyn Projection> {
@@ -407,14 +380,11 @@ mod tests {
             let p = make(face, Format::new(8, 8));
             assert_spherical_ray_length(p.as_ref(), None, Some(90.0));
         }
-        let err = testing::try_make(
+        let err = testing::refusal(
             &CubemapFaceFactory,
             &[("string face", "front")],
             Format::new(8, 8),
-        )
-        .err()
-        .unwrap()
-        .to_string();
+        );
         assert!(
             err.starts_with("EquiangularCubemapFace: parameter \"face\""),
             "{err}"

@@ -30,16 +30,11 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::{
-    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
-};
+use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, ValueRange, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_spherical, finite_f64, hsweep_param, sin_cos, spherical_field_of_view,
-    spherical_property,
+    AzimuthSweep, SphericalClip, boxed_sweep, hsweep_param, sin_cos, spherical_field_of_view,
 };
-use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrCylinderCamera";
@@ -57,29 +52,11 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct CylinderCameraFactory;
 
-impl ProjectionFactory for CylinderCameraFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "cylindrical panorama: azimuth u*hsweep/2, height v*tan(vsweep/2) on the unit cylinder"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let cylinder = CylinderCamera::new(env, p.float("hsweep")?, p.float("vsweep")?);
-        boxed_spherical(NAME, env, cylinder)
-    }
-}
+projection_factory!(
+    CylinderCameraFactory,
+    "cylindrical panorama: azimuth u*hsweep/2, height v*tan(vsweep/2) on the unit cylinder",
+    |env, p| boxed_sweep(NAME, env, p, CylinderCamera::new)
+);
 
 /// The cylindrical panorama (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -129,18 +106,11 @@ impl CylinderCamera {
     }
 }
 
-impl Projection for CylinderCamera {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, self.fov)
-    }
+spherical_projection!(CylinderCamera, |camera: &CylinderCamera| camera.fov);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (x, y, z) = finite_f64(point)?;
+impl CylinderCamera {
+    /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
+    fn screen_of(&self, x: f64, y: f64, z: f64) -> Option<Point2> {
         let rho = x.hypot(z);
         if rho == 0.0 {
             return None;
@@ -153,9 +123,10 @@ impl Projection for CylinderCamera {
 mod tests {
     use super::*;
     use crate::testing::{
-        self, assert_refused, assert_spherical_ray_length, check_centred_roundtrip, keeps_contract, ray_at,
+        self, assert_refused, assert_spherical_ray_length, assert_sweeps_keep_contract,
+        check_sweep_roundtrip, ray_at,
     };
-    use obscura_sdk::Format;
+    use obscura_sdk::{Format, Projection, ProjectionProperty, PropertyValue};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
@@ -184,9 +155,7 @@ mod tests {
             u in -1.0f32..=1.0, v in -1.0f32..=1.0, depth in 0.01f32..1000.0,
             hsweep in 1.0f32..=360.0, vsweep in 1.0f32..175.0,
         ) {
-            let format = Format::new(300, 200);
-            let (p, env) = make(&[("float hsweep", &hsweep.to_string()), ("float vsweep", &vsweep.to_string())], format);
-            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
+            check_sweep_roundtrip(&CylinderCameraFactory, (hsweep, vsweep), u, v, depth)?;
         }
     }
 
@@ -217,20 +186,7 @@ mod tests {
 
     #[test]
     fn keeps_the_contract() {
-        let cases = [
-            (Format::new(48, 24), vec![]),
-            (
-                Format::new(40, 30),
-                vec![("float hsweep", "150"), ("float vsweep", "160")],
-            ),
-            (
-                Format::new(30, 40),
-                vec![("float hsweep", "360"), ("float vsweep", "20")],
-            ),
-        ];
-        for (_, stats) in keeps_contract(&CylinderCameraFactory, &cases) {
-            stats.assert_complete(1000);
-        }
+        assert_sweeps_keep_contract(&CylinderCameraFactory, [("150", "160"), ("360", "20")]);
     }
 
     #[test]

@@ -74,13 +74,12 @@
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
-    Vec3,
+    DeepMetric, ParamDecl, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
 };
 
 use crate::panorama::{SphericalClip, finite_f64, radial_ray, rim_cos_floor, spherical_property};
-use crate::simd;
+use crate::screen;
 
 /// The name scenes use.
 pub const NAME: &str = "Fisheye";
@@ -164,26 +163,11 @@ impl Mapping {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct FisheyeFactory;
 
-impl ProjectionFactory for FisheyeFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "circular fisheye: equidistant, equisolid, stereographic, orthographic or Cycles' polynomial lens; \
-         fov may exceed 180"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
+projection_factory!(
+    FisheyeFactory,
+    "circular fisheye: equidistant, equisolid, stereographic, orthographic or Cycles' polynomial lens; \
+     fov may exceed 180",
+    |env, p| {
         let mapping = Mapping::parse(p.string("mapping")?).ok_or_else(|| invalid("unknown mapping"))?;
         let k = p.floats("polynomial", 5)?;
         let lens = Lens {
@@ -196,13 +180,10 @@ impl ProjectionFactory for FisheyeFactory {
         env.set_deep_metric(DeepMetric::RayLength);
         Ok(Box::new(Fisheye::new(env, &lens)?))
     }
-}
+);
 
 fn invalid(message: impl Into<String>) -> PluginError {
-    PluginError::Invalid {
-        plugin: NAME.to_string(),
-        message: message.into(),
-    }
+    crate::invalid(NAME, message)
 }
 
 /// The parameters of one fisheye lens, as the table declares them.
@@ -269,9 +250,7 @@ impl Fisheye {
         }
         let theta_max = (0.5 * f64::from(fov).to_radians()).min(std::f64::consts::PI);
         let window = env.screen_window();
-        let (dx, dy) = env.pixel_size();
-        // A hundredth of a pixel, in screen units: how close to a singular rim the footprint follows it.
-        let eps = 0.01 * f64::from(dx.min(dy));
+        let eps = screen::rim_step(env);
         let mm_per_unit = f64::from(lens.sensor_width_mm) / f64::from(window.width());
         let mut p64 = [0.0; 5];
         let (law, r_lo, r_hi) = match lens.mapping {
@@ -345,7 +324,7 @@ impl Fisheye {
             r_hi,
             r_lo2: (r_lo * r_lo) as f32,
             r_hi2: (r_hi * r_hi) as f32,
-            half_pixel: 0.5 * (dx * dy).sqrt(),
+            half_pixel: screen::half_pixel(env),
             clip: SphericalClip::new(env),
         };
         if fisheye.theta_of(r_hi) >= std::f64::consts::PI - 1e-9 {
@@ -516,18 +495,14 @@ impl Projection for Fisheye {
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        let (rays, screen) = (c.rays, c.screen);
         match self.law {
-            Law::Equidistant { h } => simd::map_screen(rays, screen, |s| self.equidistant(s, h)),
-            Law::Stereographic { k } => simd::map_screen(rays, screen, |s| self.stereographic(s, k)),
+            Law::Equidistant { h } => screen::map_rays(ctx, |s| self.equidistant(s, h)),
+            Law::Stereographic { k } => screen::map_rays(ctx, |s| self.stereographic(s, k)),
             Law::Orthographic { m, cos_floor } => {
-                simd::map_screen(rays, screen, |s| self.orthographic(s, m, cos_floor))
+                screen::map_rays(ctx, |s| self.orthographic(s, m, cos_floor))
             }
-            Law::Equisolid { q, cos_floor } => {
-                simd::map_screen(rays, screen, |s| self.equisolid(s, q, cos_floor))
-            }
-            Law::Polynomial { p, dp } => simd::map_screen(rays, screen, |s| self.polynomial(s, &p, &dp)),
+            Law::Equisolid { q, cos_floor } => screen::map_rays(ctx, |s| self.equisolid(s, q, cos_floor)),
+            Law::Polynomial { p, dp } => screen::map_rays(ctx, |s| self.polynomial(s, &p, &dp)),
         }
     }
 

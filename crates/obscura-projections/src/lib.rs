@@ -22,8 +22,72 @@
 //! The table of every built-in projection (these and the calibrated cameras of `obscura-calibration`)
 //! is assembled above both crates, in `obscura-plugins`.
 //!
-//! [`panorama`] holds what the panoramic projections share (window coordinates, azimuth sweeps, radial
-//! maps, spherical clipping and property answers).
+//! [`screen`] holds what every projection does with the screen samples (the batch loop, the pixel
+//! footprint); [`panorama`] holds what the panoramic projections share (window coordinates, azimuth
+//! sweeps, radial maps, spherical clipping and property answers).
+
+/// Implements `ProjectionFactory` for `$factory`, the unit struct of a projection module, from the
+/// module's `NAME` and `TABLE`: every factory answers its name and table the same way and resolves the
+/// scene's parameters against the table before `$create` (a closure of the environment and the
+/// resolved parameters) makes the projection.
+macro_rules! projection_factory {
+    ($factory:ident, $summary:expr, $create:expr $(,)?) => {
+        impl obscura_sdk::ProjectionFactory for $factory {
+            fn name(&self) -> &str {
+                NAME
+            }
+
+            fn summary(&self) -> &str {
+                $summary
+            }
+
+            fn param_table(&self) -> &[obscura_sdk::ParamDecl] {
+                &TABLE
+            }
+
+            fn create_projection(
+                &self,
+                env: &mut obscura_sdk::ProjectionEnvironment,
+                params: &obscura_sdk::ParamList,
+            ) -> Result<Box<dyn obscura_sdk::Projection>, obscura_sdk::PluginError> {
+                let create: fn(
+                    &mut obscura_sdk::ProjectionEnvironment,
+                    &obscura_sdk::Params,
+                )
+                    -> Result<Box<dyn obscura_sdk::Projection>, obscura_sdk::PluginError> = $create;
+                create(env, &obscura_sdk::Params::resolve(NAME, &TABLE, params)?)
+            }
+        }
+    };
+}
+
+/// Implements `Projection` for `$camera`, a panoramic camera whose rays leave its centre: DicingHint
+/// Spherical, DeepMetric RayLength and the FieldOfView `$fov` reads off the camera
+/// (`crate::panorama::spherical_property`); each ray from its screen sample by the camera's
+/// `ray(&self, Point2) -> RayGeometry`; the inverse by its `screen_of(&self, x, y, z) -> Option<Point2>`
+/// once the point's components are finite.
+macro_rules! spherical_projection {
+    ($camera:ty, $fov:expr $(,)?) => {
+        impl obscura_sdk::Projection for $camera {
+            fn property(
+                &self,
+                property: obscura_sdk::ProjectionProperty,
+            ) -> Option<obscura_sdk::PropertyValue> {
+                let fov: fn(&$camera) -> f32 = $fov;
+                crate::panorama::spherical_property(property, fov(self))
+            }
+
+            fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
+                crate::screen::map_rays(ctx, |s| self.ray(s));
+            }
+
+            fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {
+                let (x, y, z) = crate::panorama::finite_f64(point)?;
+                self.screen_of(x, y, z)
+            }
+        }
+    };
+}
 
 pub mod cubemap;
 pub mod cylinder;
@@ -39,12 +103,13 @@ pub mod panorama;
 pub mod perspective;
 pub mod pxrcamera;
 pub mod rolling_shutter;
+pub mod screen;
 pub mod simd;
 pub mod sphere;
 #[cfg(test)]
 mod testing;
 
-use obscura_sdk::ProjectionFactory;
+use obscura_sdk::{PluginError, ProjectionFactory};
 
 pub use cubemap::{CubemapFace, CubemapFaceFactory, Face as CubemapFaceName};
 pub use cylinder::{CylinderCamera, CylinderCameraFactory};
@@ -59,6 +124,14 @@ pub use perspective::{Perspective, PerspectiveFactory};
 pub use pxrcamera::{PxrCamera, PxrCameraFactory};
 pub use rolling_shutter::{RollingShutter, RollingShutterFactory, RollingShutterModifier, Sweep};
 pub use sphere::{SphereCamera, SphereCameraFactory};
+
+/// The error of `plugin` for parameters it cannot use.
+pub(crate) fn invalid(plugin: &str, message: impl Into<String>) -> PluginError {
+    PluginError::Invalid {
+        plugin: plugin.to_string(),
+        message: message.into(),
+    }
+}
 
 /// A factory of every projection in this crate, for a host's table of built-ins (assembled, with the
 /// calibrated cameras, by `obscura_plugins::builtin_registry`).

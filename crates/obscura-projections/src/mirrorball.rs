@@ -56,15 +56,10 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::{
-    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
-};
+use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry};
 
-use crate::panorama::{
-    SphericalClip, boxed_spherical, finite_f64, radial_ray, rim_cos_floor, spherical_property,
-};
-use crate::simd;
+use crate::panorama::{SphericalClip, boxed_spherical, radial_ray, rim_cos_floor};
+use crate::screen;
 
 /// The name scenes use.
 pub const NAME: &str = "MirrorBall";
@@ -118,35 +113,18 @@ impl Orientation {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct MirrorBallFactory;
 
-impl ProjectionFactory for MirrorBallFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "mirror ball in the unit circle: D = (2c sx, 2c sy, sigma (1 - 2r^2)), c = sqrt(1 - r^2); orientation \
-         camera (Cycles, sigma = +1: centre +Z, rim -Z) or lightprobe (sigma = -1: centre -Z, rim +Z)"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let orientation =
-            Orientation::parse(p.string("orientation")?).ok_or_else(|| PluginError::Invalid {
-                plugin: NAME.into(),
-                message: "parameter \"orientation\": expected camera or lightprobe".into(),
-            })?;
+projection_factory!(
+    MirrorBallFactory,
+    "mirror ball in the unit circle: D = (2c sx, 2c sy, sigma (1 - 2r^2)), c = sqrt(1 - r^2); orientation \
+     camera (Cycles, sigma = +1: centre +Z, rim -Z) or lightprobe (sigma = -1: centre -Z, rim +Z)",
+    |env, p| {
+        let orientation = Orientation::parse(p.string("orientation")?).ok_or_else(|| {
+            crate::invalid(NAME, "parameter \"orientation\": expected camera or lightprobe")
+        })?;
         let ball = MirrorBall::new(env, orientation);
         boxed_spherical(NAME, env, Some(ball))
     }
-}
+);
 
 /// A mirror-ball camera (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -164,12 +142,11 @@ impl MirrorBall {
     /// A mirror ball for `env` in `orientation`.
     #[must_use]
     pub fn new(env: &ProjectionEnvironment, orientation: Orientation) -> Self {
-        let (dx, dy) = env.pixel_size();
         MirrorBall {
             orientation,
             sign: orientation.sign(),
-            half_pixel: 0.5 * (dx * dy).sqrt(),
-            c_floor: rim_cos_floor(0.01 * f64::from(dx.min(dy))),
+            half_pixel: screen::half_pixel(env),
+            c_floor: rim_cos_floor(screen::rim_step(env)),
             clip: SphericalClip::new(env),
         }
     }
@@ -198,18 +175,11 @@ impl MirrorBall {
     }
 }
 
-impl Projection for MirrorBall {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, 360.0)
-    }
+spherical_projection!(MirrorBall, |_: &MirrorBall| 360.0);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (x, y, z) = finite_f64(point)?;
+impl MirrorBall {
+    /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
+    fn screen_of(&self, x: f64, y: f64, z: f64) -> Option<Point2> {
         // The component along the centre's direction σ·Z.
         let zc = f64::from(self.sign) * z;
         let rho2 = x * x + y * y;
@@ -232,7 +202,7 @@ impl Projection for MirrorBall {
 mod tests {
     use super::*;
     use crate::testing::{self, ContractTest, assert_contract, assert_spherical_ray_length, ray_at};
-    use obscura_sdk::Format;
+    use obscura_sdk::{Format, Projection, ProjectionProperty, Vec3};
     use proptest::prelude::*;
 
     const BOTH: [Orientation; 2] = [Orientation::Camera, Orientation::LightProbe];
@@ -475,19 +445,13 @@ mod tests {
             assert_eq!(p.property(ProjectionProperty::FStop), None);
         }
         assert_spherical_ray_length(make(Format::new(8, 8)).as_ref(), None, Some(360.0));
-        let err = testing::try_make(&MirrorBallFactory, &[("float fov", "90")], Format::new(8, 8))
-            .err()
-            .unwrap()
-            .to_string();
+        let err = testing::refusal(&MirrorBallFactory, &[("float fov", "90")], Format::new(8, 8));
         assert!(err.starts_with("MirrorBall: unknown parameter \"fov\""), "{err}");
-        let err = testing::try_make(
+        let err = testing::refusal(
             &MirrorBallFactory,
             &[("string orientation", "sideways")],
             Format::new(8, 8),
-        )
-        .err()
-        .unwrap()
-        .to_string();
+        );
         assert!(
             err.starts_with("MirrorBall:") && err.contains("orientation"),
             "{err}"

@@ -56,44 +56,28 @@
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
-use obscura_sdk::{
-    DeepMetric, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
-};
+use obscura_sdk::{DeepMetric, ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
 
-use crate::panorama::{SphericalClip, SweepWindow, finite_f64, spherical_property};
-use crate::simd;
+use crate::panorama::{SphericalClip, SweepWindow};
 
 /// The name scenes use.
 pub const NAME: &str = "Octahedral";
+
+/// None: the map is fixed, the screen window alone places it.
+static TABLE: [ParamDecl; 0] = [];
 
 /// Creates [`Octahedral`] projections.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct OctahedralFactory;
 
-impl ProjectionFactory for OctahedralFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "pbrt-v4's equal-area octahedral sphere over the whole window: centre +Z, corners -Z, horizon the diamond"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &[]
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        Params::resolve(NAME, &[], params)?;
+projection_factory!(
+    OctahedralFactory,
+    "pbrt-v4's equal-area octahedral sphere over the whole window: centre +Z, corners -Z, horizon the diamond",
+    |env, _p| {
         env.set_deep_metric(DeepMetric::RayLength);
         Ok(Box::new(Octahedral::new(env)))
     }
-}
+);
 
 /// An equal-area octahedral camera (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -165,18 +149,11 @@ impl Octahedral {
     }
 }
 
-impl Projection for Octahedral {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, 360.0)
-    }
+spherical_projection!(Octahedral, |_: &Octahedral| 360.0);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (x, y, z) = finite_f64(point)?;
+impl Octahedral {
+    /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
+    fn screen_of(&self, x: f64, y: f64, z: f64) -> Option<Point2> {
         let len = (x * x + y * y + z * z).sqrt();
         if len == 0.0 {
             return None;
@@ -201,7 +178,7 @@ mod tests {
     use crate::testing::{
         self, ContractTest, angle, assert_contract, assert_spherical_ray_length, project_points, ray_at,
     };
-    use obscura_sdk::{Format, ScreenWindow};
+    use obscura_sdk::{Format, Projection, ScreenWindow};
     use proptest::prelude::*;
 
     fn make(format: Format) -> Box<dyn Projection> {

@@ -53,16 +53,12 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::{
-    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
-};
+use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, ValueRange, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_spherical, direction_angles, finite_f64, hsweep_param,
-    lat_long_field_of_view, radians_toward_zero, sin_cos, spherical_property, vsweep_param,
+    AzimuthSweep, SphericalClip, boxed_spherical, direction_angles, hsweep_param, lat_long_field_of_view,
+    radians_toward_zero, sin_cos, vsweep_param,
 };
-use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "OmnidirectionalStereo";
@@ -123,29 +119,11 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct OmnidirectionalStereoFactory;
 
-impl ProjectionFactory for OmnidirectionalStereoFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "omni-directional stereo panorama: equirectangular directions from eyes on the viewing circle, pole merging"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let invalid = |message: String| PluginError::Invalid {
-            plugin: NAME.to_string(),
-            message,
-        };
+projection_factory!(
+    OmnidirectionalStereoFactory,
+    "omni-directional stereo panorama: equirectangular directions from eyes on the viewing circle, pole merging",
+    |env, p| {
+        let invalid = |message: String| crate::invalid(NAME, message);
         let eye = match p.string("eye")? {
             "right" => Eye::Right,
             "center" => Eye::Center,
@@ -179,7 +157,7 @@ impl ProjectionFactory for OmnidirectionalStereoFactory {
         let ods = OmnidirectionalStereo::new(env, &settings);
         boxed_spherical(NAME, env, ods)
     }
-}
+);
 
 /// The parameters of an [`OmnidirectionalStereo`] camera, angles in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -309,18 +287,11 @@ impl OmnidirectionalStereo {
     }
 }
 
-impl Projection for OmnidirectionalStereo {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, self.fov)
-    }
+spherical_projection!(OmnidirectionalStereo, |camera: &OmnidirectionalStereo| camera.fov);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (px, py, pz) = finite_f64(point)?;
+impl OmnidirectionalStereo {
+    /// The screen point that sees the camera-space point `(px, py, pz)`, finite: the inverse.
+    fn screen_of(&self, px: f64, py: f64, pz: f64) -> Option<Point2> {
         let p = [px, py, pz];
         let (rho, y) = (p[0].hypot(p[2]), p[1]);
         let psi = p[0].atan2(p[2]);
@@ -393,7 +364,7 @@ impl Projection for OmnidirectionalStereo {
 mod tests {
     use super::*;
     use crate::testing::{self, assert_refused, assert_spherical_ray_length, keeps_contract, ray_at};
-    use obscura_sdk::{DeepMetric, Format};
+    use obscura_sdk::{DeepMetric, Format, Projection};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {

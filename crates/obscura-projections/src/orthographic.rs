@@ -22,12 +22,12 @@ use std::sync::LazyLock;
 
 use obscura_sdk::optics::OrthographicRays;
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, Vec3,
+    DeepMetric, DicingHint, ParamDecl, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionProperty, PropertyValue, Vec3,
 };
 
 use crate::dof::{self, DepthOfField};
-use crate::simd;
+use crate::screen;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrOrthographic";
@@ -38,29 +38,14 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| dof::params().to_vec()
 #[derive(Debug, Default, Clone, Copy)]
 pub struct OrthographicFactory;
 
-impl ProjectionFactory for OrthographicFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "parallel rays O = (sx, sy, 0), D = +Z; thin-lens depth of field centred on each pixel"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
+projection_factory!(
+    OrthographicFactory,
+    "parallel rays O = (sx, sy, 0), D = +Z; thin-lens depth of field centred on each pixel",
+    |env, p| {
         env.set_deep_metric(DeepMetric::CameraZ);
-        Ok(Box::new(Orthographic::new(env, DepthOfField::from_params(&p)?)))
+        Ok(Box::new(Orthographic::new(env, DepthOfField::from_params(p)?)))
     }
-}
+);
 
 /// An orthographic camera (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -95,13 +80,8 @@ impl Projection for Orthographic {
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
         let rays = &self.rays;
-        simd::run(|| {
-            for ((r, s), a) in c.rays.iter_mut().zip(c.screen).zip(c.aperture) {
-                *r = rays.ray(*s, *a);
-            }
-        });
+        screen::map_rays_with_aperture(ctx, |s, a| rays.ray(s, a));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -112,8 +92,8 @@ impl Projection for Orthographic {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::project_points;
-    use obscura_sdk::{Format, ScreenWindow};
+    use crate::testing::{assert_camera_z, project_points};
+    use obscura_sdk::{Format, ParamList, ProjectionFactory, ScreenWindow};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)]) -> Box<dyn Projection> {
@@ -163,14 +143,7 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let p = make(&[]);
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Orthographic))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        assert_camera_z(p.as_ref(), DicingHint::Orthographic, None);
         assert_eq!(p.property(ProjectionProperty::FieldOfView), None);
         assert_eq!(p.property(ProjectionProperty::FStop), None);
         let lens = make(&[("float fStop", "2"), ("float focalLength", "1")]);

@@ -61,13 +61,12 @@
 use std::sync::LazyLock;
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
-    Vec3,
+    DeepMetric, DicingHint, ParamDecl, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
 };
 
 use crate::panorama::{SphericalClip, SweepWindow, degenerate_window, finite_f64};
-use crate::simd;
+use crate::screen;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrPanini";
@@ -102,41 +101,26 @@ pub fn max_fov(d: f64) -> f64 {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct PaniniFactory;
 
-impl ProjectionFactory for PaniniFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "generalised Panini: cylinder then perspective from distance d; fov across the width, d = compression"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
+projection_factory!(
+    PaniniFactory,
+    "generalised Panini: cylinder then perspective from distance d; fov across the width, d = compression",
+    |env, p| {
         let (fov, d) = (p.float("fov")?, p.float("compression")?);
         let limit = max_fov(d as f64);
         if fov as f64 >= limit {
-            return Err(PluginError::Invalid {
-                plugin: NAME.to_string(),
-                message: format!(
+            return Err(crate::invalid(
+                NAME,
+                format!(
                     "\"fov\" = {fov} is too wide for \"compression\" = {d}: expected less than {limit:.4} degrees \
-                     (2·acos(−d) for d ≤ 1, 2·acos(−1/d) beyond; raise the compression or narrow the fov)"
+                 (2·acos(−d) for d ≤ 1, 2·acos(−1/d) beyond; raise the compression or narrow the fov)"
                 ),
-            });
+            ));
         }
         let panini = Panini::new(env, fov, d).ok_or_else(|| degenerate_window(NAME, env.screen_window()))?;
         env.set_deep_metric(panini.deep_metric());
         Ok(Box::new(panini))
     }
-}
+);
 
 /// The generalised Panini camera (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -248,8 +232,7 @@ impl Projection for Panini {
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
+        screen::map_rays(ctx, |s| self.ray(s));
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -274,8 +257,10 @@ impl Projection for Panini {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{self, ContractTest, assert_contract, check_centred_roundtrip, ray_at};
-    use obscura_sdk::Format;
+    use crate::testing::{
+        self, ContractTest, assert_camera_z, assert_contract, check_centred_roundtrip, ray_at,
+    };
+    use obscura_sdk::{Format, ParamList, ProjectionFactory};
     use proptest::prelude::*;
 
     fn make(fov: f32, d: f32, format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
@@ -355,14 +340,7 @@ mod tests {
             assert!((a.ray_spread / b.ray_spread - 1.0).abs() < 1e-4, "{s:?}");
             assert!((a.min_dist / b.min_dist - 1.0).abs() < 1e-5, "{s:?}");
         }
-        assert_eq!(
-            pan.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Perspective))
-        );
-        assert_eq!(
-            pan.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        assert_camera_z(pan.as_ref(), DicingHint::Perspective, None);
         let Some(PropertyValue::Float(f)) = pan.property(ProjectionProperty::FieldOfView) else {
             panic!()
         };

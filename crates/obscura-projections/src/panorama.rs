@@ -52,7 +52,7 @@
 //! `max_dist = far` ([`SphericalClip`]).
 
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, PluginError, Point2, Projection, ProjectionEnvironment,
+    DeepMetric, DicingHint, ParamDecl, Params, PluginError, Point2, Projection, ProjectionEnvironment,
     ProjectionProperty, PropertyValue, RayGeometry, ScreenWindow, ValueRange, Vec3,
 };
 
@@ -189,6 +189,20 @@ impl AzimuthSweep {
 #[must_use]
 pub fn direction_angles(x: f64, y: f64, z: f64) -> (f64, f64) {
     (x.atan2(z), y.atan2(x.hypot(z)))
+}
+
+/// The angle in radians between the directions `a` and `b`, not necessarily unit:
+/// `atan2(|a × b|, a·b)`, accurate at every size (`acos` of the dot product is not, near 0 and π).
+#[must_use]
+pub fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+    let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    sin.atan2(cos)
 }
 
 /// The components of `point` in f64; `None` when one is not finite (every inverse starts here).
@@ -343,13 +357,13 @@ pub fn rim_cos_floor(step: f64) -> f32 {
 
 /// The error for a screen window without area.
 pub(crate) fn degenerate_window(plugin: &str, w: ScreenWindow) -> PluginError {
-    PluginError::Invalid {
-        plugin: plugin.to_string(),
-        message: format!(
+    crate::invalid(
+        plugin,
+        format!(
             "the screen window ({}, {}, {}, {}) has no area; a panoramic projection needs one",
             w.left, w.right, w.bottom, w.top
         ),
-    }
+    )
 }
 
 /// The end of a panoramic factory's `create`: `camera`, boxed, with DeepMetric RayLength set in `env`;
@@ -365,6 +379,21 @@ pub fn boxed_spherical<P: Projection + 'static>(
     let camera = camera.ok_or_else(|| degenerate_window(plugin, env.screen_window()))?;
     env.set_deep_metric(DeepMetric::RayLength);
     Ok(Box::new(camera))
+}
+
+/// The end of the factory of a panorama made from `hsweep` and `vsweep` alone (the latitude–longitude
+/// grid, the cylinder): `new` of the two sweeps in degrees, then [`boxed_spherical`].
+///
+/// # Errors
+/// A parameter lookup error when `p` lacks either sweep, and those of [`boxed_spherical`].
+pub fn boxed_sweep<P: Projection + 'static>(
+    plugin: &str,
+    env: &mut ProjectionEnvironment,
+    p: &Params,
+    new: fn(&ProjectionEnvironment, f32, f32) -> Option<P>,
+) -> Result<Box<dyn Projection>, PluginError> {
+    let camera = new(env, p.float("hsweep")?, p.float("vsweep")?);
+    boxed_spherical(plugin, env, camera)
 }
 
 /// The `hsweep` parameter: degrees of azimuth across the window's width, in `(0, 360]`, default 360.

@@ -25,12 +25,12 @@ use std::sync::LazyLock;
 
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, ValueRange,
-    Vec3,
+    DeepMetric, DicingHint, ParamDecl, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
 };
 
 use crate::dof::{self, DepthOfField};
+use crate::screen;
 use crate::simd;
 
 /// The name scenes use.
@@ -57,16 +57,18 @@ pub fn check_fov_end(plugin: &str, fov_end: f32) -> Result<(), PluginError> {
     if fov_end == 0.0 || f64::from(fov_end) >= MIN_FOV {
         return Ok(());
     }
-    Err(PluginError::Invalid {
-        plugin: plugin.to_string(),
-        message: format!(
+    Err(crate::invalid(
+        plugin,
+        format!(
             "parameter \"fovEnd\" = {fov_end:?}: expected 0 (no zoom) or a field of view of at least {MIN_FOV} degrees"
         ),
-    })
+    ))
 }
 
-static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
-    let mut table = vec![
+/// The parameter declarations `fov` and `fovEnd` (zoom blur), shared by PxrPerspective and PxrCamera.
+#[must_use]
+pub fn zoom_params() -> [ParamDecl; 2] {
+    [
         ParamDecl::float("fov", 90.0).range(FOV_RANGE).doc(
             "field of view in degrees across the screen window's [-1, 1] square (the smaller image side)",
         ),
@@ -78,34 +80,19 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
                 max_inclusive: false,
             })
             .doc("field of view at shutter close, for zoom blur; 0 = same as fov"),
-    ];
-    table.extend(dof::params());
-    table
-});
+    ]
+}
+
+static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| [&zoom_params()[..], &dof::params()].concat());
 
 /// Creates [`Perspective`] projections.
 #[derive(Debug, Default, Clone, Copy)]
 pub struct PerspectiveFactory;
 
-impl ProjectionFactory for PerspectiveFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "pinhole or thin-lens perspective: D = normalize(sx, sy, 1/tan(fov/2)); zoom blur with fovEnd"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
+projection_factory!(
+    PerspectiveFactory,
+    "pinhole or thin-lens perspective: D = normalize(sx, sy, 1/tan(fov/2)); zoom blur with fovEnd",
+    |env, p| {
         env.set_deep_metric(DeepMetric::CameraZ);
         let (fov, fov_end) = (p.float("fov")?, p.float("fovEnd")?);
         check_fov_end(NAME, fov_end)?;
@@ -113,8 +100,48 @@ impl ProjectionFactory for PerspectiveFactory {
             env,
             fov,
             fov_end,
-            DepthOfField::from_params(&p)?,
+            DepthOfField::from_params(p)?,
         )))
+    }
+);
+
+/// The field of view over the shutter, `φ(t) = fov + (fovEnd − fov)·t`, and the screen plane
+/// `d(t) = 1/tan(φ(t)/2)` it puts the image at (PxrPerspective's and PxrCamera's zoom).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Zoom {
+    /// `fov` at shutter open, degrees.
+    pub fov: f32,
+    /// `Some(fovEnd)` when the field of view changes during the shutter.
+    pub fov_end: Option<f32>,
+    /// The screen plane at shutter open, `d(0)`.
+    pub d: f32,
+}
+
+impl Zoom {
+    /// `fov` throughout when `fov_end` is 0 or equal to it, else a zoom from `fov` to `fov_end`.
+    #[must_use]
+    pub fn new(fov: f32, fov_end: f32) -> Self {
+        Zoom {
+            fov,
+            fov_end: (fov_end > 0.0 && fov_end != fov).then_some(fov_end),
+            d: screen_distance(fov),
+        }
+    }
+
+    /// The screen-plane distance `d(t)` at shutter-normalised time `t`.
+    #[inline]
+    #[must_use]
+    pub fn screen_distance_at(&self, t: f32) -> f32 {
+        match self.fov_end {
+            None => self.d,
+            Some(end) => screen_distance(self.fov + (end - self.fov) * t),
+        }
+    }
+
+    /// The narrowest field of view of the shutter interval: dicing fine enough all through it.
+    #[must_use]
+    pub fn narrowest(&self) -> f32 {
+        self.fov_end.map_or(self.fov, |e| e.min(self.fov))
     }
 }
 
@@ -122,10 +149,7 @@ impl ProjectionFactory for PerspectiveFactory {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Perspective {
     rays: PerspectiveRays,
-    fov: f32,
-    /// `Some(fovEnd)` when the field of view changes during the shutter.
-    fov_end: Option<f32>,
-    d: f32,
+    zoom: Zoom,
     dof: DepthOfField,
 }
 
@@ -140,9 +164,7 @@ impl Perspective {
                 dof.lens_radius(),
                 dof.focal_distance,
             ),
-            fov,
-            fov_end: (fov_end > 0.0 && fov_end != fov).then_some(fov_end),
-            d: screen_distance(fov),
+            zoom: Zoom::new(fov, fov_end),
             dof,
         }
     }
@@ -151,10 +173,7 @@ impl Perspective {
     #[inline]
     #[must_use]
     pub fn screen_distance_at(&self, t: f32) -> f32 {
-        match self.fov_end {
-            None => self.d,
-            Some(end) => screen_distance(self.fov + (end - self.fov) * t),
-        }
+        self.zoom.screen_distance_at(t)
     }
 
     /// True when depth of field is on.
@@ -169,29 +188,29 @@ impl Projection for Perspective {
         match property {
             ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Perspective)),
             ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
-            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(
-                self.fov_end.map_or(self.fov, |e| e.min(self.fov)),
-            )),
+            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.zoom.narrowest())),
             other => self.dof.property(other),
         }
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
         let rays = self.rays;
-        let d = self.d;
-        match (self.fov_end.is_some(), self.has_depth_of_field()) {
-            (false, false) => pinhole_batch(&rays, c.screen, d, c.rays),
-            (false, true) => simd::run(|| {
-                for ((r, s), a) in c.rays.iter_mut().zip(c.screen).zip(c.aperture) {
-                    *r = rays.thin_lens(*s, *a, d);
-                }
-            }),
-            (true, _) => simd::run(|| {
-                for (((r, s), a), t) in c.rays.iter_mut().zip(c.screen).zip(c.aperture).zip(c.time.iter()) {
-                    *r = rays.ray(*s, *a, self.screen_distance_at(*t));
-                }
-            }),
+        let d = self.zoom.d;
+        match (self.zoom.fov_end.is_some(), self.has_depth_of_field()) {
+            (false, false) => {
+                let c = ctx.parts_mut();
+                pinhole_batch(&rays, c.screen, d, c.rays);
+            }
+            (false, true) => screen::map_rays_with_aperture(ctx, |s, a| rays.thin_lens(s, a, d)),
+            (true, _) => {
+                let c = ctx.parts_mut();
+                simd::run(|| {
+                    for (((r, s), a), t) in c.rays.iter_mut().zip(c.screen).zip(c.aperture).zip(c.time.iter())
+                    {
+                        *r = rays.ray(*s, *a, self.screen_distance_at(*t));
+                    }
+                });
+            }
         }
     }
 
@@ -285,8 +304,11 @@ mod avx2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testing::{self, assert_refused, pixel_centre_rays, project_points};
-    use obscura_sdk::Format;
+    use crate::testing::{
+        self, angle, assert_camera_z, assert_lens_properties, assert_refused, pixel_centre_rays,
+        project_points,
+    };
+    use obscura_sdk::{Format, ParamList, ProjectionFactory};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &[&str])], format: Format) -> Box<dyn Projection> {
@@ -406,19 +428,6 @@ mod tests {
             let mut worst = 0.0f64;
             for y in (1..format.height as usize - 1).step_by(7) {
                 for x in (1..w - 1).step_by(7) {
-                    let angle = |a: Vec3, b: Vec3| {
-                        let (a, b) = (
-                            [a.x as f64, a.y as f64, a.z as f64],
-                            [b.x as f64, b.y as f64, b.z as f64],
-                        );
-                        let c = [
-                            a[1] * b[2] - a[2] * b[1],
-                            a[2] * b[0] - a[0] * b[2],
-                            a[0] * b[1] - a[1] * b[0],
-                        ];
-                        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-                        (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt().atan2(dot)
-                    };
                     let c = &grid[y * w + x];
                     let ax = 0.5 * angle(grid[y * w + x - 1].direction, grid[y * w + x + 1].direction);
                     let ay = 0.5 * angle(grid[(y - 1) * w + x].direction, grid[(y + 1) * w + x].direction);
@@ -452,18 +461,7 @@ mod tests {
     #[test]
     fn properties_are_honest() {
         let pin = make(&[("float fov", &["45"])], Format::new(8, 8));
-        assert_eq!(
-            pin.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Perspective))
-        );
-        assert_eq!(
-            pin.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(45.0))
-        );
-        assert_eq!(
-            pin.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        assert_camera_z(pin.as_ref(), DicingHint::Perspective, Some(45.0));
         assert_eq!(pin.property(ProjectionProperty::FStop), None);
         let lens = make(
             &[
@@ -473,18 +471,7 @@ mod tests {
             ],
             Format::new(8, 8),
         );
-        assert_eq!(
-            lens.property(ProjectionProperty::FStop),
-            Some(PropertyValue::Float(2.8))
-        );
-        assert_eq!(
-            lens.property(ProjectionProperty::FocalLength),
-            Some(PropertyValue::Float(0.05))
-        );
-        assert_eq!(
-            lens.property(ProjectionProperty::FocalDistance),
-            Some(PropertyValue::Float(3.0))
-        );
+        assert_lens_properties(lens.as_ref(), 2.8, 0.05, 3.0);
         // A finite f-stop without a focal length is still a pinhole.
         let no_fl = make(&[("float fStop", &["2.8"])], Format::new(8, 8));
         assert_eq!(no_fl.property(ProjectionProperty::FStop), None);

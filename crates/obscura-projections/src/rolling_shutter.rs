@@ -42,9 +42,8 @@ use std::sync::LazyLock;
 
 use obscura_sdk::optics::screen_distance;
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, ScreenWindow, ValueRange,
-    Vec3,
+    DeepMetric, DicingHint, ParamDecl, Params, PluginError, Point2, Projection, ProjectionContext,
+    ProjectionProperty, PropertyValue, ScreenWindow, ValueRange, Vec3,
 };
 
 use crate::dof::{self, DepthOfField};
@@ -119,21 +118,25 @@ impl RollingShutter {
     /// has no area.
     pub fn from_params(p: &Params, window: ScreenWindow) -> Result<Self, PluginError> {
         let name = p.string("sweep")?;
-        let sweep = Sweep::parse(name).ok_or_else(|| PluginError::Invalid {
-            plugin: p.plugin().to_string(),
-            message: format!("\"sweep\" = \"{name}\": expected one of down, up, left, right"),
+        let sweep = Sweep::parse(name).ok_or_else(|| {
+            crate::invalid(
+                p.plugin(),
+                format!("\"sweep\" = \"{name}\": expected one of down, up, left, right"),
+            )
         })?;
-        Self::new(sweep, p.float("duration")?, window).ok_or_else(|| PluginError::Invalid {
-            plugin: p.plugin().to_string(),
-            message: format!(
-                "rolling shutter needs a screen window with area and a duration in [0, 1]; got window \
+        Self::new(sweep, p.float("duration")?, window).ok_or_else(|| {
+            crate::invalid(
+                p.plugin(),
+                format!(
+                    "rolling shutter needs a screen window with area and a duration in [0, 1]; got window \
                  ({}, {}, {}, {}) and duration {}",
-                window.left,
-                window.right,
-                window.bottom,
-                window.top,
-                p.float("duration").unwrap_or(f32::NAN)
-            ),
+                    window.left,
+                    window.right,
+                    window.bottom,
+                    window.top,
+                    p.float("duration").unwrap_or(f32::NAN)
+                ),
+            )
         })
     }
 
@@ -242,26 +245,11 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct RollingShutterFactory;
 
-impl ProjectionFactory for RollingShutterFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "modifier: rolling shutter over the host's default camera; time' = p(1 - duration) + time*duration"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let shutter = RollingShutter::from_params(&p, env.screen_window())?;
+projection_factory!(
+    RollingShutterFactory,
+    "modifier: rolling shutter over the host's default camera; time' = p(1 - duration) + time*duration",
+    |env, p| {
+        let shutter = RollingShutter::from_params(p, env.screen_window())?;
         let base = match p.string("base")? {
             "orthographic" => Base::Orthographic,
             _ => {
@@ -276,10 +264,10 @@ impl ProjectionFactory for RollingShutterFactory {
         Ok(Box::new(RollingShutterModifier {
             shutter,
             base,
-            dof: DepthOfField::from_params(&p)?,
+            dof: DepthOfField::from_params(p)?,
         }))
     }
-}
+);
 
 /// `PxrRollingShutter` (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -338,7 +326,7 @@ impl Projection for RollingShutterModifier {
 mod tests {
     use super::*;
     use obscura_sdk::optics::PerspectiveRays;
-    use obscura_sdk::{Format, RayGeometry, Rgb};
+    use obscura_sdk::{Format, ProjectionEnvironment, RayGeometry, Rgb};
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
@@ -464,18 +452,7 @@ mod tests {
             ],
             Format::new(8, 8),
         );
-        assert_eq!(
-            p.property(ProjectionProperty::DicingHint),
-            Some(PropertyValue::DicingHint(DicingHint::Perspective))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::FieldOfView),
-            Some(PropertyValue::Float(40.0))
-        );
-        assert_eq!(
-            p.property(ProjectionProperty::DeepMetric),
-            Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-        );
+        crate::testing::assert_camera_z(p.as_ref(), DicingHint::Perspective, Some(40.0));
         assert_eq!(env.deep_metric(), DeepMetric::CameraZ);
         assert_eq!(
             p.property(ProjectionProperty::FStop),

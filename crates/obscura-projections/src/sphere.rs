@@ -38,16 +38,12 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::{
-    ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Vec3,
-};
+use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_spherical, direction_angles, finite_f64, hsweep_param,
-    lat_long_field_of_view, radians_toward_zero, sin_cos, spherical_property, vsweep_param,
+    AzimuthSweep, SphericalClip, boxed_sweep, direction_angles, hsweep_param, lat_long_field_of_view,
+    radians_toward_zero, sin_cos, vsweep_param,
 };
-use crate::simd;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrSphereCamera";
@@ -58,29 +54,11 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| vec![hsweep_param(), v
 #[derive(Debug, Default, Clone, Copy)]
 pub struct SphereCameraFactory;
 
-impl ProjectionFactory for SphereCameraFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "latitude-longitude panorama: azimuth u*hsweep/2, elevation v*vsweep/2 over the window (equirectangular)"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let sphere = SphereCamera::new(env, p.float("hsweep")?, p.float("vsweep")?);
-        boxed_spherical(NAME, env, sphere)
-    }
-}
+projection_factory!(
+    SphereCameraFactory,
+    "latitude-longitude panorama: azimuth u*hsweep/2, elevation v*vsweep/2 over the window (equirectangular)",
+    |env, p| boxed_sweep(NAME, env, p, SphereCamera::new)
+);
 
 /// The spherical panorama (see the module documentation for its mapping).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -124,19 +102,12 @@ impl SphereCamera {
     }
 }
 
-impl Projection for SphereCamera {
-    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
-        spherical_property(property, self.fov)
-    }
+spherical_projection!(SphereCamera, |camera: &SphereCamera| camera.fov);
 
-    fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let c = ctx.parts_mut();
-        simd::map_screen(c.rays, c.screen, |s| self.ray(s));
-    }
-
-    fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
-        let (x, y, z) = finite_f64(point)?;
-        if point == Vec3::ZERO {
+impl SphereCamera {
+    /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
+    fn screen_of(&self, x: f64, y: f64, z: f64) -> Option<Point2> {
+        if x == 0.0 && y == 0.0 && z == 0.0 {
             return None;
         }
         let (phi, theta) = direction_angles(x, y, z);
@@ -148,9 +119,12 @@ impl Projection for SphereCamera {
 mod tests {
     use super::*;
     use crate::testing::{
-        self, assert_refused, assert_spherical_ray_length, check_centred_roundtrip, keeps_contract, ray_at,
+        self, assert_refused, assert_spherical_ray_length, assert_sweeps_keep_contract,
+        check_sweep_roundtrip, ray_at,
     };
-    use obscura_sdk::{Format, ScreenWindow};
+    use obscura_sdk::{
+        Format, ParamList, Projection, ProjectionFactory, ProjectionProperty, PropertyValue, ScreenWindow,
+    };
     use proptest::prelude::*;
 
     fn make(params: &[(&str, &str)], format: Format) -> (Box<dyn Projection>, ProjectionEnvironment) {
@@ -182,9 +156,7 @@ mod tests {
             u in -1.0f32..=1.0, v in -1.0f32..=1.0, depth in 0.01f32..1000.0,
             hsweep in 1.0f32..=360.0, vsweep in 1.0f32..=180.0,
         ) {
-            let format = Format::new(300, 200);
-            let (p, env) = make(&[("float hsweep", &hsweep.to_string()), ("float vsweep", &vsweep.to_string())], format);
-            check_centred_roundtrip(p.as_ref(), &env, u, v, depth)?;
+            check_sweep_roundtrip(&SphereCameraFactory, (hsweep, vsweep), u, v, depth)?;
         }
     }
 
@@ -237,20 +209,7 @@ mod tests {
 
     #[test]
     fn keeps_the_contract() {
-        let cases = [
-            (Format::new(48, 24), vec![]),
-            (
-                Format::new(40, 30),
-                vec![("float hsweep", "120"), ("float vsweep", "90")],
-            ),
-            (
-                Format::new(30, 40),
-                vec![("float hsweep", "360"), ("float vsweep", "30")],
-            ),
-        ];
-        for (_, stats) in keeps_contract(&SphereCameraFactory, &cases) {
-            stats.assert_complete(1000);
-        }
+        assert_sweeps_keep_contract(&SphereCameraFactory, [("120", "90"), ("360", "30")]);
     }
 
     #[test]

@@ -7,6 +7,8 @@ use obscura_sdk::{
     ScreenWindow, Vec3,
 };
 
+use crate::panorama::angle_between;
+
 /// A parameter list from `(declaration, values)` pairs, each value given as its own string.
 pub fn param_list(params: &[(&str, &[&str])]) -> ParamList {
     let mut list = ParamList::new();
@@ -46,6 +48,15 @@ pub fn try_make(
     format: Format,
 ) -> Result<Box<dyn Projection>, PluginError> {
     try_create(factory, &split_param_list(params), format).0
+}
+
+/// The error `factory` gives for `(declaration, value)` pairs (made for `format`), as the host shows it;
+/// panics when the factory accepts them.
+pub fn refusal(factory: &dyn ProjectionFactory, params: &[(&str, &str)], format: Format) -> String {
+    try_make(factory, params, format)
+        .err()
+        .unwrap_or_else(|| panic!("{params:?} was accepted"))
+        .to_string()
 }
 
 /// The projection `factory` makes from `(declaration, value)` pairs for `format`, and the environment
@@ -92,6 +103,24 @@ pub fn check_centred_roundtrip(
     Ok(())
 }
 
+/// [`check_centred_roundtrip`] on the panorama `factory` makes with `(hsweep, vsweep)` degrees for a
+/// 300 × 200 image.
+pub fn check_sweep_roundtrip(
+    factory: &dyn ProjectionFactory,
+    (hsweep, vsweep): (f32, f32),
+    u: f32,
+    v: f32,
+    depth: f32,
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    let (hsweep, vsweep) = (hsweep.to_string(), vsweep.to_string());
+    let params = [
+        ("float hsweep", hsweep.as_str()),
+        ("float vsweep", vsweep.as_str()),
+    ];
+    let (p, env) = make_env(factory, &params, Format::new(300, 200));
+    check_centred_roundtrip(p.as_ref(), &env, u, v, depth)
+}
+
 /// Checks that `factory` refuses each `(declaration, value, needle)` (made for `format`) with an error
 /// that starts with `"{plugin}: "` and contains `needle`.
 pub fn assert_refused(
@@ -102,10 +131,7 @@ pub fn assert_refused(
 ) {
     let prefix = format!("{plugin}: ");
     for (decl, val, needle) in cases {
-        let err = try_make(factory, &[(decl, val)], format)
-            .err()
-            .unwrap_or_else(|| panic!("{decl} {val} was accepted"))
-            .to_string();
+        let err = refusal(factory, &[(decl, val)], format);
         assert!(err.starts_with(&prefix), "{err}");
         assert!(err.contains(needle), "{decl} {val}: {err}");
     }
@@ -134,6 +160,61 @@ pub fn assert_spherical_ray_length(
             p.property(ProjectionProperty::FieldOfView),
             Some(PropertyValue::Float(fov))
         );
+    }
+}
+
+/// Checks the property answers of a camera whose depth is camera z (a pinhole, a thin lens, parallel
+/// rays): DicingHint `hint` and DeepMetric CameraZ; when given, FieldOfView exactly `fov`.
+pub fn assert_camera_z(p: &dyn Projection, hint: DicingHint, fov: Option<f32>) {
+    assert_eq!(
+        p.property(ProjectionProperty::DicingHint),
+        Some(PropertyValue::DicingHint(hint))
+    );
+    assert_eq!(
+        p.property(ProjectionProperty::DeepMetric),
+        Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
+    );
+    if let Some(fov) = fov {
+        assert_eq!(
+            p.property(ProjectionProperty::FieldOfView),
+            Some(PropertyValue::Float(fov))
+        );
+    }
+}
+
+/// Checks the thin-lens property answers: FStop, FocalLength and FocalDistance exactly these.
+pub fn assert_lens_properties(p: &dyn Projection, f_stop: f32, focal_length: f32, focal_distance: f32) {
+    for (property, value) in [
+        (ProjectionProperty::FStop, f_stop),
+        (ProjectionProperty::FocalLength, focal_length),
+        (ProjectionProperty::FocalDistance, focal_distance),
+    ] {
+        assert_eq!(
+            p.property(property),
+            Some(PropertyValue::Float(value)),
+            "{property:?}"
+        );
+    }
+}
+
+/// The contract of a panorama swept by `hsweep` and `vsweep`: at its defaults on a 48 × 24 image, and
+/// with each `(hsweep, vsweep)` of `sweeps` on a landscape 40 × 30 and a portrait 30 × 40 image; nothing
+/// culled, over 1000 round trips and footprints checked in each.
+pub fn assert_sweeps_keep_contract(factory: &dyn ProjectionFactory, sweeps: [(&str, &str); 2]) {
+    let [(h1, v1), (h2, v2)] = sweeps;
+    let cases = [
+        (Format::new(48, 24), vec![]),
+        (
+            Format::new(40, 30),
+            vec![("float hsweep", h1), ("float vsweep", v1)],
+        ),
+        (
+            Format::new(30, 40),
+            vec![("float hsweep", h2), ("float vsweep", v2)],
+        ),
+    ];
+    for (_, stats) in keeps_contract(factory, &cases) {
+        stats.assert_complete(1000);
     }
 }
 
@@ -452,18 +533,8 @@ pub const BUILTIN_UNIT_TOLERANCE: f32 = 1e-5;
 /// The angle between two directions in radians, in `f64` (`atan2(|a × b|, a·b)`, accurate at every
 /// size).
 pub fn angle(a: Vec3, b: Vec3) -> f64 {
-    let (a, b) = (
-        [a.x as f64, a.y as f64, a.z as f64],
-        [b.x as f64, b.y as f64, b.z as f64],
-    );
-    let cross = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
-    let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    sin.atan2(cos)
+    let f64s = |v: Vec3| [f64::from(v.x), f64::from(v.y), f64::from(v.z)];
+    angle_between(f64s(a), f64s(b))
 }
 
 #[cfg(test)]

@@ -4,7 +4,7 @@ use super::*;
 use crate::testing::{
     self, ContractTest, assert_contract, assert_spherical_ray_length, project_points, ray_at,
 };
-use obscura_sdk::{Format, ScreenWindow};
+use obscura_sdk::{Format, ParamList, ProjectionFactory, ScreenWindow};
 use proptest::prelude::*;
 
 fn make(params: &[(&str, &[&str])], format: Format) -> Result<Box<dyn Projection>, PluginError> {

@@ -55,9 +55,8 @@ use std::sync::LazyLock;
 
 use obscura_sdk::contract::clipping_distances;
 use obscura_sdk::{
-    DeepMetric, DicingHint, ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Rgb,
-    ValueRange, Vec3,
+    DeepMetric, DicingHint, ParamDecl, Point2, Projection, ProjectionContext, ProjectionEnvironment,
+    ProjectionProperty, PropertyValue, RayGeometry, Rgb, ValueRange, Vec3,
 };
 
 use glass::LAMBDA_D;
@@ -104,30 +103,12 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct LensSystemFactory;
 
-impl ProjectionFactory for LensSystemFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "real lens: rays traced from the film through a prescription's spheres, planes and aspheres, \
-         with dispersion, vignetting and the lens's own distortion"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let invalid = |message: String| PluginError::Invalid {
-            plugin: NAME.into(),
-            message,
-        };
+projection_factory!(
+    LensSystemFactory,
+    "real lens: rays traced from the film through a prescription's spheres, planes and aspheres, \
+     with dispersion, vignetting and the lens's own distortion",
+    |env, p| {
+        let invalid = |message: String| crate::invalid(NAME, message);
         let lens_name = p.string("lens")?.to_string();
         let prescription =
             Prescription::load(&lens_name).map_err(|e| invalid(format!("parameter \"lens\": {e}")))?;
@@ -142,7 +123,7 @@ impl ProjectionFactory for LensSystemFactory {
         env.set_deep_metric(camera.metric);
         Ok(Box::new(camera))
     }
-}
+);
 
 /// What a [`LensSystem`] is made from besides its prescription.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -425,11 +406,8 @@ impl LensSystem {
     /// The ray and tint of one sample.
     #[inline]
     fn sample(&self, s: Point2, a: Point2, lens: Point2) -> (RayGeometry, Rgb) {
-        let f = [-f64::from(s.x) * self.k, -f64::from(s.y) * self.k];
-        let r = f[0].hypot(f[1]);
-        let (c, sn) = if r > 0.0 { (f[0] / r, f[1] / r) } else { (1.0, 0.0) };
-        let a = [f64::from(a.x), f64::from(a.y)];
-        let local = [c * a[0] + sn * a[1], -sn * a[0] + c * a[1]];
+        let frame = self.film_frame(s);
+        let (r, local) = (frame.r, frame.local(a));
         // The lens-centre sample is the chief ray at the d line (the ray maps' main layer).
         let (lambda_step, rgb) = if self.dispersive && local != [0.0, 0.0] {
             let u = spectrum::hash_unit(s.x, s.y, lens.x, lens.y);
@@ -438,20 +416,8 @@ impl LensSystem {
             (None, [1.0; 3])
         };
         let spread = self.spread(r);
-        let rotate = |ray: Ray| Ray {
-            o: [
-                c * ray.o[0] - sn * ray.o[1],
-                sn * ray.o[0] + c * ray.o[1],
-                ray.o[2],
-            ],
-            d: [
-                c * ray.d[0] - sn * ray.d[1],
-                sn * ray.d[0] + c * ray.d[1],
-                ray.d[2],
-            ],
-        };
         if let Some((out, w)) = self.trace_sample(r, local, lambda_step)
-            && let Some(ray) = self.camera_ray(&rotate(out), spread)
+            && let Some(ray) = self.camera_ray(&frame.turn_back(out), spread)
         {
             let w = (w / self.norm) as f32;
             return (ray, Rgb::new(w * rgb[0], w * rgb[1], w * rgb[2]));
@@ -459,7 +425,7 @@ impl LensSystem {
         // Blocked: the chief ray of this film point, carrying nothing.
         match self
             .chief_interpolated(r)
-            .and_then(|ch| self.camera_ray(&rotate(ch), spread))
+            .and_then(|ch| self.camera_ray(&frame.turn_back(ch), spread))
         {
             Some(ray) => (ray, Rgb::new(0.0, 0.0, 0.0)),
             None => (RayGeometry::CULLED, Rgb::new(0.0, 0.0, 0.0)),
@@ -516,6 +482,44 @@ impl LensSystem {
             .filter(|&a| self.trace_sample(r, a, None).is_none())
             .count();
         blocked as f64 / disk_grid(n).count() as f64
+    }
+}
+
+/// A film point in the lens frame turned about the axis so that it lies on +x: every table (aiming,
+/// chief rays) is meridional, so a sample is looked up there and its ray turned back.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct FilmFrame {
+    /// Film radius, mm.
+    r: f64,
+    /// Cosine and sine of the film point's azimuth.
+    c: f64,
+    sn: f64,
+}
+
+impl FilmFrame {
+    /// The film centre, whose azimuth is taken as +x.
+    const CENTRE: FilmFrame = FilmFrame {
+        r: 0.0,
+        c: 1.0,
+        sn: 0.0,
+    };
+
+    /// Aperture sample `a` in this frame.
+    #[inline]
+    fn local(&self, a: Point2) -> [f64; 2] {
+        let a = [f64::from(a.x), f64::from(a.y)];
+        [self.c * a[0] + self.sn * a[1], -self.sn * a[0] + self.c * a[1]]
+    }
+
+    /// A ray of this frame turned back into the lens's own frame.
+    #[inline]
+    fn turn_back(&self, ray: Ray) -> Ray {
+        let (c, sn) = (self.c, self.sn);
+        let turn = |v: [f64; 3]| [c * v[0] - sn * v[1], sn * v[0] + c * v[1], v[2]];
+        Ray {
+            o: turn(ray.o),
+            d: turn(ray.d),
+        }
     }
 }
 
@@ -687,7 +691,7 @@ impl LensSystem {
         while start < n {
             let mut lanes = batch::Lanes::default();
             let mut eta: [&[f32]; LANES] = [&self.eta_d; LANES];
-            let mut setup = [(0.0f64, 1.0f64, 0.0f64, 0.0f64, [1.0f32; 3]); LANES];
+            let mut setup = [(FilmFrame::CENTRE, 0.0f64, [1.0f32; 3]); LANES];
             let mut todo = [false; LANES];
             for l in 0..LANES {
                 let i = start + l;
@@ -695,11 +699,8 @@ impl LensSystem {
                     continue;
                 }
                 let s = screen[i];
-                let f = [-f64::from(s.x) * self.k, -f64::from(s.y) * self.k];
-                let r = f[0].hypot(f[1]);
-                let (c, sn) = if r > 0.0 { (f[0] / r, f[1] / r) } else { (1.0, 0.0) };
-                let a = [f64::from(aperture[i].x), f64::from(aperture[i].y)];
-                let local = [c * a[0] + sn * a[1], -sn * a[0] + c * a[1]];
+                let frame = self.film_frame(s);
+                let (r, local) = (frame.r, frame.local(aperture[i]));
                 if local == [0.0, 0.0] {
                     (rays[i], tint[i]) = self.sample(s, aperture[i], lens[i]);
                     continue;
@@ -713,7 +714,7 @@ impl LensSystem {
                 };
                 todo[l] = true;
                 let Some(aimed) = self.table.lookup(r, local) else {
-                    setup[l] = (r, c, sn, 0.0, rgb);
+                    setup[l] = (frame, 0.0, rgb);
                     continue;
                 };
                 let t = aimed.t;
@@ -724,13 +725,7 @@ impl LensSystem {
                 lanes.dy[l] = ray.d[1] as f32;
                 lanes.dz[l] = ray.d[2] as f32;
                 lanes.alive[l] = 1.0;
-                setup[l] = (
-                    r,
-                    c,
-                    sn,
-                    aimed.jacobian / ((1.0 + t2) * (1.0 + t2)) / self.norm,
-                    rgb,
-                );
+                setup[l] = (frame, aimed.jacobian / ((1.0 + t2) * (1.0 + t2)) / self.norm, rgb);
             }
             batch::trace(lane_lens, &mut lanes, &eta);
             for l in 0..LANES {
@@ -738,24 +733,20 @@ impl LensSystem {
                     continue;
                 }
                 let i = start + l;
-                let (r, c, sn, w, rgb) = setup[l];
-                let rotate = |o: [f64; 3], d: [f64; 3]| Ray {
-                    o: [c * o[0] - sn * o[1], sn * o[0] + c * o[1], o[2]],
-                    d: [c * d[0] - sn * d[1], sn * d[0] + c * d[1], d[2]],
-                };
-                let spread = self.spread(r);
-                let out = rotate(
-                    [
+                let (frame, w, rgb) = setup[l];
+                let spread = self.spread(frame.r);
+                let out = frame.turn_back(Ray {
+                    o: [
                         f64::from(lanes.ox[l]),
                         f64::from(lanes.oy[l]),
                         f64::from(lanes.oz[l]),
                     ],
-                    [
+                    d: [
                         f64::from(lanes.dx[l]),
                         f64::from(lanes.dy[l]),
                         f64::from(lanes.dz[l]),
                     ],
-                );
+                });
                 if lanes.alive[l] != 0.0
                     && let Some(ray) = self.camera_ray(&out, spread)
                 {
@@ -764,10 +755,10 @@ impl LensSystem {
                     tint[i] = Rgb::new(w * rgb[0], w * rgb[1], w * rgb[2]);
                     continue;
                 }
-                rays[i] = match self.chief_interpolated(r).and_then(|ch| {
-                    let ch = rotate(ch.o, ch.d);
-                    self.camera_ray(&ch, spread)
-                }) {
+                rays[i] = match self
+                    .chief_interpolated(frame.r)
+                    .and_then(|ch| self.camera_ray(&frame.turn_back(ch), spread))
+                {
                     Some(ray) => ray,
                     None => RayGeometry::CULLED,
                 };
@@ -775,6 +766,15 @@ impl LensSystem {
             }
             start += LANES;
         }
+    }
+
+    /// The film point of screen sample `s` as its radius and the frame turned so that it lies on +x.
+    #[inline]
+    fn film_frame(&self, s: Point2) -> FilmFrame {
+        let f = [-f64::from(s.x) * self.k, -f64::from(s.y) * self.k];
+        let r = f[0].hypot(f[1]);
+        let (c, sn) = if r > 0.0 { (f[0] / r, f[1] / r) } else { (1.0, 0.0) };
+        FilmFrame { r, c, sn }
     }
 
     fn film_to_screen(&self, r: f64, p: [f64; 3]) -> Option<Point2> {

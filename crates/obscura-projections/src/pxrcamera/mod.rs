@@ -93,14 +93,16 @@ use std::sync::LazyLock;
 
 use obscura_sdk::optics::screen_distance;
 use obscura_sdk::{
-    ContextParts, DeepMetric, DicingHint, ParamDecl, ParamList, ParamType, ParamValue, Params, PluginError,
-    Point2, Projection, ProjectionContext, ProjectionEnvironment, ProjectionFactory, ProjectionProperty,
-    PropertyValue, RayGeometry, Rgb, ValueRange, Vec3,
+    ContextParts, DeepMetric, DicingHint, ParamDecl, ParamType, ParamValue, Params, PluginError, Point2,
+    Projection, ProjectionContext, ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry,
+    Rgb, ValueRange, Vec3,
 };
 
 use crate::dof::{self, DepthOfField};
+use crate::panorama::angle_between;
+use crate::perspective::Zoom;
 use crate::rolling_shutter::RollingShutter;
-use crate::simd;
+use crate::{screen, simd};
 use distortion::Distortion;
 use focal_plane::{FocalPlane, MAX_TILT_DEGREES};
 
@@ -117,22 +119,26 @@ const NON_NEGATIVE: ValueRange = ValueRange {
     max_inclusive: false,
 };
 
+/// A float parameter that takes any finite value, 0 by default (off).
+fn finite(name: &'static str, doc: &'static str) -> ParamDecl {
+    ParamDecl::float(name, 0.0).range(FINITE).doc(doc)
+}
+
+/// A camera-space point on the plane of focus, any finite position.
+fn focus_point(name: &'static str, doc: &'static str) -> ParamDecl {
+    ParamDecl::triple(name, ParamType::Point, Vec3::ZERO)
+        .range(FINITE)
+        .doc(doc)
+}
+
 static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
     let [mut f_stop, focal_length, focal_distance] = dof::params();
     f_stop.default = ParamValue::Floats(vec![16.0]);
     f_stop.doc = "aperture f-number (RenderMan's PxrCamera default 16); depth of field needs focalLength > 0 too; inf or 0 = pinhole".into();
+    let [fov, fov_end] = crate::perspective::zoom_params();
     let mut table = vec![
-        ParamDecl::float("fov", 90.0)
-            .range(crate::perspective::FOV_RANGE)
-            .doc("field of view in degrees across the screen window's [-1, 1] square (the smaller image side)"),
-        ParamDecl::float("fovEnd", 0.0)
-            .range(ValueRange {
-                min: 0.0,
-                max: 180.0,
-                min_inclusive: true,
-                max_inclusive: false,
-            })
-            .doc("field of view at shutter close, for zoom blur; 0 = same as fov"),
+        fov,
+        fov_end,
         f_stop,
         focal_length,
         focal_distance,
@@ -142,36 +148,19 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
         ParamDecl::float("tilt", 0.0)
             .range(ValueRange::closed(-MAX_TILT_DEGREES, MAX_TILT_DEGREES))
             .doc("degrees between the plane of focus and the image plane; + brings the top of the plane closer (needs depth of field)"),
-        ParamDecl::float("roll", 0.0)
-            .range(FINITE)
-            .doc("degrees the tilted plane of focus turns clockwise about the view axis"),
-        ParamDecl::triple("focus1", ParamType::Point, Vec3::ZERO)
-            .range(FINITE)
-            .doc("first of three camera-space points on the plane of focus; all three replace tilt, roll and focalDistance"),
-        ParamDecl::triple("focus2", ParamType::Point, Vec3::ZERO)
-            .range(FINITE)
-            .doc("second point on the plane of focus (with focus1, focus3)"),
-        ParamDecl::triple("focus3", ParamType::Point, Vec3::ZERO)
-            .range(FINITE)
-            .doc("third point on the plane of focus (with focus1, focus2)"),
-        ParamDecl::float("shiftX", 0.0)
-            .range(FINITE)
-            .doc("lens shift to the right in screen units (half the smaller image side = 1)"),
-        ParamDecl::float("shiftY", 0.0)
-            .range(FINITE)
-            .doc("lens shift up in screen units; corrects keystoning without tilting the camera"),
-        ParamDecl::float("radial1", 0.0)
-            .range(FINITE)
-            .doc("quadratic radial distortion: > 0 pincushion, < 0 barrel"),
-        ParamDecl::float("radial2", 0.0)
-            .range(FINITE)
-            .doc("quartic radial distortion"),
-        ParamDecl::float("assymX", 0.0)
-            .range(FINITE)
-            .doc("radial distortion of x only: horizontal lines stay straight"),
-        ParamDecl::float("assymY", 0.0)
-            .range(FINITE)
-            .doc("radial distortion of y only: vertical lines stay straight"),
+        finite("roll", "degrees the tilted plane of focus turns clockwise about the view axis"),
+        focus_point(
+            "focus1",
+            "first of three camera-space points on the plane of focus; all three replace tilt, roll and focalDistance",
+        ),
+        focus_point("focus2", "second point on the plane of focus (with focus1, focus3)"),
+        focus_point("focus3", "third point on the plane of focus (with focus1, focus2)"),
+        finite("shiftX", "lens shift to the right in screen units (half the smaller image side = 1)"),
+        finite("shiftY", "lens shift up in screen units; corrects keystoning without tilting the camera"),
+        finite("radial1", "quadratic radial distortion: > 0 pincushion, < 0 barrel"),
+        finite("radial2", "quartic radial distortion"),
+        finite("assymX", "radial distortion of x only: horizontal lines stay straight"),
+        finite("assymY", "radial distortion of y only: vertical lines stay straight"),
         ParamDecl::float("squeeze", 1.0)
             .range(ValueRange::greater_than(0.0))
             .doc("anamorphic squeeze of the distortion: the radius is measured with x/squeeze, so > 1 distorts x less"),
@@ -199,31 +188,16 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
 #[derive(Debug, Default, Clone, Copy)]
 pub struct PxrCameraFactory;
 
-impl ProjectionFactory for PxrCameraFactory {
-    fn name(&self) -> &str {
-        NAME
-    }
-
-    fn summary(&self) -> &str {
-        "full-featured perspective: zoom, thin lens with tilted focal plane, shift, distortion, \
-         chromatic aberration, vignetting, rolling shutter, enhance"
-    }
-
-    fn param_table(&self) -> &[ParamDecl] {
-        &TABLE
-    }
-
-    fn create_projection(
-        &self,
-        env: &mut ProjectionEnvironment,
-        params: &ParamList,
-    ) -> Result<Box<dyn Projection>, PluginError> {
-        let p = Params::resolve(NAME, &TABLE, params)?;
-        let camera = PxrCamera::from_params(env, &p)?;
+projection_factory!(
+    PxrCameraFactory,
+    "full-featured perspective: zoom, thin lens with tilted focal plane, shift, distortion, \
+     chromatic aberration, vignetting, rolling shutter, enhance",
+    |env, p| {
+        let camera = PxrCamera::from_params(env, p)?;
         env.set_deep_metric(DeepMetric::CameraZ);
         Ok(Box::new(camera))
     }
-}
+);
 
 /// RenderMan's `PxrCamera` (see the module documentation for its mapping).
 #[derive(Debug, Clone, PartialEq)]
@@ -231,10 +205,7 @@ pub struct PxrCamera {
     half_pixel: f32,
     near: f32,
     far: f32,
-    fov: f32,
-    /// `Some(fovEnd)` when the field of view changes during the shutter.
-    fov_end: Option<f32>,
-    d: f32,
+    zoom: Zoom,
     /// `(ex, ey, 1/ez)`.
     enhance: (f32, f32, f32),
     enhance_zoom: f64,
@@ -264,10 +235,7 @@ const GREEN: usize = 1;
 
 impl PxrCamera {
     fn from_params(env: &ProjectionEnvironment, p: &Params) -> Result<Self, PluginError> {
-        let invalid = |message: String| PluginError::Invalid {
-            plugin: NAME.to_string(),
-            message,
-        };
+        let invalid = |message: String| crate::invalid(NAME, message);
         let (fov, fov_end) = (p.float("fov")?, p.float("fovEnd")?);
         crate::perspective::check_fov_end(NAME, fov_end)?;
         let dof = DepthOfField::from_params(p)?;
@@ -334,17 +302,14 @@ impl PxrCamera {
             focal_length: dof.focal_length,
             focal_distance: (axis + axial[GREEN] as f64) as f32,
         };
-        let (px, py) = env.pixel_size();
         let shutter = Some(RollingShutter::from_params(p, env.screen_window())?).filter(|r| !r.is_global());
         let (natural, optical) = (p.float("natural")?, p.float("optical")?);
-        let fov_end_on = fov_end > 0.0 && fov_end != fov;
+        let zoom = Zoom::new(fov, fov_end);
         let mut camera = PxrCamera {
-            half_pixel: 0.5 * (px * py).sqrt(),
+            half_pixel: screen::half_pixel(env),
             near: env.clipping_near(),
             far: env.clipping_far(),
-            fov,
-            fov_end: fov_end_on.then_some(fov_end),
-            d: screen_distance(fov),
+            zoom,
             enhance: (enhance[0], enhance[1], 1.0 / enhance[2]),
             enhance_zoom: enhance[2] as f64,
             shift: (p.float("shiftX")?, p.float("shiftY")?),
@@ -372,7 +337,7 @@ impl PxrCamera {
             natural,
             optical,
             shutter,
-            extra: shutter.is_some() || fov_end_on || chromatic || natural > 0.0 || optical > 0.0,
+            extra: shutter.is_some() || zoom.fov_end.is_some() || chromatic || natural > 0.0 || optical > 0.0,
             reported_dof,
             field_of_view: fov,
         };
@@ -386,7 +351,7 @@ impl PxrCamera {
     /// green channel's `transverse` magnification reshape the image; a pair with an end beyond the
     /// distortion's fold is left out (and with both left out, `fov` stands).
     fn measured_field_of_view(&self) -> f32 {
-        let narrower = self.fov_end.map_or(self.fov, |e| e.min(self.fov));
+        let narrower = self.zoom.narrowest();
         let inv_m = f64::from(self.inv_magnification[GREEN]);
         if self.distortion.is_none() && self.shift == (0.0, 0.0) && inv_m == 1.0 {
             return narrower;
@@ -403,26 +368,16 @@ impl PxrCamera {
             let l = (u[0] * u[0] + u[1] * u[1] + d * d).sqrt();
             Some([u[0] / l, u[1] / l, d / l])
         };
-        let angle = |a: [f64; 3], b: [f64; 3]| {
-            let c = [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ];
-            let sin = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-            let cos = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-            sin.atan2(cos).to_degrees()
-        };
         let extent = |fov: f32| -> f32 {
             let d = f64::from(screen_distance(fov));
             [([-1.0, 0.0], [1.0, 0.0]), ([0.0, -1.0], [0.0, 1.0])]
                 .into_iter()
-                .filter_map(|(a, b)| Some(angle(chief(a, d)?, chief(b, d)?)))
+                .filter_map(|(a, b)| Some(angle_between(chief(a, d)?, chief(b, d)?).to_degrees()))
                 .fold(None, |m: Option<f64>, e| Some(m.map_or(e, |m| m.min(e))))
                 .map_or(fov, |e| e as f32)
         };
-        let start = extent(self.fov);
-        self.fov_end.map_or(start, |end| start.min(extent(end)))
+        let start = extent(self.zoom.fov);
+        self.zoom.fov_end.map_or(start, |end| start.min(extent(end)))
     }
 
     /// True when the thin lens is on.
@@ -435,10 +390,7 @@ impl PxrCamera {
     #[inline]
     #[must_use]
     pub fn screen_distance_at(&self, t: f32) -> f32 {
-        match self.fov_end {
-            None => self.d,
-            Some(end) => screen_distance(self.fov + (end - self.fov) * t),
-        }
+        self.zoom.screen_distance_at(t)
     }
 
     /// One sample: the rewritten time, and the ray with its tint factor (`None`: culled).
@@ -462,7 +414,7 @@ impl PxrCamera {
             };
             (t, self.screen_distance_at(t))
         } else {
-            (t, self.d)
+            (t, self.zoom.d)
         };
         let (c, mut tint) = if EXTRA && self.chromatic {
             let c = channel(s);

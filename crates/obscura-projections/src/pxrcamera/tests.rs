@@ -2,8 +2,10 @@
 //! and properties.
 
 use super::*;
-use crate::testing::{self, ContractTest, assert_contract, assert_refused};
-use obscura_sdk::Format;
+use crate::testing::{
+    self, ContractTest, assert_camera_z, assert_contract, assert_lens_properties, assert_refused,
+};
+use obscura_sdk::{Format, ParamList, ProjectionFactory};
 use proptest::prelude::*;
 
 fn try_make(params: &[(&str, &str)], format: Format) -> Result<Box<dyn Projection>, PluginError> {
@@ -683,18 +685,7 @@ fn the_contract_holds_for_several_configurations() {
 fn properties_are_honest() {
     let format = Format::new(8, 8);
     let pin = make(&[("float fov", "50"), ("float fovEnd", "35")], format);
-    assert_eq!(
-        pin.property(ProjectionProperty::DicingHint),
-        Some(PropertyValue::DicingHint(DicingHint::Perspective))
-    );
-    assert_eq!(
-        pin.property(ProjectionProperty::DeepMetric),
-        Some(PropertyValue::DeepMetric(DeepMetric::CameraZ))
-    );
-    assert_eq!(
-        pin.property(ProjectionProperty::FieldOfView),
-        Some(PropertyValue::Float(35.0))
-    );
+    assert_camera_z(pin.as_ref(), DicingHint::Perspective, Some(35.0));
     // RenderMan's default fStop 16 without a focal length is a pinhole.
     assert_eq!(pin.property(ProjectionProperty::FStop), None);
     let lens = make(
@@ -705,18 +696,7 @@ fn properties_are_honest() {
         ],
         format,
     );
-    assert_eq!(
-        lens.property(ProjectionProperty::FStop),
-        Some(PropertyValue::Float(8.0))
-    );
-    assert_eq!(
-        lens.property(ProjectionProperty::FocalLength),
-        Some(PropertyValue::Float(0.05))
-    );
-    assert_eq!(
-        lens.property(ProjectionProperty::FocalDistance),
-        Some(PropertyValue::Float(3.0))
-    );
+    assert_lens_properties(lens.as_ref(), 8.0, 0.05, 3.0);
     // dofMult multiplies the lens radius: R = 2·0.05/(2·16).
     let (r, _, _) = one(lens.as_ref(), Point2::ZERO, Point2::new(1.0, 0.0), 0.0);
     assert!((r.origin.x - 2.0 * 0.05 / 32.0).abs() < 1e-9);
