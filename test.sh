@@ -1,22 +1,36 @@
 #!/usr/bin/env bash
-# The README's test command: every Rust test of the workspace, then the Python package's tests
-# (the `obscura` wheel built with maturin, installed into a virtual environment, run with pytest).
+# The README's test command: every Rust test of the workspace, then the Python package's tests (the
+# `obscura` wheel built with maturin, run with pytest), all with the independent checkers installed.
+#
+# The checkers we did not write (OpenEXR's Python reader, OpenCV with its contrib modules, pycolmap)
+# go into the test's own virtual environment, which is first on PATH for both halves: the Rust tests
+# call `python3` for them too. With OBSCURA_REQUIRE_* set a missing checker fails its test instead of
+# skipping it, so a newcomer's run and CI's run the same tests and nothing is skipped.
 set -euo pipefail
 cd "$(dirname "$0")"
 root=$(pwd)
 target=${CARGO_TARGET_DIR:-$root/target}
 
-cargo test --workspace
-
-echo "== the Python package: wheel (maturin), virtual environment, pytest"
+echo "== the test environment: a virtual environment with the build (maturin, pytest) and the checkers"
 venv="$target/python-venv"
-# The venv sees the system's packages, so checkers installed there (OpenCV, pycolmap, OpenEXR) are used.
-[ -x "$venv/bin/python" ] || python3 -m venv --system-site-packages "$venv"
+[ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 py="$venv/bin/python"
 export PATH="$venv/bin:$PATH"
-if ! command -v maturin >/dev/null || ! "$py" -c "import pytest, numpy" 2>/dev/null; then
-  "$py" -m pip install --quiet --disable-pip-version-check maturin pytest numpy
+if ! "$py" -c "import maturin, pytest, numpy, OpenEXR, cv2, pycolmap; cv2.omnidir" 2>/dev/null; then
+  # opencv-contrib-python-headless has cv2.omnidir; a plain OpenCV wheel installing cv2 too would
+  # shadow it, so any is removed first.
+  "$py" -m pip uninstall --quiet --yes opencv-python-headless opencv-python 2>/dev/null || true
+  "$py" -m pip install --quiet --disable-pip-version-check \
+    maturin pytest numpy OpenEXR opencv-contrib-python-headless pycolmap
 fi
+export OBSCURA_REQUIRE_INDEPENDENT_EXR=1
+export OBSCURA_REQUIRE_OPENCV=1
+export OBSCURA_REQUIRE_PYCOLMAP=1
+
+echo "== cargo test --workspace"
+cargo test --workspace
+
+echo "== the Python package: wheel (maturin), installed into the environment, pytest"
 rm -rf "$target/wheels"
 maturin build --release --quiet -m crates/obscura-python/Cargo.toml -o "$target/wheels"
 "$py" -m pip install --quiet --disable-pip-version-check --force-reinstall --no-deps "$target"/wheels/obscura-*.whl

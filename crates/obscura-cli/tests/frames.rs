@@ -1,15 +1,10 @@
 //! End to end: `obscura render --frames` and the files each frame writes.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-fn obscura(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_obscura"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the obscura binary runs")
-}
+mod support;
+
+use support::obscura_in as obscura;
 
 fn files(dir: &Path) -> Vec<String> {
     let mut names: Vec<String> = std::fs::read_dir(dir)

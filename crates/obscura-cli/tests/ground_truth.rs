@@ -3,16 +3,12 @@
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-fn obscura(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_obscura"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("the obscura binary runs")
-}
+mod support;
+
+use support::obscura_in as obscura;
 
 fn example() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/animated/boxes.gltf")

@@ -27,12 +27,6 @@ pub struct Neighbours<'a> {
     pub next: Option<&'a Scene>,
 }
 
-/// True when any display writes a flow AOV.
-#[must_use]
-pub fn wants_flow(displays: &[Display]) -> bool {
-    displays.iter().any(|d| d.aovs.iter().any(|a| a.is_flow()))
-}
-
 /// Adds `aovs` to every EXR display (once each); PNG and deep displays are left alone.
 pub fn add_aovs(displays: &mut [Display], aovs: &[Aov]) {
     for d in displays.iter_mut().filter(|d| d.driver == DisplayDriver::OpenExr) {

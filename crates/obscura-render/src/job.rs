@@ -396,20 +396,29 @@ mod tests {
         assert_eq!(s.projection_params, scene().projection_params);
     }
 
+    /// The test scene with `o` applied.
+    fn applied(o: Overrides) -> Scene {
+        let mut s = scene();
+        o.apply(&mut s).unwrap();
+        s
+    }
+
+    /// `width`×`height` with the test scene's pixel aspect, 2.
+    fn format_keeping_aspect(width: u32, height: u32) -> Format {
+        Format {
+            width,
+            height,
+            pixel_aspect: 2.0,
+        }
+    }
+
     #[test]
     fn the_format_sets_the_size_and_keeps_the_pixel_aspect() {
-        let mut s = scene();
-        let o = Overrides {
+        let s = applied(Overrides {
             format: Some((64, 48)),
             ..Overrides::default()
-        };
-        o.apply(&mut s).unwrap();
-        let want = Format {
-            width: 64,
-            height: 48,
-            pixel_aspect: 2.0,
-        };
-        assert_eq!(s.camera.format, want);
+        });
+        assert_eq!(s.camera.format, format_keeping_aspect(64, 48));
     }
 
     #[test]
@@ -506,19 +515,12 @@ mod tests {
         // Without --format the calibration's size, with square pixels.
         assert_eq!(s.camera.format, Format::new(640, 480));
 
-        let mut s = scene();
-        let o = Overrides {
+        let s = applied(Overrides {
             format: Some((32, 24)),
             calibration: Some(c),
             ..Overrides::default()
-        };
-        o.apply(&mut s).unwrap();
-        let want = Format {
-            width: 32,
-            height: 24,
-            pixel_aspect: 2.0,
-        };
-        assert_eq!(s.camera.format, want);
+        });
+        assert_eq!(s.camera.format, format_keeping_aspect(32, 24));
     }
 
     #[test]

@@ -16,6 +16,15 @@ pub fn obscura(args: &[&str]) -> Output {
         .expect("the obscura binary runs")
 }
 
+/// Runs the `obscura` binary with `args` in `dir`.
+pub fn obscura_in(args: &[&str], dir: &std::path::Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_obscura"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("the obscura binary runs")
+}
+
 /// A command's output bytes (stdout or stderr) as text.
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
