@@ -1,7 +1,8 @@
 //! Running a projection as a host does: the checker's random samples ([`SplitMix64`],
 //! [`concentric_disk`]), the batches ([`Runner`]) and what a run gives back ([`Run`], [`Output`]).
 
-use obscura_sdk::contract::{self, DefaultRays, Loss, call_project};
+use obscura_host::contract::{DefaultRays, Loss, call_project};
+use obscura_sdk::contract;
 use obscura_sdk::{Point2, Projection, ProjectionContext, RayGeometry, Rgb, Vec3};
 
 use crate::{Case, CheckResult, Sample};

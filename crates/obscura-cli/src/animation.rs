@@ -9,10 +9,11 @@ use obscura_render::frame::{self, Neighbours};
 use obscura_render::job::{self, Overrides};
 
 use crate::stdout::outln;
+use obscura_host::Registry;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_render::sequence::frame_displays;
 use obscura_scene::{Aov, Display, Scene};
-use obscura_sdk::{Format, Registry};
+use obscura_sdk::Format;
 
 /// Reads `--aov`: one AOV name, or `all` for every ground-truth AOV and the texture AOVs (`albedo`,
 /// `uv`).

@@ -483,7 +483,7 @@ fn configure(
     search: &PluginSearch,
     scene: &mut obscura_scene::Scene,
     calibration: Option<Calibrated>,
-) -> Result<(obscura_sdk::Registry, Overrides), String> {
+) -> Result<(obscura_host::Registry, Overrides), String> {
     let mut registry = builtin_registry();
     let mut overrides = Overrides {
         format: a.format,

@@ -13,15 +13,19 @@
 //!    the message; rays the projection culled itself are counted apart. Nothing invalid reaches the
 //!    tracer and nothing is dropped silently.
 //!
-//! The rules, the properties' defaults and the default rays are [`obscura_sdk::contract`]'s, the same
-//! that `obscura check` applies.
+//! The rules are [`obscura_sdk::contract`]'s, the properties' defaults and the default rays
+//! [`crate::contract`]'s: the same that `obscura check` applies.
 
-use obscura_sdk::contract::{DefaultRays, call_project, check_ray};
-pub use obscura_sdk::contract::{Properties, Violation};
+pub use obscura_sdk::contract::Violation;
+use obscura_sdk::contract::check_ray;
 use obscura_sdk::{
-    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry,
-    Registry, Rgb, Vec3,
+    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
+    Vec3,
 };
+
+pub use crate::contract::Properties;
+use crate::contract::{DefaultRays, call_project};
+use crate::registry::Registry;
 
 use crate::aperture::ApertureWarp;
 use crate::camera::{CameraDesc, CameraError};

@@ -10,10 +10,11 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use obscura_host::Registry;
 use obscura_host::{Batch, CameraDesc, CameraStage, Violation};
 use obscura_plugins::isolate::{Isolation, WorkerCommand};
 use obscura_plugins::loader::{PluginSearch, ensure, load_all, load_file};
-use obscura_sdk::{Format, ParamList, Point2, Registry, Vec3};
+use obscura_sdk::{Format, ParamList, Point2, Vec3};
 
 #[path = "support/plugin_build.rs"]
 mod plugin_build;

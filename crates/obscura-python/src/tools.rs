@@ -89,7 +89,7 @@ pub fn check<'py>(
     };
     let name = camera.stage.name().to_string();
     let mut reg = registry()?;
-    let reg_ref: &mut obscura_sdk::Registry = &mut reg;
+    let reg_ref: &mut obscura_host::Registry = &mut reg;
     let report = py
         .detach(|| check_registered(reg_ref, &name, &camera.params, &opts))
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -177,7 +177,7 @@ pub fn render<'py>(
     };
     let prepared = {
         let mut reg = registry()?;
-        let reg_ref: &mut obscura_sdk::Registry = &mut reg;
+        let reg_ref: &mut obscura_host::Registry = &mut reg;
         py.detach(|| prepare(&sc, reg_ref, &base_dir, &opts))
             .map_err(|e| PyValueError::new_err(e.to_string()))?
     };

@@ -10,7 +10,7 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use glam::{Mat4, Vec2, Vec3};
-use obscura_host::{Batch, CameraDesc, CameraStage};
+use obscura_host::{Batch, CameraDesc, CameraStage, Registry};
 use obscura_plugins::builtin_registry;
 use obscura_render::integrator::PathOptions;
 use obscura_render::material::textured::TextureLookup;
@@ -19,7 +19,7 @@ use obscura_scene::texture::{ColorSpace, ImageSource, SurfaceMaps, TextureDesc, 
 use obscura_scene::{Material, Mesh, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{
     Format, ParamDecl, ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, Registry,
+    ProjectionFactory, ProjectionProperty, PropertyValue,
 };
 
 /// Half-width and depth of the plane `y = −1` (world = camera space: the camera looks down +Z).
