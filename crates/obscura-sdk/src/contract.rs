@@ -121,6 +121,13 @@ impl Violation {
     pub fn index(self) -> usize {
         self as usize
     }
+
+    /// Whether this is a per-ray rule, one [`check_ray`] applies to each ray; the two others,
+    /// [`Violation::Panicked`] and [`Violation::Failed`], lose a whole batch.
+    #[must_use]
+    pub fn is_per_ray(self) -> bool {
+        !matches!(self, Violation::Panicked | Violation::Failed)
+    }
 }
 
 /// One ray's breach of the contract: which rule, and the values for a message.
@@ -395,6 +402,13 @@ mod tests {
         for (i, v) in Violation::ALL.iter().enumerate() {
             assert_eq!(v.index(), i);
         }
+    }
+
+    #[test]
+    fn every_rule_but_the_two_batch_losses_is_per_ray_and_after_them() {
+        let losses: Vec<_> = Violation::ALL.into_iter().filter(|v| !v.is_per_ray()).collect();
+        assert_eq!(losses, [Violation::Panicked, Violation::Failed]);
+        assert!(Violation::ALL[2..].iter().all(|v| v.is_per_ray()));
     }
 
     #[test]
