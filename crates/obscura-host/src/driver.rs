@@ -42,6 +42,46 @@ pub enum HostError {
     Plugin(#[from] PluginError),
 }
 
+/// The names of [`output_values`]' numbers, in order, for messages.
+pub const OUTPUT_FIELDS: [&str; 14] = [
+    "origin.x",
+    "origin.y",
+    "origin.z",
+    "origin_radius",
+    "direction.x",
+    "direction.y",
+    "direction.z",
+    "ray_spread",
+    "min_dist",
+    "max_dist",
+    "time",
+    "tint.r",
+    "tint.g",
+    "tint.b",
+];
+
+/// Every number `project` leaves for one sample — its ray, output time and tint — in
+/// [`OUTPUT_FIELDS`] order: what two runs of a deterministic projection agree on bit for bit.
+#[must_use]
+pub fn output_values(ray: &RayGeometry, time: f32, tint: Rgb) -> [f32; 14] {
+    [
+        ray.origin.x,
+        ray.origin.y,
+        ray.origin.z,
+        ray.origin_radius,
+        ray.direction.x,
+        ray.direction.y,
+        ray.direction.z,
+        ray.ray_spread,
+        ray.min_dist,
+        ray.max_dist,
+        time,
+        tint.r,
+        tint.g,
+        tint.b,
+    ]
+}
+
 /// One batch of samples and the rays made from them. The host fills `screen`, `lens` and `time`
 /// (canonical); [`CameraStage::run`] fills the rest.
 #[derive(Debug, Clone, Default)]
