@@ -214,8 +214,9 @@ mod tests;
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use obscura_sdk::contract::panic_message;
-use obscura_sdk::{ParamList, PluginError, Projection, ProjectionEnvironment, ProjectionFactory, Registry};
+use obscura_host::Registry;
+use obscura_host::contract::panic_message;
+use obscura_sdk::{ParamList, PluginError, Projection, ProjectionEnvironment, ProjectionFactory};
 
 pub use options::CheckOptions;
 pub use report::{Case, CheckKind, CheckReport, CheckResult, Sample, Status};

@@ -1,7 +1,9 @@
 //! Running a projection as a host does: the checker's random samples ([`SplitMix64`],
 //! [`concentric_disk`]), the batches ([`Runner`]) and what a run gives back ([`Run`], [`Output`]).
 
-use obscura_sdk::contract::{self, DefaultRays, Loss, call_project};
+use obscura_host::contract::{DefaultRays, Loss, call_project};
+use obscura_host::driver::output_values;
+use obscura_sdk::contract;
 use obscura_sdk::{Point2, Projection, ProjectionContext, RayGeometry, Rgb, Vec3};
 
 use crate::{Case, CheckResult, Sample};
@@ -87,43 +89,12 @@ pub(crate) struct Output {
 }
 
 /// The names of [`Output::values`], for messages.
-pub(crate) const FIELDS: [&str; 14] = [
-    "origin.x",
-    "origin.y",
-    "origin.z",
-    "origin_radius",
-    "direction.x",
-    "direction.y",
-    "direction.z",
-    "ray_spread",
-    "min_dist",
-    "max_dist",
-    "time",
-    "tint.r",
-    "tint.g",
-    "tint.b",
-];
+pub(crate) use obscura_host::driver::OUTPUT_FIELDS as FIELDS;
 
 impl Output {
     /// Every output number, in [`FIELDS`] order.
     pub(crate) fn values(&self) -> [f32; 14] {
-        let r = &self.ray;
-        [
-            r.origin.x,
-            r.origin.y,
-            r.origin.z,
-            r.origin_radius,
-            r.direction.x,
-            r.direction.y,
-            r.direction.z,
-            r.ray_spread,
-            r.min_dist,
-            r.max_dist,
-            self.time,
-            self.tint.r,
-            self.tint.g,
-            self.tint.b,
-        ]
+        output_values(&self.ray, self.time, self.tint)
     }
 
     /// `None` when bit-identical, else (first differing field, largest difference).

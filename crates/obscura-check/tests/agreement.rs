@@ -10,9 +10,9 @@
 //! the table.
 
 use obscura_check::{CheckKind, CheckOptions, CheckReport, check_projection};
+use obscura_host::contract::ProjectFailed;
 use obscura_host::sampler::Sampler;
 use obscura_host::{Batch, CameraDesc, CameraStage, ContractReport, Violation};
-use obscura_sdk::contract::ProjectFailed;
 use obscura_sdk::optics::PerspectiveRays;
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, Point2, Projection, ProjectionContext, ProjectionEnvironment,

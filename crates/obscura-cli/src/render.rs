@@ -11,6 +11,7 @@ use std::io::IsTerminal;
 use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
+use obscura_host::Registry;
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_render::frame::{Neighbours, add_aovs, is_complete, without_backward_flow};
@@ -23,7 +24,7 @@ use obscura_render::render::RenderOptions;
 use obscura_render::sequence::{FrameSpec, frame_displays, sequence_displays};
 use obscura_scene::source::SceneSource;
 use obscura_scene::{Aov, Display, Scene};
-use obscura_sdk::{Format, ParamList, Registry};
+use obscura_sdk::{Format, ParamList};
 use obscura_shading::integrator::PathOptions;
 
 use crate::args::{crop_window, load_calibration};

@@ -7,11 +7,12 @@ use crate::args::{load_calibration, parse_format};
 use crate::params::{merge_param_args, param_list};
 use crate::stdout::outln;
 use clap::Args;
+use obscura_host::Registry;
 use obscura_image::stmap::{DEFAULT_DISTANCE, compute_stmap, stages, write_stmap_exr};
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_render::job::CALIBRATED;
 use obscura_render::limits::{self, OutputKind};
-use obscura_sdk::{Format, ParamList, Registry};
+use obscura_sdk::{Format, ParamList};
 
 /// Arguments of `obscura stmap`.
 #[derive(Args, Debug)]

@@ -328,20 +328,16 @@ mod tests {
             CameraDesc::new(Format::new(640, 480)).screen_window()
         );
         // Adjacent crops tile the image with no pixel twice and none missed.
-        let left = CropWindow {
-            x_min: 0.0,
-            x_max: 0.37,
-            y_min: 0.0,
-            y_max: 1.0,
-        }
-        .pixels(cam.format);
-        let right = CropWindow {
-            x_min: 0.37,
-            x_max: 1.0,
-            y_min: 0.0,
-            y_max: 1.0,
-        }
-        .pixels(cam.format);
+        let columns = |x_min, x_max| {
+            CropWindow {
+                x_min,
+                x_max,
+                y_min: 0.0,
+                y_max: 1.0,
+            }
+            .pixels(cam.format)
+        };
+        let (left, right) = (columns(0.0, 0.37), columns(0.37, 1.0));
         assert_eq!(left.x1, right.x0);
         assert_eq!(left.width() + right.width(), 640);
     }

@@ -13,15 +13,19 @@
 //!    the message; rays the projection culled itself are counted apart. Nothing invalid reaches the
 //!    tracer and nothing is dropped silently.
 //!
-//! The rules, the properties' defaults and the default rays are [`obscura_sdk::contract`]'s, the same
-//! that `obscura check` applies.
+//! The rules are [`obscura_sdk::contract`]'s, the properties' defaults and the default rays
+//! [`crate::contract`]'s: the same that `obscura check` applies.
 
-use obscura_sdk::contract::{DefaultRays, call_project, check_ray};
-pub use obscura_sdk::contract::{Properties, Violation};
+pub use obscura_sdk::contract::Violation;
+use obscura_sdk::contract::check_ray;
 use obscura_sdk::{
-    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry,
-    Registry, Rgb, Vec3,
+    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
+    Vec3,
 };
+
+pub use crate::contract::Properties;
+use crate::contract::{DefaultRays, call_project};
+use crate::registry::Registry;
 
 use crate::aperture::ApertureWarp;
 use crate::camera::{CameraDesc, CameraError};
@@ -36,6 +40,46 @@ pub enum HostError {
     /// The projection could not be created.
     #[error(transparent)]
     Plugin(#[from] PluginError),
+}
+
+/// The names of [`output_values`]' numbers, in order, for messages.
+pub const OUTPUT_FIELDS: [&str; 14] = [
+    "origin.x",
+    "origin.y",
+    "origin.z",
+    "origin_radius",
+    "direction.x",
+    "direction.y",
+    "direction.z",
+    "ray_spread",
+    "min_dist",
+    "max_dist",
+    "time",
+    "tint.r",
+    "tint.g",
+    "tint.b",
+];
+
+/// Every number `project` leaves for one sample — its ray, output time and tint — in
+/// [`OUTPUT_FIELDS`] order: what two runs of a deterministic projection agree on bit for bit.
+#[must_use]
+pub fn output_values(ray: &RayGeometry, time: f32, tint: Rgb) -> [f32; 14] {
+    [
+        ray.origin.x,
+        ray.origin.y,
+        ray.origin.z,
+        ray.origin_radius,
+        ray.direction.x,
+        ray.direction.y,
+        ray.direction.z,
+        ray.ray_spread,
+        ray.min_dist,
+        ray.max_dist,
+        time,
+        tint.r,
+        tint.g,
+        tint.b,
+    ]
 }
 
 /// One batch of samples and the rays made from them. The host fills `screen`, `lens` and `time`

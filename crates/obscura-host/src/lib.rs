@@ -11,6 +11,9 @@
 //! - [`shutter`]: the shutter-opening warp of time samples;
 //! - [`distribution`]: the tabulated 1-D distribution (built from weights, sampled by inverse CDF) behind
 //!   the aperture and shutter warps and the renderer's dome-light importance sampling;
+//! - [`registry`]: the projections a host knows by name ([`Registry`]), with each factory's lifecycle;
+//! - [`contract`]: the host's half of the projection contract — asking a projection's properties with
+//!   their defaults, the default rays a host pre-fills, calling `project` with a lost batch classed;
 //! - [`driver`]: the camera stage — fills a batch, pre-fills the renderer's default rays, calls
 //!   `project`, validates every ray and culls what breaks the contract, counting it (the rules
 //!   themselves are [`obscura_sdk::contract`]).
@@ -19,10 +22,13 @@
 
 pub mod aperture;
 pub mod camera;
+pub mod contract;
 pub mod distribution;
 pub mod driver;
+pub mod registry;
 pub mod sampler;
 pub mod shutter;
 
 pub use camera::{CameraDesc, CameraError, CropWindow, PixelRect};
 pub use driver::{Batch, CameraStage, ContractReport, HostError, Violation};
+pub use registry::{DuplicateName, Registry};

@@ -54,8 +54,9 @@ use std::path::Path;
 use exr::prelude::{
     AnyChannel, AnyChannels, Encoding, FlatSamples, Image, IntegerBounds, Layer, LayerAttributes,
 };
-use obscura_sdk::contract::panic_message;
-use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Registry, Vec3};
+use obscura_host::Registry;
+use obscura_host::contract::panic_message;
+use obscura_sdk::{Format, ParamList, Point2, RayGeometry, Vec3};
 use rayon::prelude::*;
 
 use crate::atomic::AtomicWriteError;

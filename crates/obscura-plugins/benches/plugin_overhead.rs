@@ -21,11 +21,11 @@ use std::sync::OnceLock;
 
 use divan::{Bencher, counter::ItemsCount};
 use obscura_example_tiny_planet::TinyPlanetFactory;
-use obscura_host::{Batch, CameraDesc, CameraStage};
+use obscura_host::{Batch, CameraDesc, CameraStage, Registry};
 use obscura_plugins::isolate::{Isolation, WorkerCommand};
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_sdk::{
-    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionFactory, RayGeometry, Registry, Rgb,
+    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionFactory, RayGeometry, Rgb,
 };
 
 const BATCH: usize = 256;

@@ -2,7 +2,7 @@
 //! camera of `obscura-calibration`, registered under their RenderMan names.
 
 use obscura_calibration::CalibratedCameraFactory;
-use obscura_sdk::Registry;
+use obscura_host::Registry;
 
 /// Adds every built-in projection to `registry`.
 ///

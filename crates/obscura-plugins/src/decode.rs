@@ -9,11 +9,31 @@ use std::borrow::Cow;
 
 use obscura_sdk::abi::c_data::{read_str, read_strs, read_value};
 use obscura_sdk::abi::{
-    ARRAY_SINGLE, ARRAY_VARIABLE, AbiError, MAX_CHOICES, MAX_LIST_DEFAULT, RANGE_KNOWN_BITS, RANGE_LIMITED,
-    RANGE_MAX_INCLUSIVE, RANGE_MIN_INCLUSIVE, RawParamDecl, RawPropertyValue, VALUE_DEEP_METRIC,
-    VALUE_DICING_HINT, VALUE_FLOAT, deep_metric_from_raw, dicing_hint_from_raw, param_type_from_raw,
+    ARRAY_SINGLE, ARRAY_VARIABLE, AbiError, RANGE_LIMITED, RANGE_MAX_INCLUSIVE, RANGE_MIN_INCLUSIVE,
+    RawParamDecl, RawPropertyValue, VALUE_DEEP_METRIC, VALUE_DICING_HINT, VALUE_FLOAT, deep_metric_from_raw,
+    param_type_from_raw,
 };
-use obscura_sdk::{ParamDecl, ParamType, ParamValue, PropertyValue, ValueRange};
+use obscura_sdk::{DicingHint, ParamDecl, ParamType, ParamValue, PropertyValue, ValueRange};
+
+/// Every `range_flags` bit the ABI defines; a row with any other bit set is refused at load.
+const RANGE_KNOWN_BITS: u32 = RANGE_LIMITED | RANGE_MIN_INCLUSIVE | RANGE_MAX_INCLUSIVE;
+
+/// Most scalars a `float[]` parameter's default may hold: more is taken for a corrupt count.
+const MAX_LIST_DEFAULT: usize = 1 << 16;
+
+/// Most choices a string parameter may offer: more is taken for a corrupt count.
+const MAX_CHOICES: usize = 1024;
+
+/// The dicing hint numbered `v` (`OBSCURA_DICING_*`), if any.
+fn dicing_hint_from_raw(v: i32) -> Option<DicingHint> {
+    [
+        DicingHint::Orthographic,
+        DicingHint::Perspective,
+        DicingHint::Spherical,
+    ]
+    .into_iter()
+    .find(|h| *h as i32 == v)
+}
 
 /// Reads a property answer.
 ///

@@ -17,7 +17,7 @@
 //!
 //! A host asks for a projection by name ([`loader::ensure`]): a registered name is used as is, an
 //! unknown one is looked up as `<Name>.so` along the plugin path and registered. From then on a plugin
-//! and a built-in go through the same [`obscura_sdk::Registry`] and the same camera stage.
+//! and a built-in go through the same [`obscura_host::Registry`] and the same camera stage.
 
 pub mod builtins;
 pub mod decode;

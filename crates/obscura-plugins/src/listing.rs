@@ -1,6 +1,7 @@
 //! `obscura plugins`: the projections a registry knows and their parameter tables, as text.
 
-use obscura_sdk::{ParamDecl, ParamValue, PluginError, ProjectionFactory, Registry};
+use obscura_host::Registry;
+use obscura_sdk::{ParamDecl, ParamValue, PluginError, ProjectionFactory};
 
 /// The listing of one projection: its name and summary, then one line per parameter with its RIB
 /// declaration, default, allowed values and documentation.

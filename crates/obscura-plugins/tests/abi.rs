@@ -9,7 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use obscura_host::{Batch, CameraDesc, CameraStage, Violation};
+use obscura_host::{Batch, CameraDesc, CameraStage, Registry, Violation};
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::{
     PluginLoadError, PluginSearch, ensure, library_file_name, load_all, load_file,
@@ -18,7 +18,7 @@ use obscura_sdk::abi::{self, ProjectionDescriptor, RawContext, RawEnvironment, R
 use obscura_sdk::abi::{RawParam, RawParamDecl, RawParamList, RawPropertyValue};
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamList, ParamType, PluginError, Point2, ProjectionProperty,
-    PropertyValue, RayGeometry, Registry, SyncMessage, Vec3,
+    PropertyValue, RayGeometry, SyncMessage, Vec3,
 };
 
 #[path = "support/plugin_build.rs"]
@@ -115,7 +115,7 @@ fn a_descriptor_smaller_than_its_layout_is_refused() {
     let want = std::mem::size_of::<ProjectionDescriptor>();
     assert!(
         matches!(e, PluginLoadError::Size { found, minimum, .. }
-            if found as usize == want - 8 && minimum == obscura_sdk::abi::DESCRIPTOR_V1_SIZE),
+            if found as usize == want - 8 && minimum == obscura_plugins::loader::DESCRIPTOR_V1_SIZE),
         "{e:?}"
     );
     assert!(e.to_string().contains("mismatched header"), "{e}");
@@ -126,8 +126,8 @@ fn a_descriptor_smaller_than_its_layout_is_refused() {
 #[test]
 fn the_first_layouts_size_is_pinned() {
     #[cfg(target_pointer_width = "64")]
-    assert_eq!(obscura_sdk::abi::DESCRIPTOR_V1_SIZE, 104);
-    assert!(std::mem::size_of::<ProjectionDescriptor>() >= obscura_sdk::abi::DESCRIPTOR_V1_SIZE);
+    assert_eq!(obscura_plugins::loader::DESCRIPTOR_V1_SIZE, 104);
+    assert!(std::mem::size_of::<ProjectionDescriptor>() >= obscura_plugins::loader::DESCRIPTOR_V1_SIZE);
 }
 
 #[test]
@@ -621,7 +621,7 @@ fn header_facts() -> (Sizes, Offsets, Constants) {
         ("OBSCURA_VALUE_FLOAT", i64::from(abi::VALUE_FLOAT)),
         (
             "sizeof(OBSCURA_PROJECTION_ENTRY_SYMBOL)",
-            abi::ENTRY_SYMBOL_NUL.len() as i64,
+            obscura_plugins::loader::ENTRY_SYMBOL_NUL.len() as i64,
         ),
     ];
     (sizes, offsets, constants)

@@ -10,10 +10,11 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use obscura_host::{Batch, CameraDesc, CameraStage, Violation};
+use obscura_host::driver::output_values;
+use obscura_host::{Batch, CameraDesc, CameraStage, Registry, Violation};
 use obscura_plugins::isolate::{Isolation, WorkerCommand};
 use obscura_plugins::loader::{PluginSearch, ensure, load_all, load_file};
-use obscura_sdk::{Format, ParamList, Point2, Registry, Vec3};
+use obscura_sdk::{Format, ParamList, Point2, Vec3};
 
 #[path = "support/plugin_build.rs"]
 mod plugin_build;
@@ -77,25 +78,7 @@ fn batch(cam: &CameraDesc, n: usize, seed: usize) -> Batch {
 fn bits(b: &Batch) -> Vec<u32> {
     let mut v = Vec::new();
     for ((r, t), c) in b.rays.iter().zip(&b.time).zip(&b.tint) {
-        v.extend(
-            [
-                r.origin.x,
-                r.origin.y,
-                r.origin.z,
-                r.origin_radius,
-                r.direction.x,
-                r.direction.y,
-                r.direction.z,
-                r.ray_spread,
-                r.min_dist,
-                r.max_dist,
-                *t,
-                c.r,
-                c.g,
-                c.b,
-            ]
-            .map(f32::to_bits),
-        );
+        v.extend(output_values(r, *t, *c).map(f32::to_bits));
     }
     v
 }

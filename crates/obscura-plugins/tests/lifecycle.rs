@@ -10,10 +10,11 @@
 use std::ffi::{CStr, c_char};
 use std::path::{Path, PathBuf};
 
+use obscura_host::Registry;
 use obscura_plugins::builtin_registry;
 use obscura_plugins::listing;
 use obscura_plugins::loader::{PluginSearch, load_all, load_file};
-use obscura_sdk::{Format, ParamList, ProjectionEnvironment, Registry};
+use obscura_sdk::{Format, ParamList, ProjectionEnvironment};
 
 #[path = "support/plugin_build.rs"]
 mod plugin_build;

@@ -6,8 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
+use obscura_host::Registry;
 use obscura_plugins::loader::{PluginLoadError, PluginSearch, load_all, load_file};
-use obscura_sdk::Registry;
 
 #[path = "support/plugin_build.rs"]
 mod plugin_build;

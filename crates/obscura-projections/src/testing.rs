@@ -1,5 +1,6 @@
 //! Test helpers: run a projection on hand-made samples.
 
+use obscura_host::contract::{Properties, ask_property};
 use obscura_sdk::contract;
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamList, PluginError, Point2, Projection, ProjectionContext,
@@ -375,7 +376,7 @@ pub fn contract_points(format: Format) -> Vec<Point2> {
 ///   and `min_dist` finite;
 /// - DeepMetric RayLength whenever a direction has `z < 0`;
 /// - DicingHint Perspective ⇒ one shared origin; Orthographic ⇒ one shared direction;
-/// - every property answer usable ([`contract::ask_property`]), and every float answer finite and > 0;
+/// - every property answer usable ([`ask_property`]), and every float answer finite and > 0;
 /// - `unproject(O + depth·D) = s` within `roundtrip_px` pixels for every valid sample inside the window
 ///   (or, where a map glues edges, a screen point whose ray is within `roundtrip_px` pixels' angle);
 /// - `ray_spread` within `spread_rel_tol` of ½·sqrt(αx·αy), with αx, αy one-sided finite differences of
@@ -388,7 +389,7 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     let pts = contract_points(format);
     let mut stats = ContractStats::default();
     for prop in ProjectionProperty::ALL {
-        match contract::ask_property(p, prop) {
+        match ask_property(p, prop) {
             Ok(Some(PropertyValue::Float(f))) => assert!(f.is_finite() && f > 0.0, "{prop:?} = {f}"),
             Ok(_) => {}
             Err(problem) => panic!("{prop:?}: {problem:?}"),
@@ -396,7 +397,7 @@ pub fn assert_contract(p: &dyn Projection, t: &ContractTest) -> ContractStats {
     }
     let env = ProjectionEnvironment::for_format(format);
     let (near, far) = (env.clipping_near(), env.clipping_far());
-    let deep_metric = contract::Properties::read(p, &env).0.deep_metric;
+    let deep_metric = Properties::read(p, &env).0.deep_metric;
     let hint = p.property(ProjectionProperty::DicingHint);
     let metric = p.property(ProjectionProperty::DeepMetric);
     let inside =

@@ -5,9 +5,10 @@ use std::path::PathBuf;
 use std::sync::{LazyLock, Mutex, MutexGuard};
 
 use obscura_calibration::MODELS;
+use obscura_host::Registry;
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::{PluginSearch, ensure, load_all, load_file};
-use obscura_sdk::{ParamDecl, ParamValue, Registry};
+use obscura_sdk::{ParamDecl, ParamValue};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};

@@ -95,7 +95,7 @@ pub fn check<'py>(
     };
     let name = camera.stage.name().to_string();
     let mut reg = registry()?;
-    let reg_ref: &mut obscura_sdk::Registry = &mut reg;
+    let reg_ref: &mut obscura_host::Registry = &mut reg;
     let report = py
         .detach(|| check_registered(reg_ref, &name, &camera.params, &opts))
         .map_err(|e| PyValueError::new_err(e.to_string()))?;
@@ -246,7 +246,7 @@ pub fn render<'py>(
     let reporter = Polled::default();
     let pool = pool()?;
     let mut reg = registry()?;
-    let reg_ref: &mut obscura_sdk::Registry = &mut reg;
+    let reg_ref: &mut obscura_host::Registry = &mut reg;
     let mut failure: Option<PyErr> = None;
     let result = std::thread::scope(|s| {
         let worker = s.spawn(|| pool.install(|| render_frame(&frame, reg_ref, &reporter)));

@@ -24,9 +24,9 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+use obscura_host::Registry;
 use obscura_image::output::OutputError;
 use obscura_scene::{Aov, Display, Scene};
-use obscura_sdk::Registry;
 
 use crate::frame::{Neighbours, header_attributes, run_flow, write_sidecars};
 use crate::job::{check_render, wants_deep, write_displays};

@@ -29,11 +29,12 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Mat4, Vec2, Vec3, Vec3A};
+use obscura_host::Registry;
 use obscura_host::driver::Properties;
 use obscura_host::sampler::Sampler;
 use obscura_host::{Batch, CameraDesc, CameraStage, ContractReport, HostError, PixelRect};
 use obscura_scene::Scene;
-use obscura_sdk::{DeepMetric, Matrix4, RayGeometry, Registry, Rgb};
+use obscura_sdk::{DeepMetric, Matrix4, RayGeometry, Rgb};
 use rayon::prelude::*;
 
 use obscura_geometry::bvh::{Instance, SceneAccel};

@@ -11,11 +11,12 @@ use std::sync::atomic::AtomicBool;
 
 use glam::{DMat4, DVec3, Mat4};
 use obscura_host::CameraDesc;
+use obscura_host::Registry;
 use obscura_plugins::builtin_registry;
 use obscura_render::flow::{FlowTarget, SHUTTER_CLOSE};
 use obscura_render::render::{Prepared, RenderOptions, prepare};
 use obscura_scene::{Identity, Light, Material, MotionTransform, Object, Scene, Shape};
-use obscura_sdk::{Format, Matrix4, MotionSample, Registry, Rgb};
+use obscura_sdk::{Format, Matrix4, MotionSample, Rgb};
 
 /// `scene` prepared with the built-in projections.
 fn prepared(scene: &Scene) -> Prepared {

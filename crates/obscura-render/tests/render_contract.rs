@@ -6,14 +6,13 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use glam::{Mat4, Vec3};
-use obscura_host::CameraDesc;
+use obscura_host::{CameraDesc, Registry};
 use obscura_plugins::builtin_registry;
 use obscura_render::render::{Prepared, RenderOptions, prepare};
 use obscura_scene::{Identity, Light, Material, Mesh, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamDecl, ParamList, PluginError, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, Registry, Rgb,
-    Vec3 as SdkVec3,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, Rgb, Vec3 as SdkVec3,
 };
 
 /// Wraps PxrPerspective (fov 60) and changes one thing, to test the host's side of the contract.

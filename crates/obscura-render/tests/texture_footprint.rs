@@ -10,14 +10,14 @@ use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
 use glam::{Mat4, Vec2, Vec3};
-use obscura_host::{Batch, CameraDesc, CameraStage};
+use obscura_host::{Batch, CameraDesc, CameraStage, Registry};
 use obscura_plugins::builtin_registry;
 use obscura_render::render::{RenderOptions, prepare};
 use obscura_scene::texture::{ColorSpace, ImageSource, SurfaceMaps, TextureDesc, TextureSlot, Wrap};
 use obscura_scene::{Material, Mesh, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{
     Format, ParamDecl, ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionFactory, ProjectionProperty, PropertyValue, Registry,
+    ProjectionFactory, ProjectionProperty, PropertyValue,
 };
 use obscura_shading::integrator::PathOptions;
 use obscura_shading::material::textured::TextureLookup;

@@ -42,17 +42,9 @@ pub struct Vec3 {
 
 impl Vec3 {
     /// The zero vector: as a ray direction it means "cull this sample".
-    pub const ZERO: Vec3 = Vec3 {
-        x: 0.0,
-        y: 0.0,
-        z: 0.0,
-    };
+    pub const ZERO: Vec3 = Vec3::new(0.0, 0.0, 0.0);
     /// The camera's viewing axis.
-    pub const Z: Vec3 = Vec3 {
-        x: 0.0,
-        y: 0.0,
-        z: 1.0,
-    };
+    pub const Z: Vec3 = Vec3::new(0.0, 0.0, 1.0);
 
     /// Makes a vector from its coordinates.
     #[inline]
@@ -155,17 +147,9 @@ pub struct Rgb {
 
 impl Rgb {
     /// (1, 1, 1): the tint that leaves the beauty unchanged.
-    pub const WHITE: Rgb = Rgb {
-        r: 1.0,
-        g: 1.0,
-        b: 1.0,
-    };
+    pub const WHITE: Rgb = Rgb::new(1.0, 1.0, 1.0);
     /// (0, 0, 0).
-    pub const BLACK: Rgb = Rgb {
-        r: 0.0,
-        g: 0.0,
-        b: 0.0,
-    };
+    pub const BLACK: Rgb = Rgb::new(0.0, 0.0, 0.0);
 
     /// Makes a colour from its channels.
     #[inline]

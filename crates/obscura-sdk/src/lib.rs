@@ -20,12 +20,13 @@
 //! Camera space is RenderMan's: the camera at the origin looking down +Z, +Y up, +X right. Screen space
 //! is the screen window's (y up); see [`ScreenWindow`].
 //!
-//! Beyond the interface: [`contract`] is the contract itself, written once — the per-ray rules and
-//! tolerances, the property defaults and the default rays a host pre-fills, exactly what the host
-//! enforces (the checker `obscura check` runs is the `obscura-check` crate: add it as a
-//! dev-dependency to test your projection) — and [`abi`] with [`export_projection!`] turns a
-//! factory into a shared library the host loads through the C ABI of `include/obscura/projection.h`
-//! (the plugin's side of that ABI only: the host's side is in `obscura-plugins`).
+//! Beyond the interface: [`contract`] is the contract's rules, written once — the per-ray rules and
+//! tolerances, the clipping distances and the property domains, exactly what the host enforces (the
+//! checker `obscura check` runs is the `obscura-check` crate: add it as a dev-dependency to test your
+//! projection) — and [`abi`] with [`export_projection!`] turns a factory into a shared library the
+//! host loads through the C ABI of `include/obscura/projection.h`. Only the plugin's side is here:
+//! the host's side — the registry of projections, calling `project`, reading properties with their
+//! defaults, the default rays — is in `obscura-host`, and loading plugins in `obscura-plugins`.
 //!
 //! A minimal projection:
 //!
@@ -62,7 +63,6 @@ mod param;
 mod plugin;
 mod property;
 mod ray;
-mod registry;
 pub mod simd;
 
 pub use context::{ContextLengthError, ContextParts, ProjectionContext};
@@ -70,9 +70,8 @@ pub use environment::{Format, MotionSample, ProjectionEnvironment, ScreenWindow}
 pub use geometry::{Matrix4, Point2, Rgb, Vec3};
 pub use param::{
     DeclarationError, ParamDecl, ParamEntry, ParamError, ParamList, ParamType, ParamValue, Params,
-    ValueRange, did_you_mean, parse_declaration, parse_float,
+    ValueRange, did_you_mean, parse_declaration,
 };
 pub use plugin::{PluginError, Projection, ProjectionFactory, SyncMessage};
 pub use property::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
 pub use ray::RayGeometry;
-pub use registry::{DuplicateName, Registry};

@@ -650,7 +650,7 @@ impl ParamList {
 
 /// Reads a float as RIB and the CLI write it; `inf`/`infinity` allowed (an f-stop of ∞).
 #[must_use]
-pub fn parse_float(s: &str) -> Option<f32> {
+fn parse_float(s: &str) -> Option<f32> {
     let t = s.trim();
     match t.to_ascii_lowercase().as_str() {
         "inf" | "+inf" | "infinity" | "+infinity" => Some(f32::INFINITY),

@@ -3,33 +3,38 @@
 //! range.
 
 use obscura_sdk::DeepMetric;
-use obscura_sdk::contract::clipping_distances;
+use obscura_sdk::contract::{Violation, clipping_distances};
 
 use super::{Checker, relative_error};
 use crate::report::count;
 use crate::run::{Input, Run};
 use crate::{Case, CheckKind};
 
-/// The per-ray checks, one per rule of [`check_ray`](obscura_sdk::contract::check_ray) (radius and
-/// spread share one).
-const PER_RAY: [CheckKind; 7] = [
-    CheckKind::DirectionFinite,
-    CheckKind::DirectionUnit,
-    CheckKind::OriginFinite,
-    CheckKind::TimeRange,
-    CheckKind::RadiusSpread,
-    CheckKind::Distances,
-    CheckKind::TintFinite,
-];
+/// The per-ray checks: the check of each rule of [`check_ray`](obscura_sdk::contract::check_ray)
+/// ([`Violation::is_per_ray`]), in [`Violation::ALL`] order, each once (radius and spread share one).
+fn per_ray_checks() -> Vec<CheckKind> {
+    let mut kinds = Vec::new();
+    for k in Violation::ALL
+        .into_iter()
+        .filter(|v| v.is_per_ray())
+        .map(CheckKind::of)
+    {
+        if !kinds.contains(&k) {
+            kinds.push(k);
+        }
+    }
+    kinds
+}
 
 impl Checker<'_> {
     /// The per-ray checks on the first run; returns which samples are valid and not culled.
     pub(super) fn per_ray(&mut self, inputs: &[Input], run: &Run) -> Vec<bool> {
         let unit = self.opts.unit_tolerance;
+        let per_ray = per_ray_checks();
         let mut valid = vec![false; inputs.len()];
         for (i, o) in run.outputs.iter().enumerate() {
             let Some(o) = o else { continue };
-            for k in PER_RAY {
+            for &k in &per_ray {
                 self.report.at(k).examined += 1;
             }
             match o.breach(unit) {
@@ -97,5 +102,16 @@ impl Checker<'_> {
                 count(backward, "rays")
             ));
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::per_ray_checks;
+    use crate::CheckKind;
+
+    #[test]
+    fn the_per_ray_checks_are_the_reports_third_to_ninth() {
+        assert_eq!(per_ray_checks(), CheckKind::ALL[2..9]);
     }
 }

@@ -2,8 +2,8 @@
 //! [`CheckKind::Panic`] failure, an answer of the wrong type or out of its domain a
 //! [`CheckKind::PropertyType`] failure. What is usable sets the default rays of every batch.
 
+use obscura_host::contract::{DefaultRays, Properties, PropertyProblem};
 use obscura_sdk::PropertyValue;
-use obscura_sdk::contract::{DefaultRays, Properties, PropertyProblem};
 
 use super::Checker;
 use crate::run::record_panic;

@@ -3,7 +3,7 @@
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
-use obscura_sdk::contract::panic_message;
+use obscura_host::contract::panic_message;
 
 use super::{Checker, v3};
 use crate::run::{Input, Output, Run, record_panic};

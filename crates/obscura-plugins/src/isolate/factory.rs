@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, PoisonError};
 
-use obscura_sdk::contract::{ProjectFailed, UndecodableProperty};
+use obscura_host::contract::{ProjectFailed, UndecodableProperty};
 use obscura_sdk::{
     ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
     ProjectionFactory, ProjectionProperty, PropertyValue, SyncMessage, Vec3,

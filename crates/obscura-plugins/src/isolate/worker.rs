@@ -11,7 +11,7 @@ use std::os::unix::net::UnixStream;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 
-use obscura_sdk::contract::{ProjectFailed, UndecodableProperty, panic_message};
+use obscura_host::contract::{ProjectFailed, UndecodableProperty, panic_message};
 use obscura_sdk::{Projection, ProjectionContext, ProjectionFactory};
 
 use super::SHM_FD_VAR;

@@ -18,8 +18,8 @@ use std::panic::resume_unwind;
 use std::path::Path;
 use std::sync::PoisonError;
 
+use obscura_host::contract::{ProjectFailed, UndecodableProperty};
 use obscura_sdk::abi::{self, RawContext, RawPropertyValue};
-use obscura_sdk::contract::{ProjectFailed, UndecodableProperty};
 use obscura_sdk::{
     ParamDecl, ParamList, Params, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
     ProjectionFactory, ProjectionProperty, PropertyValue, SyncMessage, Vec3,

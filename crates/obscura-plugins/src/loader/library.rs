@@ -8,14 +8,26 @@ use std::sync::{Mutex, PoisonError};
 
 use obscura_sdk::abi::c_data::read_str;
 use obscura_sdk::abi::{
-    self, ABI_VERSION, CreateFn, DESCRIPTOR_V1_SIZE, DestroyFn, ENTRY_SYMBOL_NUL, EntryFn, FinalizeFn,
-    InitFn, ProjectFn, ProjectionDescriptor, PropertyFn, SynchronizeFn, UnprojectFn,
+    self, ABI_VERSION, CreateFn, DestroyFn, EntryFn, FinalizeFn, InitFn, ProjectFn, ProjectionDescriptor,
+    PropertyFn, SynchronizeFn, UnprojectFn,
 };
 use obscura_sdk::{ParamDecl, PluginError};
 
 use super::PluginLoadError;
 use crate::decode::decl_from_raw;
 use crate::encode::collect_message;
+
+/// [`abi::ENTRY_SYMBOL`] with its terminating NUL, as symbol lookups want it.
+pub const ENTRY_SYMBOL_NUL: &[u8] = b"obscura_projection_entry\0";
+
+/// The size of generation 1's first descriptor layout (64-bit targets: through `unproject`), the
+/// smallest `struct_size` the host accepts. Fields appended within the generation lie beyond it; a
+/// descriptor built with an older header is read up to its own `struct_size` and the rest is taken
+/// as absent (zero: NULL pointers, no function). Pinned: it never changes within a generation.
+pub const DESCRIPTOR_V1_SIZE: usize = 13 * size_of::<usize>();
+
+// Every Option<fn> and pointer field is valid all-zero, which is what an absent appended field reads as.
+const _: () = assert!(size_of::<ProjectionDescriptor>() >= DESCRIPTOR_V1_SIZE);
 
 /// Most rows a parameter table may have: more is taken for a corrupt descriptor.
 const MAX_PARAMS: usize = 4096;

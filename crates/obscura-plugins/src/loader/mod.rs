@@ -34,7 +34,8 @@
 
 use std::path::{Path, PathBuf};
 
-use obscura_sdk::{ProjectionFactory, Registry, did_you_mean};
+use obscura_host::Registry;
+use obscura_sdk::{ProjectionFactory, did_you_mean};
 
 mod adapter;
 mod error;
@@ -44,6 +45,7 @@ pub mod validate;
 
 pub use adapter::PluginFactory;
 pub use error::PluginLoadError;
+pub use library::{DESCRIPTOR_V1_SIZE, ENTRY_SYMBOL_NUL};
 pub use search::{PLUGIN_PATH_VAR, PluginSearch, library_file_name, looks_like_path};
 
 /// Loads the plugin library at `path` into `registry`, in process.

@@ -97,7 +97,7 @@ pub fn projection(name: &str, params: &[(&str, &str)]) -> Box<dyn Projection> {
             .expect("valid bench parameter");
     }
     let mut env = ProjectionEnvironment::for_format(Format::new(FORMAT.0, FORMAT.1));
-    let mut registry = obscura_sdk::Registry::new();
+    let mut registry = obscura_host::Registry::new();
     for factory in obscura_projections::factories() {
         registry.register(factory, "").expect("built-in names are unique");
     }

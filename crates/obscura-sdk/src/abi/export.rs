@@ -22,7 +22,6 @@ use super::raw::{
     property_from_raw, sync_message_from_raw, value_to_raw,
 };
 use crate::context::ProjectionContext;
-use crate::contract::panic_message;
 use crate::environment::{Format, MotionSample, ProjectionEnvironment, ScreenWindow};
 use crate::geometry::{Point2, Rgb, Vec3};
 use crate::param::{ParamDecl, ParamList};
@@ -317,6 +316,16 @@ pub fn export_entry(
     exported
         .as_ref()
         .map_or(std::ptr::null(), |e| &raw const e.descriptor)
+}
+
+/// The text of a panic payload: a `&str` or a `String` (what `panic!` raises), else a placeholder.
+/// (The host's `obscura_host::contract::panic_message` also reads its adapters' own payloads.)
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_string())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic with a non-string payload".into())
 }
 
 /// Runs `f`, turning an error or a panic into a status and a message on `sink`.

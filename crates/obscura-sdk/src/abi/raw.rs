@@ -9,7 +9,7 @@ use std::ffi::{c_char, c_void};
 use crate::geometry::{Matrix4, Point2, Rgb, Vec3};
 use crate::param::{ParamDecl, ParamType};
 use crate::plugin::SyncMessage;
-use crate::property::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
+use crate::property::{DeepMetric, ProjectionProperty, PropertyValue};
 use crate::ray::RayGeometry;
 
 /// The layout generation (`OBSCURA_PROJECTION_ABI_VERSION`). A host refuses any other.
@@ -17,9 +17,6 @@ pub const ABI_VERSION: u32 = 1;
 
 /// The symbol every plugin library exports (`OBSCURA_PROJECTION_ENTRY_SYMBOL`).
 pub const ENTRY_SYMBOL: &str = "obscura_projection_entry";
-
-/// [`ENTRY_SYMBOL`] with its terminating NUL, as symbol lookups want it.
-pub const ENTRY_SYMBOL_NUL: &[u8] = b"obscura_projection_entry\0";
 
 /// A status code returned across the boundary (`ObscuraStatus`).
 pub type Status = i32;
@@ -43,8 +40,6 @@ pub const RANGE_LIMITED: u32 = 1;
 pub const RANGE_MIN_INCLUSIVE: u32 = 2;
 /// `range_flags` bit: `range_max` itself is allowed (`OBSCURA_RANGE_MAX_INCLUSIVE`).
 pub const RANGE_MAX_INCLUSIVE: u32 = 4;
-/// Every `range_flags` bit the ABI defines; a row with any other bit set is refused at load.
-pub const RANGE_KNOWN_BITS: u32 = RANGE_LIMITED | RANGE_MIN_INCLUSIVE | RANGE_MAX_INCLUSIVE;
 
 /// [`RawPropertyValue::kind`] of a dicing hint (`OBSCURA_VALUE_DICING_HINT`).
 pub const VALUE_DICING_HINT: i32 = 0;
@@ -283,21 +278,6 @@ pub struct ProjectionDescriptor {
     pub unproject: Option<UnprojectFn>,
 }
 
-/// The size of generation 1's first descriptor layout (64-bit targets: through `unproject`), the
-/// smallest `struct_size` the host accepts. Fields appended within the generation lie beyond it; a
-/// descriptor built with an older header is read up to its own `struct_size` and the rest is taken
-/// as absent (zero: NULL pointers, no function). Pinned: it never changes within a generation.
-pub const DESCRIPTOR_V1_SIZE: usize = 13 * size_of::<usize>();
-
-// Every Option<fn> and pointer field is valid all-zero, which is what an absent appended field reads as.
-const _: () = assert!(size_of::<ProjectionDescriptor>() >= DESCRIPTOR_V1_SIZE);
-
-/// Most scalars a `float[]` parameter's default may hold: more is taken for a corrupt count.
-pub const MAX_LIST_DEFAULT: usize = 1 << 16;
-
-/// Most choices a string parameter may offer: more is taken for a corrupt count.
-pub const MAX_CHOICES: usize = 1024;
-
 // ------------------------------------------------------------------------------------------------
 // Enumerations.
 
@@ -340,18 +320,6 @@ pub fn sync_message_from_raw(v: i32) -> Option<SyncMessage> {
     .find(|m| *m as i32 == v)
 }
 
-/// The dicing hint numbered `v` (`OBSCURA_DICING_*`), if any.
-#[must_use]
-pub fn dicing_hint_from_raw(v: i32) -> Option<DicingHint> {
-    [
-        DicingHint::Orthographic,
-        DicingHint::Perspective,
-        DicingHint::Spherical,
-    ]
-    .into_iter()
-    .find(|h| *h as i32 == v)
-}
-
 /// The deep metric numbered `v` (`OBSCURA_DEEP_*`), if any.
 #[must_use]
 pub fn deep_metric_from_raw(v: i32) -> Option<DeepMetric> {
@@ -389,7 +357,7 @@ pub fn array_len_to_raw(d: &ParamDecl) -> i32 {
     if d.variable_len {
         ARRAY_VARIABLE
     } else {
-        // A table's lengths are at most MAX_LIST_DEFAULT, far below i32::MAX.
+        // A table's lengths are far below i32::MAX (a host refuses more than 2¹⁶ scalars).
         d.array_len.map_or(ARRAY_SINGLE, |n| n as i32)
     }
 }

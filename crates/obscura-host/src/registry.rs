@@ -1,8 +1,8 @@
 //! Name → factory: how a host finds the projection a scene names.
 
-use crate::environment::ProjectionEnvironment;
-use crate::param::{ParamList, did_you_mean};
-use crate::plugin::{PluginError, Projection, ProjectionFactory, SyncMessage};
+use obscura_sdk::{
+    ParamList, PluginError, Projection, ProjectionEnvironment, ProjectionFactory, SyncMessage, did_you_mean,
+};
 
 struct Entry {
     factory: Box<dyn ProjectionFactory>,
@@ -156,7 +156,7 @@ impl Drop for Registry {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::param::ParamDecl;
+    use obscura_sdk::ParamDecl;
 
     struct Named(&'static str);
 
@@ -255,7 +255,7 @@ mod tests {
             log.lock().unwrap().is_empty(),
             "registering runs none of the factory's code"
         );
-        let mut env = ProjectionEnvironment::for_format(crate::Format::new(4, 4));
+        let mut env = ProjectionEnvironment::for_format(obscura_sdk::Format::new(4, 4));
         for _ in 0..3 {
             let _ = r.create("Recorder", &mut env, &ParamList::new());
         }
