@@ -65,13 +65,9 @@ impl Animation<'_> {
     /// The scene of `frame`, with the overrides applied.
     fn scene(&self, frame: u32) -> Result<Scene, String> {
         let seconds = (frame as f32 - 1.0) / self.fps;
-        let mut s = obscura_scene::gltf_scene::load_gltf_at(
-            self.path,
-            CameraDesc::new(self.format),
-            seconds,
-            self.fps,
-        )
-        .map_err(|e| e.to_string())?;
+        let mut s =
+            obscura_render::staging::load_gltf_at(self.path, CameraDesc::new(self.format), seconds, self.fps)
+                .map_err(|e| e.to_string())?;
         self.overrides.apply(&mut s).map_err(|e| e.to_string())?;
         s.projection = self.projection.to_string();
         Ok(s)

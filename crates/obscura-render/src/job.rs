@@ -43,7 +43,7 @@ pub fn load_scene(path: Option<&Path>, format: Format) -> Result<(Scene, PathBuf
             PathBuf::from("."),
         ),
         Some(path) => (
-            obscura_scene::load(path, CameraDesc::new(format))?,
+            crate::staging::load(path, CameraDesc::new(format))?,
             path.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
     })
@@ -69,7 +69,7 @@ pub fn load_frames(path: Option<&Path>, format: Format) -> Result<(Vec<Frame>, P
             )
         }
         Some(path) => (
-            obscura_scene::load_frames(path, CameraDesc::new(format))?,
+            crate::staging::load_frames(path, CameraDesc::new(format))?,
             path.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
     })
