@@ -362,7 +362,8 @@ fn stage(projection: &str, params: &ParamList, camera: &CameraDesc) -> Result<()
 
 fn scene_file(input: &[u8], path: &Path) -> Result<(), String> {
     std::fs::write(path, input).map_err(|e| format!("scratch file: {e}"))?;
-    let scene = obscura_scene::load(path, CameraDesc::new(Format::new(64, 48))).map_err(|e| e.to_string())?;
+    let scene = obscura_render::staging::load(path, CameraDesc::new(Format::new(64, 48)))
+        .map_err(|e| e.to_string())?;
     stage(&scene.projection, &scene.projection_params, &scene.camera)
 }
 

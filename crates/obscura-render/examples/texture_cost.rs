@@ -53,7 +53,7 @@ fn main() {
     let path = Path::new(args.get(1).expect("usage: texture_cost SCENE [W H SPP]"));
     let num = |i: usize, d: u32| args.get(i).and_then(|a| a.parse().ok()).unwrap_or(d);
     let (w, h, spp) = (num(2, 640), num(3, 480), num(4, 16));
-    let scene = obscura_scene::load(path, CameraDesc::new(Format::new(w, h))).expect("loads");
+    let scene = obscura_render::staging::load(path, CameraDesc::new(Format::new(w, h))).expect("loads");
     let base = path.parent().unwrap_or(Path::new("."));
     let mut plain = scene.clone();
     for maps in plain.material_maps.values_mut() {

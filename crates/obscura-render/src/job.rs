@@ -44,7 +44,7 @@ pub fn load_scene(path: Option<&Path>, format: Format) -> Result<(Scene, PathBuf
             PathBuf::from("."),
         ),
         Some(path) => (
-            obscura_scene::load(path, CameraDesc::new(format))?,
+            crate::staging::load(path, CameraDesc::new(format))?,
             path.parent().map(Path::to_path_buf).unwrap_or_default(),
         ),
     })
@@ -70,7 +70,10 @@ pub fn open_scene(path: Option<&Path>, format: Format, fps: f32) -> Result<Box<d
             };
             Ok(Box::new(Images::new(vec![still], dir)))
         }
-        Some(path) => obscura_scene::source::open(path, CameraDesc::new(format), fps),
+        Some(path) => {
+            let source = obscura_scene::source::open(path, CameraDesc::new(format), fps)?;
+            Ok(Box::new(crate::staging::Placed::new(source, path)))
+        }
     }
 }
 

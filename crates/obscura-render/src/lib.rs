@@ -8,6 +8,7 @@
 //! | module | job |
 //! |---|---|
 //! | [`render`] | setup and the render loop: camera stage → world rays → trace → film |
+//! | [`staging`] | what a scene file leaves out: the automatic camera, interiors, the default lights |
 //! | [`flow`] | optical flow through the projection's `unproject` |
 //! | [`truth`] | the scene's object, instance and material IDs |
 //! | [`metadata`], [`frame`] | per-frame camera JSON and ID sidecar; complete frames |
@@ -24,4 +25,5 @@ pub mod metadata;
 pub mod pipeline;
 pub mod render;
 pub mod sequence;
+pub mod staging;
 pub mod truth;

@@ -34,7 +34,7 @@ use obscura_host::driver::Properties;
 use obscura_host::sampler::Sampler;
 use obscura_host::{Batch, CameraDesc, CameraStage, ContractReport, HostError, PixelRect};
 use obscura_scene::Scene;
-use obscura_sdk::{DeepMetric, Matrix4, RayGeometry, Rgb};
+use obscura_sdk::{DeepMetric, RayGeometry, Rgb};
 use rayon::prelude::*;
 
 use obscura_geometry::bvh::{Instance, SceneAccel};
@@ -246,18 +246,9 @@ pub fn prepare(
         &scene.projection_params,
         &scene.camera,
     )?;
-    let mut info = Vec::new();
-    if let Some((min, max)) = scene.auto_camera {
-        let camera = auto_camera_for(&stage, min, max, scene.auto_interior.as_ref(), &mut info);
-        stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, &camera)?;
-    }
-    if scene.auto_light {
-        info.push(format!(
-            "no light in the scene: a soft sky (dome of colour {:.2} {:.2} {:.2}) and a distant key light from above, front left",
-            obscura_scene::framing::DEFAULT_SKY.r,
-            obscura_scene::framing::DEFAULT_SKY.g,
-            obscura_scene::framing::DEFAULT_SKY.b
-        ));
+    let staged = crate::staging::Staged::new(scene, &stage);
+    if let Some(camera) = &staged.camera {
+        stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, camera)?;
     }
     let props = *stage.properties();
     let shutter = scene.camera.shutter;
@@ -327,7 +318,7 @@ pub fn prepare(
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),
-        lights: Lights::new(&scene.lights, base_dir)?,
+        lights: Lights::new(&staged.lights, base_dir)?,
         texturing,
         emissive,
         local_shading: (0..scene.materials.len() as u32)
@@ -347,63 +338,11 @@ pub fn prepare(
         samples_per_pixel: spp,
         camera_to_world,
         texture_warnings: texture_warnings.into_iter().map(|w| w.0).collect(),
-        info: info.join("; "),
+        info: staged.notes.join("; "),
         ids: IdTable::new(scene),
         exposure: scene.exposure,
         setup_seconds: start.elapsed().as_secs_f64(),
     })
-}
-
-/// The scene's camera with the automatic framing of the bounds `min..max` for the projection of
-/// `stage` (see [`obscura_scene::framing::auto_camera`]): orthographic for an Orthographic dicing
-/// hint, wide for a Spherical hint or a field of view of 150° or more, perspective otherwise.
-fn auto_camera_for(
-    stage: &CameraStage,
-    min: Vec3,
-    max: Vec3,
-    interior: Option<&obscura_scene::interior::Interior>,
-    info: &mut Vec<String>,
-) -> CameraDesc {
-    use obscura_scene::framing::{AutoView, auto_camera};
-    use obscura_sdk::DicingHint;
-    let props = stage.properties();
-    let fov = props.field_of_view.filter(|f| f.is_finite() && *f > 0.0);
-    let mut camera = stage.camera().clone();
-    let w = camera.screen_window();
-    let aspect = ((w.right - w.left) / (w.top - w.bottom)).abs();
-    let aspect = if aspect.is_finite() && aspect > 0.0 {
-        aspect
-    } else {
-        1.0
-    };
-    let view = match (props.dicing_hint, fov) {
-        (DicingHint::Orthographic, _) => AutoView::Orthographic,
-        // FieldOfView spans the shorter side; a spherical mapping's angle grows with screen
-        // distance, so the longer side sees that times the aspect (a 2:1 lat-long: 360°).
-        (DicingHint::Spherical, f) => AutoView::Wide {
-            fov: f.map_or(360.0, |f| f * aspect.max(1.0 / aspect)).min(360.0),
-        },
-        (_, Some(f)) if f >= 150.0 => AutoView::Wide { fov: f.min(360.0) },
-        (_, f) => AutoView::Perspective {
-            fov: f.unwrap_or(45.0),
-        },
-    };
-    let auto = auto_camera(min, max, view, aspect, interior);
-    camera.world_to_camera = vec![obscura_sdk::MotionSample {
-        time: camera.shutter.0,
-        world_to_camera: Matrix4(auto.world_to_camera.to_cols_array_2d()),
-    }];
-    if auto.screen_window.is_some() {
-        camera.screen_window = auto.screen_window;
-    }
-    // A wide view stands close: keep the near plane in front of the asset (RenderMan's default of
-    // 0.1 would cut a small asset open).
-    let near = camera.clipping.0.min(1e-3 * auto.distance);
-    if near > 0.0 {
-        camera.clipping.0 = near;
-    }
-    info.push(auto.description);
-    camera
 }
 
 /// Which sides camera rays see of each object. Curves and points face the camera by construction and

@@ -10,7 +10,7 @@ use obscura_render::render::{RenderOptions, prepare};
 use obscura_sdk::Format;
 
 fn emissive_triangles(path: &Path) -> usize {
-    let scene = obscura_scene::load(path, CameraDesc::new(Format::new(8, 8))).expect("loads");
+    let scene = obscura_render::staging::load(path, CameraDesc::new(Format::new(8, 8))).expect("loads");
     let opts = RenderOptions::default();
     let prepared = prepare(&scene, &mut builtin_registry(), Path::new("."), &opts).expect("prepares");
     prepared.emissive_triangles()

@@ -88,7 +88,7 @@ fn write_scene(dir: &Path, texture_info: &str) -> std::path::PathBuf {
 
 /// The albedo of every pixel of a 16×8 render (4 pixels per texel across, 4 down).
 fn render_albedo(path: &Path) -> Vec<[f32; 3]> {
-    let scene = obscura_scene::load(path, CameraDesc::new(Format::new(16, 8))).expect("loads");
+    let scene = obscura_render::staging::load(path, CameraDesc::new(Format::new(16, 8))).expect("loads");
     assert!(scene.auto_camera.is_none(), "the file's camera is used");
     let opts = RenderOptions {
         samples_per_pixel: Some(4),

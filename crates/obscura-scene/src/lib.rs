@@ -16,9 +16,8 @@
 
 pub mod aov;
 pub mod classic;
-pub mod framing;
+pub mod convert;
 pub mod gltf_scene;
-pub mod interior;
 pub mod obj;
 pub mod rib;
 pub mod source;
@@ -79,11 +78,13 @@ pub fn load_frames(path: &Path, camera: CameraDesc) -> Result<Vec<rib::Frame>, L
     }])
 }
 
-/// A classic scene often has no light (or only ones the renderer skips): it is lit as glTF and OBJ
-/// scenes are, with a warning saying so.
+/// A classic scene often has no light (or only ones the renderer skips): recorded in
+/// [`Scene::auto_light`], so the renderer lights it as it lights glTF and OBJ scenes, with a warning
+/// saying so.
 fn light_if_unlit(scene: &mut Scene, path: &Path) {
     if scene.lights.is_empty() {
-        framing::add_default_dome_if_unlit(scene, &path.display().to_string());
+        scene.auto_light = true;
+        // Worded for the whole program: the renderer's staging adds them before it renders.
         scene.warnings.push(format!(
             "{}: the scene has no light the renderer uses; added the default sky and key light \
              (as for glTF and OBJ); any LightSource in the file replaces them",
@@ -104,6 +105,10 @@ fn is_rib(path: &Path) -> bool {
 /// Reads a scene by its extension: `.rib`, `.ribz` or `.rib.gz` (camera and all from the file; ASCII
 /// or binary, gzip-compressed or not, whatever the extension says), `.gltf`/`.glb`/`.obj`
 /// (geometry, materials, lights and the file's camera; format and the rest from `camera`).
+///
+/// The scene is what the file says: a file without a camera or without a light records that
+/// ([`Scene::auto_camera`], [`Scene::auto_light`]) and the renderer's staging
+/// (`obscura_render::staging`) supplies them.
 ///
 /// # Errors
 /// A [`LoadError`] naming the file (and line, where the format has lines).

@@ -444,13 +444,16 @@ pub struct Scene {
     /// Materials whose parameters come from textures, by index into [`Scene::materials`]; such a
     /// material's entry there is its untextured fallback.
     pub material_maps: BTreeMap<u32, SurfaceMaps>,
-    /// The world bounds `(min, max)` the scene's camera was framed on when the file has no camera of
-    /// its own: the renderer frames them again for the projection it renders through.
+    /// Set by the glTF and OBJ readers when the file has no camera of its own (or only one that
+    /// cannot be used): the world bounds `(min, max)` of its geometry, `[−1, 1]³` when it has none.
+    /// The renderer's staging (`obscura_render::staging`) frames them: after reading, as the scene's
+    /// own camera, and again for the projection it renders through; it also probes them for an
+    /// interior (a room the camera stands inside).
     pub auto_camera: Option<(Vec3, Vec3)>,
-    /// Where an automatic camera stands when the geometry is closed around the bounds' centre (a
-    /// room, an atrium): [`crate::interior::probe`] of the bounds, `None` for an object.
-    pub auto_interior: Option<crate::interior::Interior>,
-    /// True when the file has no light and the default sky and key light were added.
+    /// True when the file has no light the renderer uses (set by the glTF and OBJ readers, and for a
+    /// RIB file by [`crate::load`] and [`crate::load_frames`]): the renderer's staging lights the
+    /// scene with its default sky and key light (and a lamp inside a closed interior), ahead of
+    /// [`Scene::lights`].
     pub auto_light: bool,
     /// Warnings collected while reading (unknown requests and parameters), each naming file and line.
     pub warnings: Vec<String>,
@@ -483,7 +486,6 @@ impl Scene {
             textures: Vec::new(),
             material_maps: BTreeMap::new(),
             auto_camera: None,
-            auto_interior: None,
             auto_light: false,
             warnings: Vec::new(),
             animation_seconds: None,

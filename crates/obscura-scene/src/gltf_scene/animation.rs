@@ -19,7 +19,7 @@ use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::{Interpolation, Property, util::ReadOutputs};
 
 use super::{GltfError, Loader};
-use crate::framing::{flip_z, to_row_vector};
+use crate::convert::{flip_z, to_row_vector};
 use crate::types::{MotionTransform, Scene};
 use obscura_sdk::MotionSample;
 

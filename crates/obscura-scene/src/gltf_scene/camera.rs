@@ -7,7 +7,11 @@ use glam::Mat4;
 use obscura_sdk::ScreenWindow;
 
 use super::Loader;
-use crate::framing::{FRAMING_FOV_DEG, flip_z, set_fov, set_world_to_camera};
+use crate::convert::{flip_z, set_fov, set_world_to_camera};
+
+/// The vertical field of view, in degrees, read for a camera whose `yfov` is unusable: the same 45°
+/// the renderer frames a file without a camera with.
+const FALLBACK_FOV_DEG: f32 = 45.0;
 
 impl Loader<'_> {
     /// Sets the camera transform and projection from a glTF camera; false (with a warning) when its
@@ -34,10 +38,10 @@ impl Loader<'_> {
                 let mut yfov = p.yfov();
                 if !(yfov.is_finite() && yfov > 0.0 && yfov < PI) {
                     self.warn(format!(
-                        "camera {}: yfov {yfov} is not in (0, π); using {FRAMING_FOV_DEG}°",
+                        "camera {}: yfov {yfov} is not in (0, π); using {FALLBACK_FOV_DEG}°",
                         cam.index()
                     ));
-                    yfov = FRAMING_FOV_DEG.to_radians();
+                    yfov = FALLBACK_FOV_DEG.to_radians();
                 }
                 set_fov(&mut self.scene, fov_across_smaller_side(yfov, aspect), origin);
             }

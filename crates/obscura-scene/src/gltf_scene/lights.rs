@@ -8,7 +8,7 @@ use gltf::json::Value;
 use obscura_sdk::Rgb;
 
 use super::Loader;
-use crate::framing::flip_z;
+use crate::convert::flip_z;
 use crate::types::Light;
 
 /// `PxrDistantLight`'s default `angleExtent` (the sun's apparent diameter), degrees.

@@ -5,7 +5,7 @@ use glam::{Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 
 use super::{GltfError, Loader};
-use crate::framing::grow_bounds;
+use crate::convert::grow_bounds;
 use crate::types::{Identity, Mesh, MotionTransform, Object, Shape};
 
 impl Loader<'_> {

@@ -51,8 +51,6 @@ use std::path::{Path, PathBuf};
 use glam::{Mat4, Vec3};
 use obscura_host::CameraDesc;
 
-pub use crate::framing::frame_bounds;
-use crate::framing::{add_default_dome_if_unlit, frame_scene};
 use crate::types::Scene;
 use container::{
     check_before_validation, check_glb_header, check_required_extensions, json_chunk, load_buffers,
@@ -134,9 +132,9 @@ pub enum GltfError {
 /// Loads a `.gltf` or `.glb` file into a [`Scene`] for `camera`.
 ///
 /// `camera` supplies format, windows, shutter, clipping and aperture; its `world_to_camera` is
-/// replaced by one motion sample at shutter open: the file's first camera (see the module
-/// documentation), or, when the file has none, [`frame_bounds`] of the scene's world bounds with a
-/// 45° field of view. The projection is `PxrPerspective` with `"float fov"` (degrees, across the
+/// replaced by one motion sample at shutter open of the file's first camera (see the module
+/// documentation). A file without one keeps `camera`'s and records its world bounds in
+/// [`Scene::auto_camera`] for the renderer's staging to frame. The projection is `PxrPerspective` with `"float fov"` (degrees, across the
 /// smaller image side, derived from the glTF `yfov` and the format's frame aspect `a`:
 /// `fov = yfov` when `a ≥ 1`, else `2·atan(tan(yfov/2)·a)`), or `PxrOrthographic` with the screen
 /// window `(−ymag·a, ymag·a, −ymag, ymag)`.
@@ -152,8 +150,9 @@ pub enum GltfError {
 /// matrix times `S` (glTF's light shines down its −Z, ours along +Z) and the illuminance as
 /// intensity; `point` and `spot` → [`Light::Sphere`] at the node's world position, 1 % of the scene's
 /// diagonal across, with the radiance that makes its radiant intensity equal the glTF intensity
-/// (candela read as W/sr); a spot light's cone is dropped with a warning. A scene with no light gets
-/// a white dome of intensity 1 and a warning, since it would otherwise render black.
+/// (candela read as W/sr); a spot light's cone is dropped with a warning. A scene with no light is
+/// recorded in [`Scene::auto_light`]: the renderer's staging lights it, as it would otherwise render
+/// black.
 ///
 /// [`Material::Constant`]: crate::types::Material::Constant
 /// [`Material::Diffuse`]: crate::types::Material::Diffuse
@@ -256,10 +255,10 @@ fn load_posed(path: &Path, camera: CameraDesc, times: &[(f32, f32)]) -> Result<S
     );
     loader.scene.warnings.dedup();
     if !camera_set {
-        frame_scene(&mut loader.scene, loader.bounds, &loader.file);
+        loader.scene.auto_camera = Some(loader.bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0))));
     }
     loader.read_lights(&placed, punctual, &document);
-    add_default_dome_if_unlit(&mut loader.scene, &loader.file);
+    loader.scene.auto_light = loader.scene.lights.is_empty();
     Ok(loader.scene)
 }
 

@@ -2,15 +2,13 @@
 //!
 //! Every object (or each run of faces under one `usemtl`) becomes one [`Object`] with [`Shape::Mesh`]
 //! (polygons fan-triangulated, one index per vertex) and the identity transform. Points and lines are
-//! dropped. There is no camera or light in OBJ: the camera frames the geometry with
-//! [`frame_bounds`] and a 45° `PxrPerspective`, and a white dome lights the scene.
+//! dropped. There is no camera or light in OBJ: the scene records its bounds and that it is unlit
+//! ([`Scene::auto_camera`], [`Scene::auto_light`]), and the renderer's staging frames and lights it.
 //!
 //! `tobj` reports no line numbers and trusts some of its input, so the text is checked first (face
 //! indices against the vertices the file declares, colour statements of the material library) and fed
 //! to `tobj` through a reader that knows which line it is on: every error names the file and, where
 //! there is one, the line, and no input panics.
-//!
-//! [`frame_bounds`]: crate::gltf_scene::frame_bounds
 
 use std::cell::{Cell, RefCell};
 use std::io::{BufRead, Read};
@@ -20,7 +18,7 @@ use glam::{Vec2, Vec3};
 use obscura_host::CameraDesc;
 use obscura_sdk::Rgb;
 
-use crate::framing::{add_default_dome_if_unlit, frame_scene, grow_bounds};
+use crate::convert::grow_bounds;
 use crate::types::{Identity, Material, Mesh, MotionTransform, Object, Scene, Shape};
 
 mod maps;
@@ -60,9 +58,9 @@ pub enum ObjError {
 
 /// Loads a Wavefront OBJ file into a [`Scene`] for `camera`.
 ///
-/// `camera` supplies format, windows, shutter and clipping; its `world_to_camera` is replaced by
-/// [`frame_bounds`](crate::gltf_scene::frame_bounds) of the geometry's bounds with a 45° field of
-/// view, and the projection set to `PxrPerspective` with `"float fov" [45]` (the CLI may override both).
+/// `camera` supplies format, windows, shutter and clipping. OBJ has no camera and no light: the
+/// geometry's bounds go to [`Scene::auto_camera`] and [`Scene::auto_light`] is set, for the renderer's
+/// staging to frame (a 45° `PxrPerspective` the CLI may override) and light the scene.
 ///
 /// Materials from the `mtllib` files, appended after the default material 0 in the order read:
 /// non-zero `Ke` gives [`Material::Constant`]; non-zero `Ks` gives [`Material::Surface`] with `Kd` as
@@ -116,8 +114,8 @@ pub fn load_obj(path: &Path, camera: CameraDesc) -> Result<Scene, ObjError> {
             .warnings
             .push(format!("{file}: no faces; the scene has no geometry"));
     }
-    frame_scene(&mut scene, bounds, &file);
-    add_default_dome_if_unlit(&mut scene, &file);
+    scene.auto_camera = Some(bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0))));
+    scene.auto_light = scene.lights.is_empty();
     Ok(scene)
 }
 

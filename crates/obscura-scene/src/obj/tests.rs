@@ -1,9 +1,7 @@
 //! The OBJ reader's tests: files and material libraries written to a temporary folder.
 
 use super::*;
-use obscura_sdk::{Format, ParamValue};
-
-use crate::types::Light;
+use obscura_sdk::Format;
 
 const CUBE: &str = "\
 # a unit cube, two materials
@@ -178,91 +176,6 @@ fn obj_missing_mtl_warns_and_uses_the_default_material() {
     );
 }
 
-#[test]
-fn obj_camera_frames_every_corner_of_the_bounds() {
-    let scene = load_cube(Some(MTL));
-    assert_eq!(scene.projection, "PxrPerspective");
-    let fov = match &scene.projection_params.get("fov").unwrap().value {
-        ParamValue::Floats(v) => v[0],
-        other => panic!("{other:?}"),
-    };
-    assert_eq!(fov, 45.0);
-    let m = scene.camera.world_to_camera[0].world_to_camera;
-    let t = (0.5 * fov.to_radians()).tan() * (1.0 + 1e-4);
-    for i in 0..8 {
-        let corner = obscura_sdk::Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32);
-        let c = m.transform_point(corner);
-        assert!(
-            c.z > 0.0 && (c.x / c.z).abs() <= t && (c.y / c.z).abs() <= t,
-            "{corner:?} → {c:?}"
-        );
-    }
-}
-
-#[test]
-fn obj_gets_the_default_sky_and_key_light() {
-    let scene = load_cube(Some(MTL));
-    assert!(matches!(
-        scene.lights.as_slice(),
-        [
-            Light::Dome {
-                intensity: 1.0,
-                map: None,
-                ..
-            },
-            Light::Distant { .. }
-        ]
-    ));
-    assert!(scene.auto_light && scene.auto_camera.is_some());
-}
-
-#[test]
-fn a_closed_room_without_lights_gets_a_lamp_inside() {
-    // The cube of CUBE stretched to a 4 × 2.5 × 3 room, each face wound the other way and its
-    // normals turned: it faces in.
-    let room: String = CUBE
-        .lines()
-        .map(|l| match l.split_whitespace().collect::<Vec<_>>().as_slice() {
-            ["v", x, y, z] => format!(
-                "v {} {} {}",
-                4.0 * x.parse::<f32>().unwrap(),
-                2.5 * y.parse::<f32>().unwrap(),
-                3.0 * z.parse::<f32>().unwrap()
-            ),
-            ["f", a, b, c, d] => format!("f {d} {c} {b} {a}"),
-            ["vn", x, y, z] => {
-                let n = |c: &str| -c.parse::<f32>().unwrap();
-                format!("vn {} {} {}", n(x), n(y), n(z))
-            }
-            _ => l.to_string(),
-        })
-        .collect::<Vec<_>>()
-        .join("\n");
-    let dir = tempfile::tempdir().unwrap();
-    write(&dir, "cube.mtl", MTL);
-    let scene = load_obj(&write(&dir, "room.obj", &room), camera()).unwrap();
-    let inside = scene.auto_interior.expect("a room facing in is an interior");
-    assert_eq!(inside.open_above, 0.0);
-    let [
-        Light::Dome { .. },
-        Light::Distant { .. },
-        Light::Sphere {
-            transform, intensity, ..
-        },
-    ] = scene.lights.as_slice()
-    else {
-        panic!("{:?}", scene.lights);
-    };
-    // Under the ceiling (80 % of 2.5) over the centre eye, 4 % of the 3-unit side in radius.
-    let at = transform.transform_point3(glam::Vec3::ZERO);
-    assert!((at - glam::Vec3::new(2.0, 2.0, 1.5)).length() < 1e-5, "{at}");
-    let diameter = transform.transform_vector3(glam::Vec3::X).length();
-    assert!((diameter - 0.24).abs() < 1e-5 && *intensity > 100.0, "{diameter}");
-    // The cube wound outward (CUBE itself) is an object: no interior, no lamp
-    // (obj_gets_the_default_sky_and_key_light).
-    assert!(load_cube(Some(MTL)).auto_interior.is_none());
-}
-
 fn error_of(obj: &str, mtl: Option<&str>) -> String {
     let dir = tempfile::tempdir().unwrap();
     if let Some(mtl) = mtl {
@@ -354,76 +267,6 @@ fn obj_roughness_follows_the_blinn_phong_exponent() {
     assert_eq!(roughness_from_ns(-5.0), 1.0);
     assert!(roughness_from_ns(1000.0) < roughness_from_ns(10.0));
     assert!((roughness_from_ns(6.0).powi(4) - 0.25).abs() < 1e-6);
-}
-
-const OBJ_WORDS: &[&str] = &[
-    "v 0 0 0",
-    "v 1 2 3 4",
-    "v 1 2 3 0",
-    "v 1 2",
-    "v 1 2 3 0.5 0.5",
-    "vt 0 0",
-    "vn 0 0 1",
-    "f 1 2 3",
-    "f -1 -2 -3",
-    "f 1/1/1 2/2/2 3/3/3",
-    "f 1//1 2//1 3//1 4//1",
-    "f 2 3",
-    "f 1",
-    "l 1 2",
-    "p 1",
-    "o",
-    "o thing",
-    "g grp",
-    "usemtl a",
-    "usemtl",
-    "mtllib m.mtl",
-    "f 99999999999999999999 1 2",
-    "f 1/-5 2 3",
-    "f a b c",
-    "#",
-    "",
-    "s 1",
-    "f 1/2/3/4 1 1",
-    "f 1/1 2/1 3/1 4/1 5/1",
-    "  o  ",
-    "f",
-];
-const MTL_WORDS: &[&str] = &[
-    "newmtl a",
-    "newmtl",
-    "Kd 1",
-    "Kd 1 2",
-    "Kd 1 2 3",
-    "Ks 1 1 1",
-    "Ns 10",
-    "Ns",
-    "Ke 1 1 1",
-    "map_Kd",
-    "map_Kd t.png",
-    "illum",
-    "d 0.5",
-    "Kd",
-    "Tf 1 1 1",
-    "Ka nan 1 1",
-    "Kd spectral x.rfl",
-];
-
-proptest::proptest! {
-    #[test]
-    fn obj_random_statements_never_panic(
-        obj in proptest::collection::vec(proptest::sample::select(OBJ_WORDS), 0..24),
-        mtl in proptest::collection::vec(proptest::sample::select(MTL_WORDS), 0..8),
-    ) {
-        let dir = tempfile::tempdir().unwrap();
-        write(&dir, "m.mtl", &mtl.join("\n"));
-        let path = write(&dir, "fuzz.obj", &obj.join("\n"));
-        // Any outcome but a panic; a scene always gets a camera and a light.
-        if let Ok(scene) = load_obj(&path, camera()) {
-            proptest::prop_assert_eq!(scene.camera.world_to_camera.len(), 1);
-            proptest::prop_assert!(!scene.lights.is_empty());
-        }
-    }
 }
 
 /// Issue 16: an OBJ statement `zz 1 2` was ignored without a word.

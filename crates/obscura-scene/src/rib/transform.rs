@@ -7,7 +7,7 @@ use obscura_sdk::MotionSample;
 use super::lex::Value;
 use super::request::Req;
 use super::{Reader, RibError};
-use crate::framing::to_row_vector;
+use crate::convert::to_row_vector;
 use crate::types::MotionTransform;
 
 /// The current transform: one sample when static (its time is then meaningless), else motion samples

@@ -257,56 +257,6 @@ fn a_varying_cs_is_averaged_with_one_warning() {
 }
 
 #[test]
-fn a_rib_scene_without_lights_gets_the_default_light_when_loaded() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("dark.rib");
-    std::fs::write(
-        &path,
-        "WorldBegin\nSurface \"matte\"\nSphere 1 -1 1 360\nWorldEnd\n",
-    )
-    .unwrap();
-    let scene = crate::load(
-        &path,
-        obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
-    )
-    .unwrap();
-    assert!(
-        matches!(
-            scene.lights[..],
-            [
-                Light::Dome { .. },
-                Light::Distant {
-                    enable_shadows: false,
-                    ..
-                }
-            ]
-        ),
-        "the key light of a classic scene casts no shadows, as classic lights: {:?}",
-        scene.lights
-    );
-    assert!(
-        scene
-            .warnings
-            .iter()
-            .any(|w| w.contains("no light") && w.contains("any LightSource in the file replaces them")),
-        "{:?}",
-        scene.warnings
-    );
-    // A scene with a light of its own keeps it alone.
-    std::fs::write(
-        &path,
-        "WorldBegin\nLightSource \"pointlight\" 1\nSphere 1 -1 1 360\nWorldEnd\n",
-    )
-    .unwrap();
-    let scene = crate::load(
-        &path,
-        obscura_host::CameraDesc::new(obscura_sdk::Format::new(8, 8)),
-    )
-    .unwrap();
-    assert!(matches!(scene.lights[..], [Light::Point(_)]));
-}
-
-#[test]
 fn blobby_programs_are_decoded_and_checked() {
     let scene = ok(
         "WorldBegin\nBlobby 2 [1001 0 1001 16 0 2 0 1] [1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 1 1 0 0 0 0 1 0 0 0 0 1 0 1 0 0 1] [\"\"]\nWorldEnd\n",
