@@ -4,6 +4,7 @@
 //!
 //! - [`builtins`]: the table of built-in projections, assembled from `obscura-projections` and the
 //!   calibrated cameras of `obscura-calibration` ([`builtin_registry`]);
+//! - [`library`]: one plugin library in this process (file checks, descriptor checks, the adapter);
 //! - [`loader`]: projection plugins loaded from shared libraries through the C ABI of
 //!   `include/obscura/projection.h` — the search path, the descriptor checks and the adapter that makes
 //!   a plugin an ordinary [`obscura_sdk::ProjectionFactory`];
@@ -23,6 +24,7 @@ pub mod builtins;
 pub mod decode;
 pub mod encode;
 pub mod isolate;
+pub mod library;
 pub mod listing;
 pub mod loader;
 

@@ -17,7 +17,7 @@ use obscura_sdk::{Projection, ProjectionContext, ProjectionFactory};
 use super::SHM_FD_VAR;
 use super::shm::Shm;
 use super::wire::{self, Description, Reply, Request};
-use crate::loader::PluginFactory;
+use crate::library::PluginFactory;
 
 /// What one worker holds.
 #[derive(Default)]

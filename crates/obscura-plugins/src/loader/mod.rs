@@ -26,26 +26,17 @@
 //! | file | what |
 //! |---|---|
 //! | `search.rs` | [`PluginSearch`], [`library_file_name`], [`PLUGIN_PATH_VAR`] |
-//! | `library.rs` | opening a library, the descriptor checks, the `init`/`finalize` session |
-//! | `adapter.rs` | [`PluginFactory`] and its projections, through the function pointers |
-//! | `validate.rs` | [`validate::validate`]: the file checks before `dlopen` |
-//! | `error.rs` | [`PluginLoadError`] |
-//! | here | [`load_file`], [`load_all`], [`ensure`] |
+//! | [`crate::library`] | one library in process: [`validate`], opening, [`PluginFactory`], [`PluginLoadError`] |
+//! | here | [`load_file`], [`load_all`], [`ensure`]: in process, or in a worker ([`crate::isolate`]) |
 
 use std::path::{Path, PathBuf};
 
 use obscura_host::Registry;
 use obscura_sdk::{ProjectionFactory, did_you_mean};
 
-mod adapter;
-mod error;
-mod library;
 mod search;
-pub mod validate;
 
-pub use adapter::PluginFactory;
-pub use error::PluginLoadError;
-pub use library::{DESCRIPTOR_V1_SIZE, ENTRY_SYMBOL_NUL};
+pub use crate::library::{DESCRIPTOR_V1_SIZE, ENTRY_SYMBOL_NUL, PluginFactory, PluginLoadError, validate};
 pub use search::{PLUGIN_PATH_VAR, PluginSearch, library_file_name, looks_like_path};
 
 /// Loads the plugin library at `path` into `registry`, in process.

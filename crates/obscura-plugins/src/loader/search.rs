@@ -5,8 +5,7 @@ use std::path::PathBuf;
 
 use crate::isolate::Isolation;
 
-/// The environment variable listing plugin directories (colon-separated; `;` on Windows).
-pub const PLUGIN_PATH_VAR: &str = "OBSCURA_PLUGIN_PATH";
+pub use crate::library::PLUGIN_PATH_VAR;
 
 /// Where plugin libraries are looked for, in order.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

@@ -26,7 +26,7 @@ use obscura_sdk::{
 };
 
 use super::PluginLoadError;
-use super::library::{self, Loaded, or_status, status_name};
+use super::open::{self, Loaded, or_status, status_name};
 use crate::decode::value_from_raw;
 use crate::encode::{OwnedEnvironment, OwnedParamList, collect_message};
 
@@ -54,7 +54,7 @@ impl PluginFactory {
     /// A [`PluginLoadError`] naming the file and the reason.
     pub fn open(path: &Path) -> Result<Self, PluginLoadError> {
         Ok(PluginFactory {
-            lib: library::open(path)?,
+            lib: open::open(path)?,
             initialized: false,
         })
     }
