@@ -102,16 +102,21 @@ fn field(nodes: &[Node], combined: bool, p: DVec3, values: &mut Vec<f64>) -> f64
     }
 }
 
+/// Corner `k` of the cube [−1, 1]³: at the `k & 1`, `k >> 1 & 1`, `k >> 2 & 1` ends of x, y and z.
+pub(super) fn cube_corner(k: usize) -> Vec3 {
+    Vec3::new(
+        if k & 1 == 0 { -1.0 } else { 1.0 },
+        if k & 2 == 0 { -1.0 } else { 1.0 },
+        if k & 4 == 0 { -1.0 } else { 1.0 },
+    )
+}
+
 /// The object-space box of a leaf: the unit cube under `m` (holds the unit ball).
 fn leaf_box(m: Mat4, extra: f32) -> (DVec3, DVec3) {
     let mut lo = DVec3::INFINITY;
     let mut hi = DVec3::NEG_INFINITY;
     for k in 0..8 {
-        let c = Vec3::new(
-            if k & 1 == 0 { -1.0 } else { 1.0 },
-            if k & 2 == 0 { -1.0 } else { 1.0 },
-            if k & 4 == 0 { -1.0 } else { 1.0 },
-        ) * (1.0 + extra);
+        let c = cube_corner(k) * (1.0 + extra);
         let p = m.transform_point3(c).as_dvec3();
         lo = lo.min(p);
         hi = hi.max(p);

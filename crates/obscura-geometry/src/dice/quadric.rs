@@ -514,6 +514,14 @@ pub(super) fn cylinder(
     })
 }
 
+/// A cone's or disk's height, radius (|radius|) and sweep (radians), checked: `None` when the sweep
+/// is empty, a value is not finite or the radius is 0.
+fn height_radius_sweep(height: f32, radius: f32, theta_max: f32) -> Option<(f64, f64, f64)> {
+    let (h, r) = (f64::from(height), f64::from(radius).abs());
+    let theta = sweep(theta_max)?;
+    (finite(&[h, r]) && r != 0.0).then_some((h, r, theta))
+}
+
 /// `Cone height radius thetamax`: base circle at z = 0, apex at (0, 0, height).
 pub(super) fn cone(
     height: f32,
@@ -522,13 +530,9 @@ pub(super) fn cone(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let (h, r) = (f64::from(height), f64::from(radius).abs());
-    let Some(theta) = sweep(theta_max) else {
+    let Some((h, r, theta)) = height_radius_sweep(height, radius, theta_max) else {
         return Default::default();
     };
-    if !finite(&[h, r]) || r == 0.0 {
-        return Default::default();
-    }
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * h), r.hypot(0.5 * h));
     // The outward normal is the gradient of √(x² + y²) − R·(1 − z/h), scaled by |h|.
     let up = if h < 0.0 { -1.0 } else { 1.0 };
@@ -555,13 +559,9 @@ pub(super) fn disk(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let (h, r) = (f64::from(height), f64::from(radius).abs());
-    let Some(theta) = sweep(theta_max) else {
+    let Some((h, r, theta)) = height_radius_sweep(height, radius, theta_max) else {
         return Default::default();
     };
-    if !finite(&[h, r]) || r == 0.0 {
-        return Default::default();
-    }
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, h), r);
     let centre = (DVec3::new(0.0, 0.0, h), DVec3::Z);
     let grid = swept_grid(&rate, r, theta, r, Some(centre));

@@ -9,6 +9,7 @@ use crate::bvh::tree::Aabb;
 use crate::bvh::{Instance, SceneAccel};
 use crate::motion::tests::rotating_transform;
 use crate::ray::{Hit, Tracer};
+use crate::testing::CUBE_QUADS;
 
 #[test]
 fn empty_inputs_build_and_miss() {
@@ -220,7 +221,7 @@ proptest! {
         let meshes = vec![soup(&mesh_a, 1.0), soup(&mesh_b, 1.0)];
         // Mesh index 2 does not exist: such instances must be ignored.
         let instances: Vec<Instance> =
-            placements.iter().map(|(mesh, m)| Instance { mesh: *mesh, transform: vec![(0.0, *m)] }).collect();
+            placements.iter().map(|(mesh, m)| still(*mesh, *m)).collect();
         let accel = SceneAccel::build(meshes.clone(), instances.clone());
         let targets: Vec<[Vec3A; 3]> = instances
             .iter()
@@ -238,18 +239,10 @@ proptest! {
 /// A box-shaped mesh (12 triangles) spanning `lo..hi`.
 fn cuboid(lo: Vec3A, hi: Vec3A) -> TriangleMesh {
     let b = Aabb { lo, hi };
-    let faces: [[u32; 4]; 6] = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
     TriangleMesh {
         positions: b.corners().to_vec(),
         normals: None,
-        triangles: faces
+        triangles: CUBE_QUADS
             .iter()
             .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
             .collect(),
@@ -432,14 +425,8 @@ fn shading_normals_interpolate_vertex_normals() {
     let accel = SceneAccel::build(
         vec![mesh],
         vec![
-            Instance {
-                mesh: 0,
-                transform: vec![(0.0, Affine3A::IDENTITY)],
-            },
-            Instance {
-                mesh: 0,
-                transform: vec![(0.0, Affine3A::from_translation(glam::Vec3::Z * -10.0) * scale)],
-            },
+            still(0, Affine3A::IDENTITY),
+            still(0, Affine3A::from_translation(glam::Vec3::Z * -10.0) * scale),
         ],
     );
     for x in [-0.9f32, -0.3, 0.0, 0.5, 0.8] {

@@ -5,9 +5,9 @@
 use glam::{Affine3A, Vec3, Vec3A};
 use obscura_scene::Sides;
 
-use super::{SplitMix, ray};
+use super::{SplitMix, ray, still};
+use crate::bvh::SceneAccel;
 use crate::bvh::triangle::TriRay;
-use crate::bvh::{Instance, SceneAccel};
 use crate::ray::{Tracer, TriangleMesh};
 
 #[test]
@@ -60,14 +60,8 @@ fn facing_the_origin() -> TriangleMesh {
 }
 
 fn accel(transform: Affine3A, sides: Sides, planes: &[(Vec3A, Vec3A)]) -> SceneAccel {
-    SceneAccel::build(
-        vec![facing_the_origin()],
-        vec![Instance {
-            mesh: 0,
-            transform: vec![(0.0, transform)],
-        }],
-    )
-    .with_camera_visibility(vec![sides], planes)
+    SceneAccel::build(vec![facing_the_origin()], vec![still(0, transform)])
+        .with_camera_visibility(vec![sides], planes)
 }
 
 #[test]
@@ -108,16 +102,7 @@ fn clipping_planes_pass_camera_rays_on_to_the_next_hit() {
     let build = |planes: &[(Vec3A, Vec3A)]| {
         SceneAccel::build(
             vec![facing_the_origin()],
-            vec![
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, Affine3A::IDENTITY)],
-                },
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, behind)],
-                },
-            ],
+            vec![still(0, Affine3A::IDENTITY), still(0, behind)],
         )
         .with_camera_visibility(vec![], planes)
     };
@@ -145,20 +130,8 @@ fn hidden_and_shadowless_instances_are_passed_by_camera_and_shadow_rays_only() {
     let far = Affine3A::from_translation(Vec3::new(0.0, 0.0, 1.0));
     let r = ray(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
     for (camera, shadows) in [(true, true), (false, true), (true, false), (false, false)] {
-        let accel = SceneAccel::build(
-            vec![facing_the_origin()],
-            vec![
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, near)],
-                },
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, far)],
-                },
-            ],
-        )
-        .with_ray_visibility(&[camera, true], &[shadows, true]);
+        let accel = SceneAccel::build(vec![facing_the_origin()], vec![still(0, near), still(0, far)])
+            .with_ray_visibility(&[camera, true], &[shadows, true]);
         let instance = |h: Option<crate::ray::Hit>| h.map(|h| h.instance);
         let first = |seen: bool| Some(if seen { 0 } else { 1 });
         assert_eq!(instance(accel.intersect(&r)), Some(0), "{camera} {shadows}");
