@@ -432,6 +432,20 @@ pub(super) fn finite(values: &[f64]) -> bool {
     values.iter().all(|v| v.is_finite())
 }
 
+/// A sphere's, cylinder's or paraboloid's radius (|radius|), z range and sweep (radians), checked:
+/// `None` when the sweep is empty, a value is not finite or the radius is 0.
+pub(super) fn radius_z_sweep(
+    radius: f32,
+    z_min: f32,
+    z_max: f32,
+    theta_max: f32,
+) -> Option<(f64, f64, f64, f64)> {
+    let r = f64::from(radius).abs();
+    let (z0, z1) = (f64::from(z_min), f64::from(z_max));
+    let theta = sweep(theta_max)?;
+    (finite(&[r, z0, z1]) && r != 0.0).then_some((r, z0, z1, theta))
+}
+
 /// `Sphere radius zmin zmax thetamax`.
 pub(super) fn sphere(
     radius: f32,
@@ -441,14 +455,9 @@ pub(super) fn sphere(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let r = f64::from(radius).abs();
-    let (z0, z1) = (f64::from(z_min), f64::from(z_max));
-    let Some(theta) = sweep(theta_max) else {
+    let Some((r, z0, z1, theta)) = radius_z_sweep(radius, z_min, z_max, theta_max) else {
         return Default::default();
     };
-    if !finite(&[r, z0, z1]) || r == 0.0 {
-        return Default::default();
-    }
     let (z0, z1) = (z0.clamp(-r, r), z1.clamp(-r, r));
     if z0 == z1 {
         return Default::default();
@@ -496,12 +505,10 @@ pub(super) fn cylinder(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let r = f64::from(radius).abs();
-    let (z0, z1) = (f64::from(z_min), f64::from(z_max));
-    let Some(theta) = sweep(theta_max) else {
+    let Some((r, z0, z1, theta)) = radius_z_sweep(radius, z_min, z_max, theta_max) else {
         return Default::default();
     };
-    if !finite(&[r, z0, z1]) || r == 0.0 || z0 == z1 {
+    if z0 == z1 {
         return Default::default();
     }
     let dz = z1 - z0;
