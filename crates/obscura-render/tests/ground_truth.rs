@@ -65,8 +65,8 @@ fn sphere(radius: f64) -> Shape {
     full_sphere(radius as f32)
 }
 
-/// The moving-spheres scene with a moving camera over the shutter `[0, 1]`.
-fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32) -> Scene {
+/// A camera over the shutter `[0, 1]` whose camera-to-world goes from identity at open to `close`.
+fn moving_camera(format: Format, close: DMat4) -> CameraDesc {
     let mut cam = CameraDesc::new(format);
     cam.shutter = (0.0, 1.0);
     let w2c = |m: DMat4| Matrix4(m.inverse().as_mat4().to_cols_array_2d());
@@ -77,10 +77,15 @@ fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32)
         },
         MotionSample {
             time: 1.0,
-            world_to_camera: w2c(camera_close()),
+            world_to_camera: w2c(close),
         },
     ];
-    let mut s = Scene::new(cam);
+    cam
+}
+
+/// The moving-spheres scene with a moving camera over the shutter `[0, 1]`.
+fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32) -> Scene {
+    let mut s = Scene::new(moving_camera(format, camera_close()));
     s.projection = projection.into();
     for (decl, values) in params {
         s.projection_params.push_text(decl, values, None).unwrap();
@@ -545,20 +550,7 @@ fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, name: &str) -> Object {
 
 /// A camera translating by `travel` over the shutter through `PxrRollingShutter` (fov 90, sweep down).
 fn rolling_scene(duration: &str, travel: DVec3, format: Format) -> Scene {
-    let mut cam = CameraDesc::new(format);
-    cam.shutter = (0.0, 1.0);
-    let w2c = |m: DMat4| Matrix4(m.inverse().as_mat4().to_cols_array_2d());
-    cam.world_to_camera = vec![
-        MotionSample {
-            time: 0.0,
-            world_to_camera: w2c(DMat4::IDENTITY),
-        },
-        MotionSample {
-            time: 1.0,
-            world_to_camera: w2c(DMat4::from_translation(travel)),
-        },
-    ];
-    let mut s = Scene::new(cam);
+    let mut s = Scene::new(moving_camera(format, DMat4::from_translation(travel)));
     s.projection = "PxrRollingShutter".into();
     for (decl, v) in [
         ("float fov", "90"),
