@@ -105,17 +105,6 @@ fn camera_rays() -> Vec<Ray> {
     rays
 }
 
-/// A ray at time 0 from `origin` along `direction`, over the whole line ahead.
-fn ray_from(origin: Vec3A, direction: Vec3A) -> Ray {
-    Ray {
-        origin,
-        direction,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    }
-}
-
 /// Direct lighting only: one scattering event.
 const DIRECT: PathOptions = PathOptions {
     max_depth: 1,
@@ -257,7 +246,7 @@ fn sphere_light_direct_lighting_matches_the_closed_form() {
         Vec3A::new(0.2, 0.0, -1.0),
         Vec3A::new(-0.3, 0.2, -0.9),
     ] {
-        let ray = ray_from(o, (target - o).normalize());
+        let ray = Ray::new(o, (target - o).normalize());
         let h = tracer.intersect(&ray).unwrap();
         let to_c = Vec3A::from(centre) - h.position;
         let (d, r) = (to_c.length(), 0.75f32);
@@ -272,7 +261,7 @@ fn sphere_light_direct_lighting_matches_the_closed_form() {
         );
     }
     // A camera ray that sees the light itself: its radiance, alpha 1, no geometry hit.
-    let ray = ray_from(Vec3A::new(0.0, 0.0, -9.0), Vec3A::Z);
+    let ray = Ray::new(Vec3A::new(0.0, 0.0, -9.0), Vec3A::Z);
     let r = trace_path(&s, &tracer, &ray, &mut Rng::new(1, 1), &DIRECT);
     assert_eq!((r.radiance, r.alpha, r.first_hit), (Vec3A::splat(5.0), 1.0, None));
 }
@@ -295,7 +284,7 @@ fn constant_material_is_unlit_emission() {
         emissive: Default::default(),
         local_shading: Vec::new(),
     };
-    let ray = ray_from(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z);
+    let ray = Ray::new(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z);
     let r = trace_path(&s, &tracer, &ray, &mut Rng::new(5, 5), &DEEP);
     assert_eq!(r.radiance, Vec3A::new(0.25, 0.5, 2.0));
     assert_eq!(r.alpha, 1.0);
@@ -314,7 +303,7 @@ fn max_depth_zero_sees_only_emission() {
         max_depth: 0,
         rr_start: 0,
     };
-    let ray = ray_from(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z);
+    let ray = Ray::new(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z);
     assert_eq!(
         trace_path(&s, &tracer, &ray, &mut Rng::new(5, 5), &opts).radiance,
         Vec3A::ZERO
@@ -494,7 +483,7 @@ fn a_classic_surface_inside_a_closed_sphere_shows_exactly_its_ambient_term() {
     for k in 0..64 {
         let a = k as f32 * 0.7;
         let direction = Vec3A::new(a.cos(), (0.3 * a).sin(), a.sin()).normalize();
-        let ray = ray_from(Vec3A::new(0.5, -1.0, 2.0), direction);
+        let ray = Ray::new(Vec3A::new(0.5, -1.0, 2.0), direction);
         let r = trace_path(&s, &tracer, &ray, &mut rng, &DEEP);
         assert!(
             (r.radiance - want).abs().max_element() < 1e-6,
@@ -524,7 +513,7 @@ fn a_path_traced_surface_adds_the_ambient_term_at_every_bounce() {
         )
         .unwrap(),
     );
-    let ray = ray_from(Vec3A::ZERO, Vec3A::Z);
+    let ray = Ray::new(Vec3A::ZERO, Vec3A::Z);
     let (m, se) = mean(&s, &tracer, &ray, 16_384, &DEEP);
     let want = 0.4 * rho / (1.0 - rho);
     assert!((m - want).abs() < 5.0 * se + 1e-3, "{m} ± {se} vs {want}");

@@ -24,16 +24,6 @@ fn still(mesh: u32, transform: Affine3A) -> Instance {
 /// `(t, triangle, u, v)`.
 type MeshHit = (f32, u32, f32, f32);
 
-fn ray(origin: Vec3A, direction: Vec3A) -> Ray {
-    Ray {
-        origin,
-        direction,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    }
-}
-
 /// Both traversal kernels (`true` = scalar only); without AVX2 both runs use the scalar one.
 const KERNELS: [bool; 2] = [false, true];
 

@@ -16,7 +16,7 @@ fn empty_inputs_build_and_miss() {
     let empty = MeshBvh::build(TriangleMesh::default());
     assert_eq!(empty.triangle_count(), 0);
     assert_eq!(empty.bounds(), (Vec3A::INFINITY, Vec3A::NEG_INFINITY));
-    let r = ray(Vec3A::ZERO, Vec3A::Z);
+    let r = Ray::new(Vec3A::ZERO, Vec3A::Z);
     assert_eq!(empty.intersect(&r), None);
     assert!(!empty.occluded(&r));
 
@@ -272,7 +272,7 @@ fn translated_triangle_is_hit_only_mid_shutter() {
     let accel = SceneAccel::build(vec![tri.clone()], vec![instance.clone()]);
     let at = |time: f32| Ray {
         time,
-        ..ray(Vec3A::new(1.0, -0.9, 5.0), Vec3A::NEG_Z)
+        ..Ray::new(Vec3A::new(1.0, -0.9, 5.0), Vec3A::NEG_Z)
     };
     let hit = accel.intersect(&at(0.5)).expect("hit at mid-shutter");
     assert!((hit.t - 5.0).abs() < 1e-5);
@@ -333,7 +333,7 @@ fn rotating_instance_matches_brute_force_at_random_times() {
         let origin = rng.vec(6.0);
         let r = Ray {
             time,
-            ..ray(origin, target - origin)
+            ..Ray::new(origin, target - origin)
         };
         borderline += check_scene_ray(&meshes, &instances, &accel, &r).unwrap();
         hits += usize::from(accel.intersect(&r).is_some());
@@ -432,7 +432,7 @@ fn shading_normals_interpolate_vertex_normals() {
     for x in [-0.9f32, -0.3, 0.0, 0.5, 0.8] {
         // From above: normals point up (+z).
         let hit = accel
-            .intersect(&ray(Vec3A::new(x, 0.3, 3.0), Vec3A::new(0.0, 0.0, -2.0)))
+            .intersect(&Ray::new(Vec3A::new(x, 0.3, 3.0), Vec3A::new(0.0, 0.0, -2.0)))
             .unwrap();
         assert_eq!(hit.instance, 0);
         assert!(hit.geometric_normal.abs_diff_eq(Vec3A::Z, 1e-6));
@@ -442,14 +442,16 @@ fn shading_normals_interpolate_vertex_normals() {
             hit.shading_normal
         );
         // From below: both flip.
-        let hit = accel.intersect(&ray(Vec3A::new(x, 0.3, -3.0), Vec3A::Z)).unwrap();
+        let hit = accel
+            .intersect(&Ray::new(Vec3A::new(x, 0.3, -3.0), Vec3A::Z))
+            .unwrap();
         assert_eq!(hit.instance, 0);
         assert!(hit.geometric_normal.abs_diff_eq(Vec3A::NEG_Z, 1e-6));
         assert!(hit.shading_normal.abs_diff_eq(-expected(x), 1e-5));
         // The scaled copy: world x = 2·object x, and normals go through the inverse transpose
         // diag(1/2, 1, 1).
         let hit = accel
-            .intersect(&ray(Vec3A::new(2.0 * x, 0.3, -5.0), Vec3A::NEG_Z))
+            .intersect(&Ray::new(Vec3A::new(2.0 * x, 0.3, -5.0), Vec3A::NEG_Z))
             .unwrap();
         assert_eq!(hit.instance, 1);
         let n = expected(x);
@@ -475,12 +477,12 @@ fn geometric_normals_are_unit_and_face_the_ray() {
         let time = rng.next_f32();
         let r = Ray {
             time,
-            ..ray(rng.vec(5.0), rng.vec(1.0))
+            ..Ray::new(rng.vec(5.0), rng.vec(1.0))
         };
         // Also from inside the box, where the ray meets back faces.
         let inside = Ray {
             time,
-            ..ray(
+            ..Ray::new(
                 rotating_transform(time).transform_point3a(Vec3A::new(2.0, 0.1, -0.1)),
                 rng.vec(1.0),
             )
