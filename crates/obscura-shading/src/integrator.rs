@@ -334,6 +334,7 @@ impl PathContext<'_> {
         if !(dir_len > 0.0 && dir_len.is_finite()) {
             return None;
         }
+        // The camera ray sees what camera rays see (one-sided surfaces, clipping planes).
         let camera = path.depth == 0;
         let hit = self.nearest_hit(ray, camera, rng, &mut path.passes);
         let t_geometry = hit.map_or(ray.t_max, |h| h.t);
