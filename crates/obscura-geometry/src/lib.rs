@@ -19,3 +19,6 @@ pub mod dice;
 pub mod motion;
 pub mod ray;
 pub mod rng;
+
+#[cfg(test)]
+pub(crate) mod testing;

@@ -18,6 +18,19 @@ pub struct Ray {
 }
 
 impl Ray {
+    /// The ray from `origin` along `direction` over the whole line ahead (`t_min` 0, `t_max` ∞), at
+    /// shutter open.
+    #[must_use]
+    pub fn new(origin: Vec3A, direction: Vec3A) -> Ray {
+        Ray {
+            origin,
+            direction,
+            t_min: 0.0,
+            t_max: f32::INFINITY,
+            time: 0.0,
+        }
+    }
+
     /// The point at parameter `t`.
     #[inline]
     #[must_use]

@@ -167,15 +167,7 @@ fn blackman_harris(u: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    const ALL: [FilterKind; 6] = [
-        FilterKind::Box,
-        FilterKind::Triangle,
-        FilterKind::Gaussian,
-        FilterKind::CatmullRom,
-        FilterKind::Mitchell,
-        FilterKind::BlackmanHarris,
-    ];
+    use crate::testing::ALL_FILTERS;
 
     fn filter(kind: FilterKind, wx: f32, wy: f32) -> Filter {
         Filter::new(&PixelFilter {
@@ -213,7 +205,7 @@ mod tests {
 
     #[test]
     fn values_at_and_beyond_the_support_edge() {
-        for kind in ALL {
+        for kind in ALL_FILTERS {
             let f = filter(kind, 3.0, 5.0);
             let (rx, ry) = f.radius();
             assert_eq!((rx, ry), (1.5, 2.5));
@@ -250,7 +242,7 @@ mod tests {
 
     #[test]
     fn filters_are_symmetric() {
-        for kind in ALL {
+        for kind in ALL_FILTERS {
             let f = filter(kind, 2.5, 3.5);
             for i in 0..40 {
                 let (dx, dy) = (-1.3 + 0.07 * i as f32, 1.7 - 0.09 * i as f32);
@@ -264,7 +256,7 @@ mod tests {
 
     #[test]
     fn separable_filters_are_products_and_catmull_rom_is_radial() {
-        for kind in ALL {
+        for kind in ALL_FILTERS {
             let f = filter(kind, 4.0, 4.0);
             let (a, b) = (0.6, 1.3);
             let product = f.eval(a, 0.0) * f.eval(0.0, b) / f.eval(0.0, 0.0);
@@ -312,7 +304,7 @@ mod tests {
             let got = integral(&filter(kind, 3.0, 3.0));
             assert!((got - value).abs() < 2e-3 * value, "{kind:?}: {got} vs {value}");
         }
-        for kind in ALL {
+        for kind in ALL_FILTERS {
             assert!(integral(&filter(kind, 2.0, 3.0)) > 0.0, "{kind:?}");
         }
     }
@@ -381,7 +373,7 @@ mod tests {
     #[test]
     fn default_widths() {
         assert_eq!(
-            ALL.map(default_width),
+            ALL_FILTERS.map(default_width),
             [1.0, 2.0, 2.0, 4.0, 4.0, 3.0],
             "box, triangle, gaussian, catmull-rom, mitchell, blackman-harris"
         );

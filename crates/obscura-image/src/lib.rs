@@ -22,3 +22,6 @@ pub mod output;
 pub mod raymap;
 pub mod samples;
 pub mod stmap;
+
+#[cfg(test)]
+pub(crate) mod testing;

@@ -1,6 +1,10 @@
 //! Classic RenderMan scenes end to end: a `constant` surface shows its colour with no light, and a
 //! `matte` surface under a classic `distantlight` has the shader's own brightness `Kd·Cs·I·cos θ`.
 
+mod common;
+
+use common::render_rib;
+
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
@@ -10,19 +14,11 @@ use obscura_scene::rib::parse_str;
 
 /// The mean beauty of the central 4×4 pixels of `rib` rendered at 16×16.
 fn centre(rib: &str) -> [f64; 3] {
-    let scene = parse_str(rib, "t.rib", Path::new(".")).expect("reads");
-    let prepared = prepare(
-        &scene,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .expect("prepares");
-    let out = prepared.render(&RenderOptions::default(), &|_, _| {}, &AtomicBool::new(false));
+    let film = render_rib(rib);
     let mut sum = [0.0f64; 3];
     for y in 6..10 {
         for x in 6..10 {
-            let p = out.film.pixel(x, y);
+            let p = film.pixel(x, y);
             sum[0] += f64::from(p.ci.r) / 16.0;
             sum[1] += f64::from(p.ci.g) / 16.0;
             sum[2] += f64::from(p.ci.b) / 16.0;

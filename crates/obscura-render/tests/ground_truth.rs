@@ -3,19 +3,21 @@
 //! the analytic sphere points projected with each camera's closed form written here; both depths and
 //! camera-space position on a finely diced sphere; IDs.
 
+mod common;
 #[path = "../../obscura-plugins/tests/support/plugin_build.rs"]
 mod plugin_build;
 
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
+use common::{full_sphere, white_dome};
 use glam::{DMat4, DVec3, Mat4};
 use obscura_host::CameraDesc;
 use obscura_host::Registry;
 use obscura_plugins::builtin_registry;
 use obscura_render::flow::{FlowTarget, SHUTTER_CLOSE};
 use obscura_render::render::{Prepared, RenderOptions, prepare};
-use obscura_scene::{Identity, Light, Material, MotionTransform, Object, Scene, Shape};
+use obscura_scene::{Identity, Material, MotionTransform, Object, Scene, Shape};
 use obscura_sdk::{Format, Matrix4, MotionSample, Rgb};
 
 /// `scene` prepared with the built-in projections.
@@ -61,17 +63,11 @@ fn camera_close() -> DMat4 {
 }
 
 fn sphere(radius: f64) -> Shape {
-    let r = radius as f32;
-    Shape::Sphere {
-        radius: r,
-        z_min: -r,
-        z_max: r,
-        theta_max: 360.0,
-    }
+    full_sphere(radius as f32)
 }
 
-/// The moving-spheres scene with a moving camera over the shutter `[0, 1]`.
-fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32) -> Scene {
+/// A camera over the shutter `[0, 1]` whose camera-to-world goes from identity at open to `close`.
+fn moving_camera(format: Format, close: DMat4) -> CameraDesc {
     let mut cam = CameraDesc::new(format);
     cam.shutter = (0.0, 1.0);
     let w2c = |m: DMat4| Matrix4(m.inverse().as_mat4().to_cols_array_2d());
@@ -82,10 +78,15 @@ fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32)
         },
         MotionSample {
             time: 1.0,
-            world_to_camera: w2c(camera_close()),
+            world_to_camera: w2c(close),
         },
     ];
-    let mut s = Scene::new(cam);
+    cam
+}
+
+/// The moving-spheres scene with a moving camera over the shutter `[0, 1]`.
+fn scene(projection: &str, params: &[(&str, &[&str])], format: Format, mpl: f32) -> Scene {
+    let mut s = Scene::new(moving_camera(format, camera_close()));
     s.projection = projection.into();
     for (decl, values) in params {
         s.projection_params.push_text(decl, values, None).unwrap();
@@ -299,29 +300,42 @@ fn check_flow(scene: &Scene, registry: &mut Registry, cf: &ClosedForm) -> usize 
     compared
 }
 
+/// [`check_flow`] of the moving-spheres scene (micropolygon length ½) through the built-in
+/// projection `projection` with `params`.
+fn builtin_flow(projection: &str, params: &[(&str, &[&str])], format: Format, cf: &ClosedForm) -> usize {
+    check_flow(
+        &scene(projection, params, format, 0.5),
+        &mut builtin_registry(),
+        cf,
+    )
+}
+
 #[test]
 fn flow_through_a_pinhole_equals_the_closed_form() {
     let format = Format::new(64, 48);
-    let s = scene("PxrPerspective", &[("float fov", &["60"])], format, 0.5);
-    let n = check_flow(&s, &mut builtin_registry(), &perspective(format, 60.0));
+    let n = builtin_flow(
+        "PxrPerspective",
+        &[("float fov", &["60"])],
+        format,
+        &perspective(format, 60.0),
+    );
     assert!(n > 300, "{n}");
 }
 
 #[test]
 fn flow_through_a_stereographic_fisheye_equals_the_closed_form() {
     let format = Format::new(160, 120);
-    let s = scene(
-        "Fisheye",
-        &[("string mapping", &["stereographic"]), ("float fov", &["200"])],
-        format,
-        0.5,
-    );
     let cf = fisheye(
         format,
         |r| 2.0 * (r * (200f64.to_radians() / 4.0).tan()).atan(),
         |th| (th / 2.0).tan() / (200f64.to_radians() / 4.0).tan(),
     );
-    let n = check_flow(&s, &mut builtin_registry(), &cf);
+    let n = builtin_flow(
+        "Fisheye",
+        &[("string mapping", &["stereographic"]), ("float fov", &["200"])],
+        format,
+        &cf,
+    );
     assert!(n > 100, "{n}");
 }
 
@@ -331,7 +345,7 @@ fn flow_through_a_calibrated_opencv_camera_equals_the_closed_form() {
     let k = [70.0, 72.0, 41.0, 29.5, -0.12, 0.03, 0.002, -0.001];
     let params: Vec<String> = k.iter().map(|v| v.to_string()).collect();
     let params: Vec<&str> = params.iter().map(String::as_str).collect();
-    let s = scene(
+    let n = builtin_flow(
         "CalibratedCamera",
         &[
             ("string model", &["OPENCV"]),
@@ -339,22 +353,20 @@ fn flow_through_a_calibrated_opencv_camera_equals_the_closed_form() {
             ("int[2] resolution", &["80", "60"]),
         ],
         format,
-        0.5,
+        &opencv(k),
     );
-    let n = check_flow(&s, &mut builtin_registry(), &opencv(k));
     assert!(n > 500, "{n}");
 }
 
 #[test]
 fn flow_through_an_equirectangular_panorama_equals_the_closed_form() {
     let format = Format::new(96, 48);
-    let s = scene(
+    let n = builtin_flow(
         "PxrSphereCamera",
         &[("float hsweep", &["360"]), ("float vsweep", &["180"])],
         format,
-        0.5,
+        &latlong(format),
     );
-    let n = check_flow(&s, &mut builtin_registry(), &latlong(format));
     assert!(n > 50, "{n}");
 }
 
@@ -400,13 +412,7 @@ fn depth_scene(projection: &str, params: &[(&str, &[&str])]) -> (Scene, DVec3, f
             instance: "ball".into(),
         },
     });
-    s.lights.push(Light::Dome {
-        color: Rgb::WHITE,
-        intensity: 1.0,
-        exposure: 0.0,
-        map: None,
-        transform: Mat4::IDENTITY,
-    });
+    s.lights.push(white_dome());
     s.samples_per_pixel = 4;
     (s, centre, radius)
 }
@@ -545,20 +551,7 @@ fn quad(x0: f32, x1: f32, y0: f32, y1: f32, z: f32, name: &str) -> Object {
 
 /// A camera translating by `travel` over the shutter through `PxrRollingShutter` (fov 90, sweep down).
 fn rolling_scene(duration: &str, travel: DVec3, format: Format) -> Scene {
-    let mut cam = CameraDesc::new(format);
-    cam.shutter = (0.0, 1.0);
-    let w2c = |m: DMat4| Matrix4(m.inverse().as_mat4().to_cols_array_2d());
-    cam.world_to_camera = vec![
-        MotionSample {
-            time: 0.0,
-            world_to_camera: w2c(DMat4::IDENTITY),
-        },
-        MotionSample {
-            time: 1.0,
-            world_to_camera: w2c(DMat4::from_translation(travel)),
-        },
-    ];
-    let mut s = Scene::new(cam);
+    let mut s = Scene::new(moving_camera(format, DMat4::from_translation(travel)));
     s.projection = "PxrRollingShutter".into();
     for (decl, v) in [
         ("float fov", "90"),
@@ -579,13 +572,7 @@ fn a_rolling_shutter_renders_the_skew_of_a_fast_pan() {
     let mut s = rolling_scene("0", DVec3::new(2.0, 0.0, 0.0), format);
     s.objects.push(quad(-0.2, 0.2, -10.0, 10.0, 4.0, "pole"));
     s.objects.push(quad(-50.0, 50.0, -50.0, 50.0, 8.0, "wall"));
-    s.lights.push(Light::Dome {
-        color: Rgb::WHITE,
-        intensity: 1.0,
-        exposure: 0.0,
-        map: None,
-        transform: Mat4::IDENTITY,
-    });
+    s.lights.push(white_dome());
     let prepared = prepared(&s);
     let out = prepared.render(&RenderOptions::default(), &|_, _| {}, &AtomicBool::new(false));
     for y in (4..60).step_by(4) {

@@ -2,17 +2,19 @@
 //! illumination — the image falls off toward the corners exactly as the real-ray integral of the
 //! projection says, with no rings, and the centre stays at the dome's radiance.
 
+mod common;
+
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use glam::Mat4;
+use common::white_dome;
 use obscura_host::CameraDesc;
 use obscura_plugins::builtin_registry;
 use obscura_projections::lens_system::prescription::Prescription;
 use obscura_projections::lens_system::{LensSystem, Settings};
 use obscura_render::render::{RenderOptions, prepare};
-use obscura_scene::{Light, Scene};
-use obscura_sdk::{Format, ProjectionEnvironment, Rgb, ScreenWindow};
+use obscura_scene::Scene;
+use obscura_sdk::{Format, ProjectionEnvironment, ScreenWindow};
 
 #[test]
 fn a_white_dome_through_the_double_gauss_shows_its_relative_illumination() {
@@ -26,13 +28,7 @@ fn a_white_dome_through_the_double_gauss_shows_its_relative_illumination() {
         .push_text("int dispersion", &["0"], None)
         .unwrap();
     scene.samples_per_pixel = 256;
-    scene.lights.push(Light::Dome {
-        color: Rgb::WHITE,
-        intensity: 1.0,
-        exposure: 0.0,
-        map: None,
-        transform: Mat4::IDENTITY,
-    });
+    scene.lights.push(white_dome());
     let opts = RenderOptions::default();
     let out = prepare(&scene, &mut builtin_registry(), Path::new("."), &opts)
         .expect("prepares")

@@ -2,14 +2,17 @@
 //! samples contribute nothing, z in the projection's deep metric, crops, motion over the shutter, and
 //! the dicing hint.
 
+mod common;
+
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
+use common::{full_sphere, test_object, white_dome};
 use glam::{Mat4, Vec3};
 use obscura_host::{CameraDesc, Registry};
 use obscura_plugins::builtin_registry;
 use obscura_render::render::{Prepared, RenderOptions, prepare};
-use obscura_scene::{Identity, Light, Material, Mesh, MotionTransform, Object, Scene, Shape};
+use obscura_scene::{Material, Mesh, MotionTransform, Scene, Shape};
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamDecl, ParamList, PluginError, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, Rgb, Vec3 as SdkVec3,
@@ -110,8 +113,8 @@ fn wall_scene(projection: &str, format: Format) -> Scene {
     scene.materials.push(Material::Constant {
         color: Rgb::new(0.8, 0.6, 0.4),
     });
-    scene.objects.push(Object {
-        shape: Shape::Mesh(Mesh {
+    scene.objects.push(test_object(
+        Shape::Mesh(Mesh {
             positions: vec![
                 Vec3::new(-50.0, -50.0, 5.0),
                 Vec3::new(50.0, -50.0, 5.0),
@@ -122,14 +125,9 @@ fn wall_scene(projection: &str, format: Format) -> Scene {
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             ..Mesh::default()
         }),
-        transform: MotionTransform::fixed(Mat4::IDENTITY),
-        material: 1,
-        micropolygon_length: 1.0,
-        source: "test".into(),
-        sides: Default::default(),
-        visibility: Default::default(),
-        identity: Identity::default(),
-    });
+        MotionTransform::fixed(Mat4::IDENTITY),
+        1,
+    ));
     scene.samples_per_pixel = 16;
     scene
 }
@@ -211,28 +209,12 @@ fn z_follows_the_deep_metric() {
 #[test]
 fn a_crop_equals_the_same_region_of_the_full_render() {
     let mut scene = wall_scene("PxrPerspective", Format::new(40, 30));
-    scene.lights.push(Light::Dome {
-        color: Rgb::WHITE,
-        intensity: 1.0,
-        exposure: 0.0,
-        map: None,
-        transform: Mat4::IDENTITY,
-    });
-    scene.objects.push(Object {
-        shape: Shape::Sphere {
-            radius: 1.0,
-            z_min: -1.0,
-            z_max: 1.0,
-            theta_max: 360.0,
-        },
-        transform: MotionTransform::fixed(Mat4::from_translation(Vec3::new(0.3, 0.0, 3.0))),
-        material: 0,
-        micropolygon_length: 1.0,
-        source: "test".into(),
-        sides: Default::default(),
-        visibility: Default::default(),
-        identity: Identity::default(),
-    });
+    scene.lights.push(white_dome());
+    scene.objects.push(test_object(
+        full_sphere(1.0),
+        MotionTransform::fixed(Mat4::from_translation(Vec3::new(0.3, 0.0, 3.0))),
+        0,
+    ));
     let full = render(&scene);
     scene.camera.crop_window = obscura_host::CropWindow {
         x_min: 0.3,
@@ -265,26 +247,16 @@ fn a_moving_sphere_is_centred_on_its_mid_shutter_position() {
         .expect("valid");
     scene.samples_per_pixel = 64;
     scene.materials.push(Material::Constant { color: Rgb::WHITE });
-    scene.objects.push(Object {
-        shape: Shape::Sphere {
-            radius: 0.5,
-            z_min: -0.5,
-            z_max: 0.5,
-            theta_max: 360.0,
-        },
-        transform: MotionTransform {
+    scene.objects.push(test_object(
+        full_sphere(0.5),
+        MotionTransform {
             samples: vec![
                 (0.0, Mat4::from_translation(Vec3::new(-1.0, 0.0, 5.0))),
                 (1.0, Mat4::from_translation(Vec3::new(2.0, 0.0, 5.0))),
             ],
         },
-        material: 1,
-        micropolygon_length: 1.0,
-        source: "test".into(),
-        sides: Default::default(),
-        visibility: Default::default(),
-        identity: Identity::default(),
-    });
+        1,
+    ));
     let out = render(&scene);
     let (mut sum, mut wx) = (0.0f64, 0.0f64);
     let mut covered_columns = 0;
@@ -312,21 +284,11 @@ fn a_moving_sphere_is_centred_on_its_mid_shutter_position() {
 #[test]
 fn a_wrong_dicing_hint_changes_the_dicing() {
     let mut scene = wall_scene("PxrPerspective", Format::new(320, 240));
-    scene.objects.push(Object {
-        shape: Shape::Sphere {
-            radius: 1.0,
-            z_min: -1.0,
-            z_max: 1.0,
-            theta_max: 360.0,
-        },
-        transform: MotionTransform::fixed(Mat4::from_translation(Vec3::new(0.0, 0.0, 30.0))),
-        material: 0,
-        micropolygon_length: 1.0,
-        source: "test".into(),
-        sides: Default::default(),
-        visibility: Default::default(),
-        identity: Identity::default(),
-    });
+    scene.objects.push(test_object(
+        full_sphere(1.0),
+        MotionTransform::fixed(Mat4::from_translation(Vec3::new(0.0, 0.0, 30.0))),
+        0,
+    ));
     let right = prepared(&scene).accel().triangle_count();
     scene.projection = "WrongHint".into();
     scene.projection_params = ParamList::new();
@@ -344,28 +306,12 @@ fn white_furnace_gives_a_uniform_image() {
     let mut scene = Scene::new(cam);
     scene.samples_per_pixel = 64;
     scene.materials.push(Material::Diffuse { color: Rgb::WHITE });
-    scene.lights.push(Light::Dome {
-        color: Rgb::WHITE,
-        intensity: 1.0,
-        exposure: 0.0,
-        map: None,
-        transform: Mat4::IDENTITY,
-    });
-    scene.objects.push(Object {
-        shape: Shape::Sphere {
-            radius: 1.0,
-            z_min: -1.0,
-            z_max: 1.0,
-            theta_max: 360.0,
-        },
-        transform: MotionTransform::fixed(Mat4::from_translation(Vec3::new(0.0, 0.0, 3.0))),
-        material: 1,
-        micropolygon_length: 1.0,
-        source: "test".into(),
-        sides: Default::default(),
-        visibility: Default::default(),
-        identity: Identity::default(),
-    });
+    scene.lights.push(white_dome());
+    scene.objects.push(test_object(
+        full_sphere(1.0),
+        MotionTransform::fixed(Mat4::from_translation(Vec3::new(0.0, 0.0, 3.0))),
+        1,
+    ));
     let mut opts = RenderOptions::default();
     opts.path.max_depth = 64;
     opts.path.rr_start = 64;

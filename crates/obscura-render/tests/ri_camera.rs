@@ -8,6 +8,18 @@ use obscura_image::raymap::trace_ray_map;
 use obscura_plugins::builtin_registry;
 use obscura_scene::rib::parse_str;
 
+/// The camera of the RIB text `rib` (read as `name`), through the built-in plugins.
+fn camera_stage(rib: &str, name: &str) -> CameraStage {
+    let scene = parse_str(rib, name, Path::new(".")).unwrap();
+    CameraStage::new(
+        &mut builtin_registry(),
+        &scene.projection,
+        &scene.projection_params,
+        &scene.camera,
+    )
+    .unwrap()
+}
+
 /// `DepthOfField fstop focallength focaldistance` is the thin lens: every sampled ray leaves the lens
 /// disc of radius `focallength/(2·fstop)` at z = 0 and passes through the point where the pinhole
 /// ray of its screen position meets z = focaldistance.
@@ -17,14 +29,7 @@ fn a_depth_of_field_scene_traces_the_thin_lens() {
     let text = format!(
         "Format 12 9 1\nProjection \"perspective\" \"fov\" [50]\nDepthOfField {f_stop} {focal_length} {focal_distance}\nWorldBegin\nWorldEnd\n"
     );
-    let scene = parse_str(&text, "dof.rib", Path::new(".")).unwrap();
-    let stage = CameraStage::new(
-        &mut builtin_registry(),
-        &scene.projection,
-        &scene.projection_params,
-        &scene.camera,
-    )
-    .unwrap();
+    let stage = camera_stage(&text, "dof.rib");
     let (map, _) = trace_ray_map(&stage, 8, 3).unwrap();
     let lens_radius = focal_length / (2.0 * f_stop);
     let t = 25f32.to_radians().tan();
@@ -63,14 +68,7 @@ fn a_depth_of_field_scene_traces_the_thin_lens() {
 fn frame_aspect_ratio_sets_the_screen_window_the_rays_follow() {
     let text =
         "Format 40 30 1\nFrameAspectRatio 2\nProjection \"perspective\" \"fov\" [60]\nWorldBegin\nWorldEnd\n";
-    let scene = parse_str(text, "fa.rib", Path::new(".")).unwrap();
-    let stage = CameraStage::new(
-        &mut builtin_registry(),
-        &scene.projection,
-        &scene.projection_params,
-        &scene.camera,
-    )
-    .unwrap();
+    let stage = camera_stage(text, "fa.rib");
     let (map, _) = trace_ray_map(&stage, 0, 0).unwrap();
     let chief = &map.layers[0];
     let t = 30f32.to_radians().tan();

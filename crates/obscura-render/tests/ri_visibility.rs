@@ -2,28 +2,11 @@
 //! checked pixel by pixel against closed forms: `Exposure`, `Sides` with `Orientation` and
 //! `ReverseOrientation`, and `ClippingPlane`.
 
-use std::path::Path;
-use std::sync::atomic::AtomicBool;
+mod common;
+
+use common::render_rib;
 
 use obscura_image::film::Film;
-use obscura_plugins::builtin_registry;
-use obscura_render::render::{RenderOptions, prepare};
-use obscura_scene::rib::parse_str;
-
-/// The film of `rib` (no light: constant surfaces show their colour).
-fn render(rib: &str) -> Film {
-    let scene = parse_str(rib, "t.rib", Path::new(".")).expect("reads");
-    let prepared = prepare(
-        &scene,
-        &mut builtin_registry(),
-        Path::new("."),
-        &RenderOptions::default(),
-    )
-    .expect("prepares");
-    prepared
-        .render(&RenderOptions::default(), &|_, _| {}, &AtomicBool::new(false))
-        .film
-}
 
 /// A `size`² image through a 90° pinhole, 4 samples per pixel, box filter.
 fn camera(size: u32) -> String {
@@ -54,8 +37,8 @@ fn exposure_writes_gain_then_gamma_of_the_filtered_colour() {
         )
     };
     let (gain, gamma) = (2.0f32, 2.2f32);
-    let plain = render(&scene(""));
-    let exposed = render(&scene(&format!("Exposure {gain} {gamma}\n")));
+    let plain = render_rib(&scene(""));
+    let exposed = render_rib(&scene(&format!("Exposure {gain} {gamma}\n")));
     for y in 0..6 {
         for x in 0..6 {
             let (p, e) = (plain.pixel(x, y), exposed.pixel(x, y));
@@ -81,7 +64,7 @@ fn a_one_sided_sphere_shows_its_outside_and_reverse_orientation_its_inside() {
     let n = 8;
     let outside = |attrs: &str| {
         alphas(
-            &render(&format!(
+            &render_rib(&format!(
                 "{}WorldBegin\n{attrs}Surface \"constant\"\nTranslate 0 0 5\nSphere 2 -2 2 360\nWorldEnd\n",
                 camera(n)
             )),
@@ -90,7 +73,7 @@ fn a_one_sided_sphere_shows_its_outside_and_reverse_orientation_its_inside() {
     };
     let inside = |attrs: &str| {
         alphas(
-            &render(&format!(
+            &render_rib(&format!(
                 "{}WorldBegin\n{attrs}Surface \"constant\"\nSphere 10 -10 10 360\nWorldEnd\n",
                 camera(n)
             )),
@@ -115,7 +98,7 @@ fn a_one_sided_sphere_shows_its_outside_and_reverse_orientation_its_inside() {
     // its far half: the depth of the pixel at screen [0, ¼] × [−¼, 0] is the far root of a ray in it,
     // between 7 (the pole, at its corner (0, 0)) and 5.49 (its corner (¼, −¼)); the near half would
     // be nearer than 5.
-    let film = render(&format!(
+    let film = render_rib(&format!(
         "{}WorldBegin\nSides 1\nReverseOrientation\nSurface \"constant\"\nTranslate 0 0 5\nSphere 2 -2 2 360\nWorldEnd\n",
         camera(n)
     ));
@@ -139,7 +122,7 @@ fn a_polygons_front_is_its_clockwise_side_and_a_mirror_keeps_it() {
     let n = 4;
     let seen = |body: &str| {
         let a = alphas(
-            &render(&format!(
+            &render_rib(&format!(
                 "{}WorldBegin\nSides 1\nSurface \"constant\"\n{body}\nWorldEnd\n",
                 camera(n)
             )),
@@ -177,7 +160,7 @@ fn a_sphere_cut_through_its_centre_shows_its_far_inside_through_the_cut() {
     // silhouette (tan 30° = 0.577) both hits lie in the near half, so the background shows.
     let n = 64u32;
     let scene = |attrs: &str, planes: &str| {
-        render(&format!(
+        render_rib(&format!(
             "{}WorldBegin\n{attrs}Surface \"constant\"\nTranslate 0 0 2\n{planes}Sphere 1 -1 1 360\nWorldEnd\n",
             camera(n)
         ))

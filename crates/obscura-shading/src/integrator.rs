@@ -225,246 +225,379 @@ pub fn trace_path_cone(
     scene: &ShadingScene,
     tracer: &dyn Tracer,
     ray: &Ray,
-    mut cone: RayCone,
+    cone: RayCone,
     rng: &mut Rng,
     opts: &PathOptions,
 ) -> PathResult {
-    let lights = &scene.lights;
-    let mut radiance = Vec3A::ZERO;
-    let mut throughput = Vec3A::ONE;
-    let mut alpha = 0.0;
-    let mut first_hit = None;
-    let mut albedo = Vec3A::ZERO;
-    let mut uv = Vec2::ZERO;
-    let mut passes = 0u32;
-    let cutouts = scene.texturing.has_cutouts();
+    let ctx = PathContext {
+        scene,
+        tracer,
+        cutouts: scene.texturing.has_cutouts(),
+    };
+    let mut path = PathState {
+        radiance: Vec3A::ZERO,
+        throughput: Vec3A::ONE,
+        bsdf_pdf: None,
+        cone,
+        depth: 0,
+        passes: 0,
+    };
+    let mut result = PathResult {
+        radiance: Vec3A::ZERO,
+        alpha: 0.0,
+        first_hit: None,
+        albedo: Vec3A::ZERO,
+        uv: Vec2::ZERO,
+    };
     let mut ray = *ray;
-    // The BSDF density of the current ray's direction; `None` for the camera ray and after a
-    // mirror bounce (no MIS: weight 1).
-    let mut bsdf_pdf: Option<f32> = None;
-    let mut depth = 0u32;
+    while let Some(next) = ctx.vertex(&mut path, &mut result, &ray, rng, opts) {
+        ray = next;
+    }
+    result.radiance = sanitize(path.radiance);
+    result
+}
 
-    loop {
+/// What every vertex of a path is traced and shaded against.
+struct PathContext<'a> {
+    scene: &'a ShadingScene,
+    tracer: &'a dyn Tracer,
+    /// The scene has cut-out or transparent surfaces, which hits and shadow rays pass through.
+    cutouts: bool,
+}
+
+/// What a path carries from one vertex to the next.
+struct PathState {
+    /// The radiance gathered so far (each contribution checked by [`accumulate`]).
+    radiance: Vec3A,
+    /// `β`, the path's throughput.
+    throughput: Vec3A,
+    /// The BSDF density of the current ray's direction; `None` for the camera ray and after a
+    /// mirror bounce (no MIS: weight 1).
+    bsdf_pdf: Option<f32>,
+    /// The current ray's footprint.
+    cone: RayCone,
+    /// The scattering events so far; 0 on the camera ray.
+    depth: u32,
+    /// The surfaces passed through so far ([`MAX_PASS_THROUGH`] at most).
+    passes: u32,
+}
+
+impl PathState {
+    fn add(&mut self, c: Vec3A) {
+        accumulate(&mut self.radiance, c);
+    }
+}
+
+/// A surface vertex, as the light-sampling strategies and the next bounce see it.
+struct Vertex {
+    /// The hit point.
+    p: Vec3A,
+    /// Where rays leaving the vertex start: `p` moved `eps` off the surface, on `wo`'s side.
+    origin: Vec3A,
+    /// The self-intersection offset ([`epsilon`]).
+    eps: f32,
+    /// The unit direction back along the incoming ray.
+    wo: Vec3A,
+    /// The unit geometric normal, on `wo`'s side.
+    n_g: Vec3A,
+    /// The unit shading normal the BSDF uses.
+    n_s: Vec3A,
+    /// The path's time (motion blur).
+    time: f32,
+}
+
+impl Vertex {
+    /// A ray leaving the vertex along `direction` (unit), up to `t_max`.
+    fn ray(&self, direction: Vec3A, t_max: f32) -> Ray {
+        Ray {
+            origin: self.origin,
+            direction,
+            t_min: self.eps,
+            t_max,
+            time: self.time,
+        }
+    }
+}
+
+impl PathContext<'_> {
+    /// Follows `ray` to the path's next vertex and adds the light found there (recording the
+    /// camera ray's hit in `result`); the ray the path goes on along, `None` where it ends.
+    fn vertex(
+        &self,
+        path: &mut PathState,
+        result: &mut PathResult,
+        ray: &Ray,
+        rng: &mut Rng,
+        opts: &PathOptions,
+    ) -> Option<Ray> {
         let dir_len = ray.direction.length();
         if !(dir_len > 0.0 && dir_len.is_finite()) {
-            break;
+            return None;
         }
         // The camera ray sees what camera rays see (one-sided surfaces, clipping planes).
-        let camera = depth == 0;
-        let hit = if camera {
-            tracer.intersect_camera(&ray)
-        } else {
-            tracer.intersect(&ray)
-        };
-        let hit = match hit {
-            Some(h) if cutouts => {
-                let rays = if camera { Rays::Camera } else { Rays::Secondary };
-                pass_cutouts(scene, tracer, &ray, h, rays, rng, &mut passes)
-            }
-            h => h,
-        };
+        let camera = path.depth == 0;
+        let hit = self.nearest_hit(ray, camera, rng, &mut path.passes);
         let t_geometry = hit.map_or(ray.t_max, |h| h.t);
+        let lights = &self.scene.lights;
 
-        if let Some(area) = lights.intersect_area(&ray, t_geometry) {
-            let w = bsdf_pdf.map_or(1.0, |p| power_heuristic(p, area.pdf));
-            accumulate(&mut radiance, throughput * area.radiance * w);
-            if depth == 0 {
-                alpha = 1.0;
+        if let Some(area) = lights.intersect_area(ray, t_geometry) {
+            let w = path.bsdf_pdf.map_or(1.0, |p| power_heuristic(p, area.pdf));
+            path.add(path.throughput * area.radiance * w);
+            if camera {
+                result.alpha = 1.0;
             }
-            break;
+            return None;
         }
-
         let Some(hit) = hit else {
-            let light = match bsdf_pdf {
-                None if depth == 0 => lights.background(ray.direction),
-                None => lights.escaped(ray.direction).0,
-                Some(p) => {
-                    let (l, light_pdf) = lights.escaped(ray.direction);
-                    l * power_heuristic(p, light_pdf)
-                }
-            };
-            accumulate(&mut radiance, throughput * light);
-            break;
+            path.add(path.throughput * escaped_light(lights, ray.direction, path.bsdf_pdf, camera));
+            return None;
         };
-
-        if depth == 0 {
-            alpha = 1.0;
-            first_hit = Some(hit);
+        if camera {
+            result.alpha = 1.0;
+            result.first_hit = Some(hit);
         }
 
+        let t_len = hit.t * dir_len;
         let wo = -ray.direction / dir_len;
-        let mut n_g = hit.geometric_normal.try_normalize().unwrap_or(wo);
-        if n_g.dot(wo) < 0.0 {
-            n_g = -n_g;
-        }
-        let mut n_s = hit.shading_normal.try_normalize().unwrap_or(n_g);
-        if n_s.dot(n_g) < 0.0 {
-            n_s = -n_s;
-        }
-        if n_s.dot(wo) <= 0.0 {
-            n_s = n_g;
-        }
+        let (n_g, n_s) = facing_normals(&hit, wo);
         let d = ray.direction / dir_len;
-        let surface = scene.texturing.surface(
+        let surface = self.scene.texturing.surface(
             &hit,
-            scene.material(hit.instance),
-            scene.material_index(hit.instance),
+            self.scene.material(hit.instance),
+            self.scene.material_index(hit.instance),
             d,
             n_s,
-            cone.radius_at(hit.t * dir_len),
-            depth == 0,
+            path.cone.radius_at(t_len),
+            camera,
         );
-        if depth == 0 {
-            albedo = surface.albedo;
-            uv = surface.uv;
+        if camera {
+            result.albedo = surface.albedo;
+            result.uv = surface.uv;
         }
         let n_s = surface.normal;
         let bsdf = Bsdf::new(&surface.material, n_s);
         let emitted = bsdf.emission() + surface.emission;
         if emitted != Vec3A::ZERO {
-            // An emitter light sampling also aims at: weighted against it after a BSDF sample.
-            let w = match (
-                bsdf_pdf,
-                scene
-                    .emissive
-                    .pdf(hit.instance, hit.primitive, hit.t * dir_len, d, n_g),
-            ) {
-                (Some(p), Some(light_pdf)) => power_heuristic(p, light_pdf),
-                _ => 1.0,
-            };
-            accumulate(&mut radiance, throughput * emitted * w);
+            self.add_emission(path, &hit, emitted, t_len, d, n_g);
         }
 
-        if depth >= opts.max_depth || !bsdf.reflects() {
-            break;
+        if path.depth >= opts.max_depth || !bsdf.reflects() {
+            return None;
         }
-
-        let p = hit.position;
-        let eps = epsilon(p, hit.t * dir_len);
-        let origin = p + n_g * eps;
-
-        // A classic shader's surface: its lights (weight 1, as no BSDF ray follows), its ambient
-        // term, and the path ends.
-        let local = scene.local_shading(hit.instance);
-        let ambient = lights.ambient();
-        if ambient != Vec3A::ZERO {
-            let reflectance = match local.map(|l| l.ambient) {
-                Some(AmbientReflectance::Color(c)) => Vec3A::new(c.r, c.g, c.b),
-                Some(AmbientReflectance::DiffuseScaled(k)) => k * bsdf.diffuse_albedo(),
-                None => bsdf.diffuse_albedo(),
-            };
-            accumulate(&mut radiance, throughput * reflectance * ambient);
-        }
-
-        // Next-event estimation.
-        let (u_light, u_pick) = (rng.next_2d(), rng.next_f32());
-        if let Some(ls) = lights.sample(p, n_s, u_light, u_pick)
-            && ls.wi.dot(n_g) > 0.0
-        {
-            let (f, pdf_b) = bsdf.eval(wo, ls.wi);
-            if f != Vec3A::ZERO {
-                let t_max = if ls.dist.is_finite() {
-                    ls.dist - 2.0 * eps
-                } else {
-                    f32::INFINITY
-                };
-                let shadow = Ray {
-                    origin,
-                    direction: ls.wi,
-                    t_min: eps,
-                    t_max,
-                    time: ray.time,
-                };
-                if t_max > eps && !(ls.shadows && shadow_blocked(scene, tracer, &shadow, cutouts, rng)) {
-                    let w = if ls.mis && local.is_none() {
-                        power_heuristic(ls.pdf, pdf_b)
-                    } else {
-                        1.0
-                    };
-                    let cos = n_s.dot(ls.wi).abs();
-                    accumulate(&mut radiance, throughput * f * ls.radiance * (cos * w / ls.pdf));
-                }
-            }
-        }
-
-        // Next-event estimation on the emissive triangles; not for a classic shader's surface, which
-        // only light sources light (a `constant` surface lights nothing in the RI).
-        if !scene.emissive.is_empty() && local.is_none() {
-            let (u_point, u_tri) = (rng.next_2d(), rng.next_f32());
-            let materials = |i: u32| (scene.material(i), scene.material_index(i));
-            if let Some(es) = scene
-                .emissive
-                .sample(p, u_point, u_tri, &materials, &scene.texturing)
-                && es.wi.dot(n_g) > 0.0
-                && es.radiance != Vec3A::ZERO
-            {
-                let (f, pdf_b) = bsdf.eval(wo, es.wi);
-                // Both ends offset off their surfaces, each toward the other's side: the segment
-                // cannot reach the emitter's own plane, whatever the angles.
-                let target = es.point + es.normal * epsilon(es.point, es.dist);
-                let to = target - origin;
-                let length = to.length();
-                if f != Vec3A::ZERO && length > eps {
-                    let shadow = Ray {
-                        origin,
-                        direction: to / length,
-                        t_min: eps,
-                        t_max: length,
-                        time: ray.time,
-                    };
-                    if !shadow_blocked(scene, tracer, &shadow, cutouts, rng) {
-                        let w = power_heuristic(es.pdf, pdf_b);
-                        let cos = n_s.dot(es.wi).abs();
-                        accumulate(&mut radiance, throughput * f * es.radiance * (cos * w / es.pdf));
-                    }
-                }
-            }
-        }
-
-        if local.is_some() {
-            break;
-        }
-
-        // BSDF sampling for the next direction.
-        let (u_dir, u_lobe) = (rng.next_2d(), rng.next_f32());
-        let Some(s) = bsdf.sample(wo, u_dir, u_lobe) else {
-            break;
-        };
-        if s.wi.dot(n_g) <= 0.0 {
-            break;
-        }
-        throughput *= s.weight;
-        if !throughput.is_finite() || throughput.max_element() <= 0.0 {
-            break;
-        }
-        bsdf_pdf = (!s.specular).then_some(s.pdf);
-        cone = cone.bounce(hit.t * dir_len, &surface.material, s.specular);
-        depth += 1;
-
-        if depth >= opts.rr_start {
-            let q = throughput.max_element().clamp(0.05, 1.0);
-            if rng.next_f32() >= q {
-                break;
-            }
-            throughput /= q;
-        }
-
-        ray = Ray {
-            origin,
-            direction: s.wi,
-            t_min: eps,
-            t_max: f32::INFINITY,
+        let eps = epsilon(hit.position, t_len);
+        let v = Vertex {
+            p: hit.position,
+            origin: hit.position + n_g * eps,
+            eps,
+            wo,
+            n_g,
+            n_s,
             time: ray.time,
         };
+        // A classic shader's surface: its lights (weight 1, as no BSDF ray follows), its ambient
+        // term, and the path ends; it samples no emissive triangles, as only light sources light it
+        // (a `constant` surface lights nothing in the RI).
+        let local = self.scene.local_shading(hit.instance);
+        classic_ambient(path, lights, local, &bsdf);
+        self.sample_lights(path, &v, &bsdf, local.is_none(), rng);
+        if local.is_some() {
+            return None;
+        }
+        self.sample_emissive(path, &v, &bsdf, rng);
+        path.scatter(&v, &bsdf, t_len, &surface.material, rng, opts)
     }
 
-    PathResult {
-        radiance: sanitize(radiance),
-        alpha,
-        first_hit,
-        albedo,
-        uv,
+    /// The nearest hit along `ray` that is there (past cut-outs), as camera rays or as secondary
+    /// rays see the scene.
+    fn nearest_hit(&self, ray: &Ray, camera: bool, rng: &mut Rng, passes: &mut u32) -> Option<Hit> {
+        let hit = if camera {
+            self.tracer.intersect_camera(ray)
+        } else {
+            self.tracer.intersect(ray)
+        };
+        match hit {
+            Some(h) if self.cutouts => {
+                let rays = if camera { Rays::Camera } else { Rays::Secondary };
+                pass_cutouts(self.scene, self.tracer, ray, h, rays, rng, passes)
+            }
+            h => h,
+        }
     }
+
+    /// Adds a surface's emission `emitted`, seen along `d` at distance `t_len`: weighted against
+    /// emissive-triangle sampling after a BSDF sample when light sampling also aims at it.
+    fn add_emission(
+        &self,
+        path: &mut PathState,
+        hit: &Hit,
+        emitted: Vec3A,
+        t_len: f32,
+        d: Vec3A,
+        n_g: Vec3A,
+    ) {
+        let light_pdf = self
+            .scene
+            .emissive
+            .pdf(hit.instance, hit.primitive, t_len, d, n_g);
+        let w = match (path.bsdf_pdf, light_pdf) {
+            (Some(p), Some(light_pdf)) => power_heuristic(p, light_pdf),
+            _ => 1.0,
+        };
+        path.add(path.throughput * emitted * w);
+    }
+
+    /// Next-event estimation on the lights: one light sample and its shadow ray, weighted against
+    /// the BSDF's density when `mis` (a BSDF ray may follow) and the light can be found by BSDF rays.
+    fn sample_lights(&self, path: &mut PathState, v: &Vertex, bsdf: &Bsdf, mis: bool, rng: &mut Rng) {
+        let (u_light, u_pick) = (rng.next_2d(), rng.next_f32());
+        let Some(ls) = self
+            .scene
+            .lights
+            .sample(v.p, v.n_s, u_light, u_pick)
+            .filter(|ls| ls.wi.dot(v.n_g) > 0.0)
+        else {
+            return;
+        };
+        let (f, pdf_b) = bsdf.eval(v.wo, ls.wi);
+        if f == Vec3A::ZERO {
+            return;
+        }
+        let t_max = if ls.dist.is_finite() {
+            ls.dist - 2.0 * v.eps
+        } else {
+            f32::INFINITY
+        };
+        let shadow = v.ray(ls.wi, t_max);
+        if t_max > v.eps && !(ls.shadows && self.blocked(&shadow, rng)) {
+            let w = if ls.mis && mis {
+                power_heuristic(ls.pdf, pdf_b)
+            } else {
+                1.0
+            };
+            let cos = v.n_s.dot(ls.wi).abs();
+            path.add(path.throughput * f * ls.radiance * (cos * w / ls.pdf));
+        }
+    }
+
+    /// Next-event estimation on the emissive triangles: one point, in proportion to area, and its
+    /// shadow ray, weighted against the BSDF's density.
+    fn sample_emissive(&self, path: &mut PathState, v: &Vertex, bsdf: &Bsdf, rng: &mut Rng) {
+        let scene = self.scene;
+        if scene.emissive.is_empty() {
+            return;
+        }
+        let (u_point, u_tri) = (rng.next_2d(), rng.next_f32());
+        let materials = |i: u32| (scene.material(i), scene.material_index(i));
+        let Some(es) = scene
+            .emissive
+            .sample(v.p, u_point, u_tri, &materials, &scene.texturing)
+            .filter(|es| es.wi.dot(v.n_g) > 0.0 && es.radiance != Vec3A::ZERO)
+        else {
+            return;
+        };
+        let (f, pdf_b) = bsdf.eval(v.wo, es.wi);
+        // Both ends offset off their surfaces, each toward the other's side: the segment cannot
+        // reach the emitter's own plane, whatever the angles.
+        let target = es.point + es.normal * epsilon(es.point, es.dist);
+        let to = target - v.origin;
+        let length = to.length();
+        if f != Vec3A::ZERO && length > v.eps {
+            let shadow = v.ray(to / length, length);
+            if !self.blocked(&shadow, rng) {
+                let w = power_heuristic(es.pdf, pdf_b);
+                let cos = v.n_s.dot(es.wi).abs();
+                path.add(path.throughput * f * es.radiance * (cos * w / es.pdf));
+            }
+        }
+    }
+
+    /// [`shadow_blocked`] in this context.
+    fn blocked(&self, shadow: &Ray, rng: &mut Rng) -> bool {
+        shadow_blocked(self.scene, self.tracer, shadow, self.cutouts, rng)
+    }
+}
+
+impl PathState {
+    /// The BSDF-sampled continuation: draws the next direction from `bsdf` at `v`, updates `β`,
+    /// the MIS density and the cone (from a hit at distance `t_len` on `material`), and plays
+    /// Russian roulette from `rr_start` on; the next ray, `None` where the path ends.
+    fn scatter(
+        &mut self,
+        v: &Vertex,
+        bsdf: &Bsdf,
+        t_len: f32,
+        material: &Material,
+        rng: &mut Rng,
+        opts: &PathOptions,
+    ) -> Option<Ray> {
+        let (u_dir, u_lobe) = (rng.next_2d(), rng.next_f32());
+        let s = bsdf.sample(v.wo, u_dir, u_lobe)?;
+        if s.wi.dot(v.n_g) <= 0.0 {
+            return None;
+        }
+        self.throughput *= s.weight;
+        if !self.throughput.is_finite() || self.throughput.max_element() <= 0.0 {
+            return None;
+        }
+        self.bsdf_pdf = (!s.specular).then_some(s.pdf);
+        self.cone = self.cone.bounce(t_len, material, s.specular);
+        self.depth += 1;
+
+        if self.depth >= opts.rr_start {
+            let q = self.throughput.max_element().clamp(0.05, 1.0);
+            if rng.next_f32() >= q {
+                return None;
+            }
+            self.throughput /= q;
+        }
+        Some(v.ray(s.wi, f32::INFINITY))
+    }
+}
+
+/// The light a ray that escapes the scene brings, before `β`: the domes for the camera ray, the
+/// infinite lights BSDF rays find otherwise, weighted against light sampling after a BSDF sample.
+fn escaped_light(lights: &Lights, direction: Vec3A, bsdf_pdf: Option<f32>, camera: bool) -> Vec3A {
+    match bsdf_pdf {
+        None if camera => lights.background(direction),
+        None => lights.escaped(direction).0,
+        Some(p) => {
+            let (l, light_pdf) = lights.escaped(direction);
+            l * power_heuristic(p, light_pdf)
+        }
+    }
+}
+
+/// The unit geometric and shading normals of `hit`, both on `wo`'s side; a shading normal that
+/// still faces away from `wo` gives way to the geometric one.
+fn facing_normals(hit: &Hit, wo: Vec3A) -> (Vec3A, Vec3A) {
+    let mut n_g = hit.geometric_normal.try_normalize().unwrap_or(wo);
+    if n_g.dot(wo) < 0.0 {
+        n_g = -n_g;
+    }
+    let mut n_s = hit.shading_normal.try_normalize().unwrap_or(n_g);
+    if n_s.dot(n_g) < 0.0 {
+        n_s = -n_s;
+    }
+    if n_s.dot(wo) <= 0.0 {
+        n_s = n_g;
+    }
+    (n_g, n_s)
+}
+
+/// The classic ambient term: the ambient lights' unshadowed radiance reflected by the surface's
+/// ambient reflectance (`Ka·Cs` or a scaled diffuse albedo for a classic shader's surface, the
+/// diffuse albedo for any other).
+fn classic_ambient(path: &mut PathState, lights: &Lights, local: Option<LocalShading>, bsdf: &Bsdf) {
+    let ambient = lights.ambient();
+    if ambient == Vec3A::ZERO {
+        return;
+    }
+    let reflectance = match local.map(|l| l.ambient) {
+        Some(AmbientReflectance::Color(c)) => Vec3A::new(c.r, c.g, c.b),
+        Some(AmbientReflectance::DiffuseScaled(k)) => k * bsdf.diffuse_albedo(),
+        None => bsdf.diffuse_albedo(),
+    };
+    path.add(path.throughput * reflectance * ambient);
 }
 
 /// The surface opacity of `hit` (1 unless its material is MASK or BLEND).
@@ -472,9 +605,6 @@ fn opacity(scene: &ShadingScene, hit: &Hit) -> f32 {
     scene.texturing.opacity(hit, scene.material_index(hit.instance))
 }
 
-/// The first hit along `ray` from `hit` on that is there: a cut-out (opacity 0) is passed, a
-/// transparent surface (0 < opacity < 1) is passed with probability `1 − opacity`. At most
-/// [`MAX_PASS_THROUGH`] surfaces are passed per path; then the next one counts as opaque.
 /// Which rays a search for the next hit is for: each sees what [`Tracer`] lets it see.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Rays {
@@ -486,6 +616,9 @@ enum Rays {
     Shadow,
 }
 
+/// The first hit along `ray` from `hit` on that is there: a cut-out (opacity 0) is passed, a
+/// transparent surface (0 < opacity < 1) is passed with probability `1 − opacity`. At most
+/// [`MAX_PASS_THROUGH`] surfaces are passed per path; then the next one counts as opaque.
 fn pass_cutouts(
     scene: &ShadingScene,
     tracer: &dyn Tracer,

@@ -50,6 +50,7 @@ use std::path::{Path, PathBuf};
 use glam::{Mat3A, Mat4, Vec3A};
 use obscura_host::distribution::Distribution1D;
 use obscura_scene::Light;
+use obscura_sdk::Rgb;
 
 mod classic;
 
@@ -186,6 +187,36 @@ struct Dome {
 }
 
 impl Dome {
+    /// A dome of strength `s` oriented by `transform`'s rotation, its map (if any) read from
+    /// `map` resolved against `base_dir`; `None` when the rotation is degenerate or `s` is 0.
+    ///
+    /// # Errors
+    ///
+    /// [`ShadeError`] when the map cannot be read (even for a dome of strength 0).
+    fn new(
+        s: Vec3A,
+        map: Option<&Path>,
+        transform: &Mat4,
+        base_dir: &Path,
+    ) -> Result<Option<Dome>, ShadeError> {
+        let Some(to_world) = rotation_of(transform) else {
+            return Ok(None);
+        };
+        let map = match map {
+            Some(path) => Some(load_map(&base_dir.join(path))?),
+            None => None,
+        };
+        if s == Vec3A::ZERO {
+            return Ok(None);
+        }
+        Ok(Some(Dome {
+            strength: s,
+            to_world,
+            to_light: to_world.transpose(),
+            map,
+        }))
+    }
+
     /// `(u, v, sin θ)` of a world direction.
     fn uv(&self, dir: Vec3A) -> (f32, f32, f32) {
         let d = (self.to_light * dir).normalize_or(Vec3A::Y);
@@ -264,6 +295,31 @@ struct Distant {
 }
 
 impl Distant {
+    /// A distant light of strength `s` in the cone `angle_extent` degrees wide (clamped to
+    /// [0°, 360°]; 0 when not finite) around `transform`'s `−Z`; `None` for a degenerate rotation.
+    fn new(s: Vec3A, angle_extent: f32, shadows: bool, transform: &Mat4) -> Option<Distant> {
+        let rot = rotation_of(transform)?;
+        let extent = if angle_extent.is_finite() {
+            angle_extent.clamp(0.0, 360.0)
+        } else {
+            0.0
+        };
+        let half = (extent * 0.5).min(180.0).to_radians();
+        let s_half = (half * 0.5).sin();
+        let one_minus_cos = 2.0 * s_half * s_half;
+        let to_light = -(rot * Vec3A::Z).normalize();
+        Some(Distant {
+            strength: s,
+            to_light,
+            frame: Frame::new(to_light),
+            cos_max: 1.0 - one_minus_cos,
+            one_minus_cos,
+            solid_angle: TAU * one_minus_cos,
+            mis: extent >= DISTANT_MIS_MIN_DEGREES,
+            shadows,
+        })
+    }
+
     fn is_delta(&self) -> bool {
         self.solid_angle < MIN_CONE_SOLID_ANGLE
     }
@@ -300,6 +356,34 @@ struct Rect {
 }
 
 impl Rect {
+    /// The unit square of `transform`'s XY plane, of strength `s`, facing `+Z` (mirrored by a
+    /// mirroring transform); `None` when the transform is not finite or flattens the square.
+    fn new(s: Vec3A, transform: &Mat4) -> Option<Rect> {
+        if !transform.is_finite() {
+            return None;
+        }
+        let corner = Vec3A::from(transform.transform_point3(glam::Vec3::new(-0.5, -0.5, 0.0)));
+        let ex = Vec3A::from(transform.transform_vector3(glam::Vec3::X));
+        let ey = Vec3A::from(transform.transform_vector3(glam::Vec3::Y));
+        let det = Mat3A::from_mat4(*transform).determinant();
+        let cross = ex.cross(ey);
+        let area = cross.length();
+        if !(area > 0.0 && area.is_finite() && det != 0.0) {
+            return None;
+        }
+        let normal = cross / area * det.signum();
+        Some(Rect {
+            strength: s,
+            corner,
+            ex,
+            ey,
+            normal,
+            cross,
+            inv_cross2: 1.0 / (area * area),
+            area,
+        })
+    }
+
     fn intersect(&self, o: Vec3A, d: Vec3A, t_min: f32, t_max: f32) -> Option<f32> {
         let denom = self.normal.dot(d);
         if denom == 0.0 || !denom.is_finite() {
@@ -334,6 +418,24 @@ struct SphereLight {
 }
 
 impl SphereLight {
+    /// The sphere of diameter 1 at `transform`'s origin (radius `½ · ∛|det M|`), of strength `s`;
+    /// `None` when the transform is not finite or the radius is 0.
+    fn new(s: Vec3A, transform: &Mat4) -> Option<SphereLight> {
+        if !transform.is_finite() {
+            return None;
+        }
+        let center = Vec3A::from(transform.transform_point3(glam::Vec3::ZERO));
+        let radius = 0.5 * Mat3A::from_mat4(*transform).determinant().abs().cbrt();
+        if !(radius > 0.0 && radius.is_finite()) {
+            return None;
+        }
+        Some(SphereLight {
+            strength: s,
+            center,
+            radius,
+        })
+    }
+
     /// `1 − cos θ_max` of the cone the sphere subtends from `p`, or `None` from inside.
     fn cone(&self, p: Vec3A) -> Option<(f32, f32)> {
         let d2 = (self.center - p).length_squared();
@@ -458,8 +560,9 @@ impl Lights {
         self.ambient
     }
 
+    /// The emitter `light` becomes; `None` for a light that cannot emit (or is not an emitter:
+    /// the ambient lights, which `new` sums).
     fn prepare(light: &Light, base_dir: &Path) -> Result<Option<Emitter>, ShadeError> {
-        let strength = |c, i: f32, e: f32| sanitize(color(c) * (i * e.exp2()));
         let e = match light {
             Light::Dome {
                 color: c,
@@ -467,63 +570,29 @@ impl Lights {
                 exposure,
                 map,
                 transform,
-            } => {
-                let s = strength(*c, *intensity, *exposure);
-                let Some(to_world) = rotation_of(transform) else {
-                    return Ok(None);
-                };
-                let map = match map {
-                    Some(path) => Some(load_map(&base_dir.join(path))?),
-                    None => None,
-                };
-                if s == Vec3A::ZERO {
-                    return Ok(None);
-                }
-                Emitter::Dome(Dome {
-                    strength: s,
-                    to_world,
-                    to_light: to_world.transpose(),
-                    map,
-                })
-            }
-            // Not an emitter: summed into `Lights::ambient` by `new`.
-            Light::Ambient { .. } => return Ok(None),
-            Light::Point(p) => {
-                if !p.position.is_finite() {
-                    return Ok(None);
-                }
-                Emitter::Point(PointLight {
-                    strength: strength(p.color, p.intensity, 0.0),
-                    position: Vec3A::from(p.position),
-                    spot: None,
-                    shadows: p.enable_shadows,
-                })
-            }
+            } => Dome::new(
+                strength(*c, *intensity, *exposure),
+                map.as_deref(),
+                transform,
+                base_dir,
+            )?
+            .map(Emitter::Dome),
+            Light::Ambient { .. } => None,
+            Light::Point(p) => PointLight::new(p, None).map(Emitter::Point),
             Light::Spot {
                 emitter: p,
                 direction,
                 cone_angle,
                 cone_delta,
                 beam_distribution,
-            } => {
-                let Some(beam) = SpotBeam::new(
-                    Vec3A::from(*direction),
-                    *cone_angle,
-                    *cone_delta,
-                    *beam_distribution,
-                ) else {
-                    return Ok(None);
-                };
-                if !p.position.is_finite() {
-                    return Ok(None);
-                }
-                Emitter::Point(PointLight {
-                    strength: strength(p.color, p.intensity, 0.0),
-                    position: Vec3A::from(p.position),
-                    spot: Some(beam),
-                    shadows: p.enable_shadows,
-                })
-            }
+            } => SpotBeam::new(
+                Vec3A::from(*direction),
+                *cone_angle,
+                *cone_delta,
+                *beam_distribution,
+            )
+            .and_then(|beam| PointLight::new(p, Some(beam)))
+            .map(Emitter::Point),
             Light::Distant {
                 color: c,
                 intensity,
@@ -531,85 +600,27 @@ impl Lights {
                 angle_extent,
                 enable_shadows,
                 transform,
-            } => {
-                let s = strength(*c, *intensity, *exposure);
-                let Some(rot) = rotation_of(transform) else {
-                    return Ok(None);
-                };
-                let extent = if angle_extent.is_finite() {
-                    angle_extent.clamp(0.0, 360.0)
-                } else {
-                    0.0
-                };
-                let half = (extent * 0.5).min(180.0).to_radians();
-                let s_half = (half * 0.5).sin();
-                let one_minus_cos = 2.0 * s_half * s_half;
-                let to_light = -(rot * Vec3A::Z).normalize();
-                Emitter::Distant(Distant {
-                    strength: s,
-                    to_light,
-                    frame: Frame::new(to_light),
-                    cos_max: 1.0 - one_minus_cos,
-                    one_minus_cos,
-                    solid_angle: TAU * one_minus_cos,
-                    mis: extent >= DISTANT_MIS_MIN_DEGREES,
-                    shadows: *enable_shadows,
-                })
-            }
+            } => Distant::new(
+                strength(*c, *intensity, *exposure),
+                *angle_extent,
+                *enable_shadows,
+                transform,
+            )
+            .map(Emitter::Distant),
             Light::Rect {
                 color: c,
                 intensity,
                 exposure,
                 transform,
-            } => {
-                let s = strength(*c, *intensity, *exposure);
-                if !transform.is_finite() {
-                    return Ok(None);
-                }
-                let corner = Vec3A::from(transform.transform_point3(glam::Vec3::new(-0.5, -0.5, 0.0)));
-                let ex = Vec3A::from(transform.transform_vector3(glam::Vec3::X));
-                let ey = Vec3A::from(transform.transform_vector3(glam::Vec3::Y));
-                let det = Mat3A::from_mat4(*transform).determinant();
-                let cross = ex.cross(ey);
-                let area = cross.length();
-                if !(area > 0.0 && area.is_finite() && det != 0.0) {
-                    return Ok(None);
-                }
-                let normal = cross / area * det.signum();
-                Emitter::Rect(Rect {
-                    strength: s,
-                    corner,
-                    ex,
-                    ey,
-                    normal,
-                    cross,
-                    inv_cross2: 1.0 / (area * area),
-                    area,
-                })
-            }
+            } => Rect::new(strength(*c, *intensity, *exposure), transform).map(Emitter::Rect),
             Light::Sphere {
                 color: c,
                 intensity,
                 exposure,
                 transform,
-            } => {
-                let s = strength(*c, *intensity, *exposure);
-                if !transform.is_finite() {
-                    return Ok(None);
-                }
-                let center = Vec3A::from(transform.transform_point3(glam::Vec3::ZERO));
-                let radius = 0.5 * Mat3A::from_mat4(*transform).determinant().abs().cbrt();
-                if !(radius > 0.0 && radius.is_finite()) {
-                    return Ok(None);
-                }
-                Emitter::Sphere(SphereLight {
-                    strength: s,
-                    center,
-                    radius,
-                })
-            }
+            } => SphereLight::new(strength(*c, *intensity, *exposure), transform).map(Emitter::Sphere),
         };
-        Ok((e.strength() != Vec3A::ZERO).then_some(e))
+        Ok(e.filter(|e| e.strength() != Vec3A::ZERO))
     }
 
     /// Number of lights that can emit.
@@ -862,6 +873,11 @@ impl Lights {
             pdf: finite_or_zero(pdf),
         })
     }
+}
+
+/// `S = color · intensity · 2^exposure`, with negative or non-finite channels as 0.
+fn strength(c: Rgb, intensity: f32, exposure: f32) -> Vec3A {
+    sanitize(color(c) * (intensity * exposure.exp2()))
 }
 
 /// A direction drawn uniformly in the cone of `1 − cos θ_max = one_minus_cos` around local `+Z`:

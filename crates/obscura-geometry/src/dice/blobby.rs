@@ -102,16 +102,21 @@ fn field(nodes: &[Node], combined: bool, p: DVec3, values: &mut Vec<f64>) -> f64
     }
 }
 
+/// Corner `k` of the cube [−1, 1]³: at the `k & 1`, `k >> 1 & 1`, `k >> 2 & 1` ends of x, y and z.
+pub(super) fn cube_corner(k: usize) -> Vec3 {
+    Vec3::new(
+        if k & 1 == 0 { -1.0 } else { 1.0 },
+        if k & 2 == 0 { -1.0 } else { 1.0 },
+        if k & 4 == 0 { -1.0 } else { 1.0 },
+    )
+}
+
 /// The object-space box of a leaf: the unit cube under `m` (holds the unit ball).
 fn leaf_box(m: Mat4, extra: f32) -> (DVec3, DVec3) {
     let mut lo = DVec3::INFINITY;
     let mut hi = DVec3::NEG_INFINITY;
     for k in 0..8 {
-        let c = Vec3::new(
-            if k & 1 == 0 { -1.0 } else { 1.0 },
-            if k & 2 == 0 { -1.0 } else { 1.0 },
-            if k & 4 == 0 { -1.0 } else { 1.0 },
-        ) * (1.0 + extra);
+        let c = cube_corner(k) * (1.0 + extra);
         let p = m.transform_point3(c).as_dvec3();
         lo = lo.min(p);
         hi = hi.max(p);
@@ -162,16 +167,31 @@ const TETRAHEDRA: [[usize; 4]; 6] = [
 
 /// The blobby's surface as triangles.
 pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
-    let combined = blob.ops.iter().any(|o| {
-        matches!(
-            o,
-            BlobOp::Combine { .. } | BlobOp::Binary { .. } | BlobOp::Unary { .. }
-        )
-    });
+    let (nodes, lo, hi) = compile(&blob.ops);
+    if !(lo.is_finite() && hi.is_finite()) || lo.cmpge(hi).any() {
+        return TriangleMesh::default();
+    }
+    let grid = Grid::new(lo, hi, ctx);
+    let values = if additive(&blob.ops) {
+        grid.sum_of_leaves(&nodes, &blob.ops)
+    } else {
+        let combined = blob.ops.iter().any(|o| {
+            matches!(
+                o,
+                BlobOp::Combine { .. } | BlobOp::Binary { .. } | BlobOp::Unary { .. }
+            )
+        });
+        grid.field(&nodes, combined)
+    };
+    Polygoniser::new(&grid, &values).run()
+}
+
+/// The program's instructions ready to evaluate, and the object-space box of its leaves.
+fn compile(ops: &[BlobOp]) -> (Vec<Node>, DVec3, DVec3) {
     let mut lo = DVec3::INFINITY;
     let mut hi = DVec3::NEG_INFINITY;
-    let mut nodes = Vec::with_capacity(blob.ops.len());
-    for op in &blob.ops {
+    let mut nodes = Vec::with_capacity(ops.len());
+    for op in ops {
         let node = match op {
             BlobOp::Constant(c) => Node::Constant(f64::from(*c)),
             BlobOp::Ellipsoid(m) => {
@@ -200,30 +220,63 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
         };
         nodes.push(node);
     }
-    if !(lo.is_finite() && hi.is_finite()) || lo.cmpge(hi).any() {
-        return TriangleMesh::default();
+    (nodes, lo, hi)
+}
+
+/// The points the field is sampled at: `nx × ny × nz` of them, `cell` apart from `lo` on, point
+/// `(i, j, k)` stored at `(k·ny + j)·nx + i`.
+struct Grid {
+    lo: DVec3,
+    cell: f64,
+    nx: usize,
+    ny: usize,
+    nz: usize,
+}
+
+impl Grid {
+    /// The grid over the box `lo`–`hi`, with a margin of one cell to keep the surface inside it.
+    fn new(lo: DVec3, hi: DVec3, ctx: &DicingContext) -> Grid {
+        let extent = hi - lo;
+        let longest = extent.max_element();
+        let rate = Rate::new(ctx, 0.5 * (lo + hi), 0.5 * extent.length());
+        let wanted = rate.segments(longest, 0.0).clamp(4, MAX_CELLS_PER_AXIS);
+        let cell = longest / f64::from(wanted);
+        let counts = ((extent + DVec3::splat(2.0 * cell)) / cell)
+            .ceil()
+            .as_uvec3()
+            .max(glam::UVec3::ONE);
+        Grid {
+            lo: lo - DVec3::splat(cell),
+            cell,
+            nx: counts.x as usize + 1,
+            ny: counts.y as usize + 1,
+            nz: counts.z as usize + 1,
+        }
     }
-    // A margin of one cell keeps the surface inside the grid.
-    let extent = hi - lo;
-    let longest = extent.max_element();
-    let rate = Rate::new(ctx, 0.5 * (lo + hi), 0.5 * extent.length());
-    let wanted = rate.segments(longest, 0.0).clamp(4, MAX_CELLS_PER_AXIS);
-    let cell = longest / f64::from(wanted);
-    let lo = lo - DVec3::splat(cell);
-    let counts = ((extent + DVec3::splat(2.0 * cell)) / cell)
-        .ceil()
-        .as_uvec3()
-        .max(glam::UVec3::ONE);
-    let (nx, ny, nz) = (
-        counts.x as usize + 1,
-        counts.y as usize + 1,
-        counts.z as usize + 1,
-    );
-    let at = |i: usize, j: usize, k: usize| lo + DVec3::new(i as f64, j as f64, k as f64) * cell;
-    let mut values = vec![-BLOBBY_LEVEL; nx * ny * nz];
-    if additive(&blob.ops) {
-        // A sum of leaves: each leaf adds itself over the grid points of its own box only.
-        for (node, op) in nodes.iter().zip(&blob.ops) {
+
+    /// Grid point `(i, j, k)`, object space.
+    fn at(&self, i: usize, j: usize, k: usize) -> DVec3 {
+        self.lo + DVec3::new(i as f64, j as f64, k as f64) * self.cell
+    }
+
+    /// The index of grid point `(i, j, k)`.
+    fn id(&self, i: usize, j: usize, k: usize) -> usize {
+        (k * self.ny + j) * self.nx + i
+    }
+
+    /// The position of the grid point of index `g`.
+    fn position(&self, g: usize) -> DVec3 {
+        let (x, rest) = (g % self.nx, g / self.nx);
+        self.at(x, rest % self.ny, rest / self.ny)
+    }
+
+    /// `field − level` at every grid point, for a sum of leaves: each leaf adds itself over the
+    /// grid points of its own box only.
+    fn sum_of_leaves(&self, nodes: &[Node], ops: &[BlobOp]) -> Vec<f64> {
+        let (lo, cell) = (self.lo, self.cell);
+        let (nx, ny, nz) = (self.nx, self.ny, self.nz);
+        let mut values = vec![-BLOBBY_LEVEL; nx * ny * nz];
+        for (node, op) in nodes.iter().zip(ops) {
             let (a, b) = match op {
                 BlobOp::Ellipsoid(m) => leaf_box(*m, 0.0),
                 BlobOp::Segment {
@@ -254,26 +307,34 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
             for k in k0..=k1 {
                 for j in j0..=j1 {
                     for i in i0..=i1 {
-                        values[(k * ny + j) * nx + i] += field(one, false, at(i, j, k), &mut scratch);
+                        values[self.id(i, j, k)] += field(one, false, self.at(i, j, k), &mut scratch);
                     }
                 }
             }
         }
-    } else {
+        values
+    }
+
+    /// `field − level` at every grid point, the whole program evaluated at each.
+    fn field(&self, nodes: &[Node], combined: bool) -> Vec<f64> {
+        let mut values = vec![-BLOBBY_LEVEL; self.nx * self.ny * self.nz];
         let mut scratch = Vec::new();
-        for k in 0..nz {
-            for j in 0..ny {
-                for i in 0..nx {
-                    values[(k * ny + j) * nx + i] += field(&nodes, combined, at(i, j, k), &mut scratch);
+        for k in 0..self.nz {
+            for j in 0..self.ny {
+                for i in 0..self.nx {
+                    values[self.id(i, j, k)] += field(nodes, combined, self.at(i, j, k), &mut scratch);
                 }
             }
         }
+        values
     }
-    // The field's gradient at a grid point, by central differences on the grid.
-    let gradient = |g: usize| {
+
+    /// The gradient of `values` at grid point `g`, by central differences on the grid.
+    fn gradient(&self, values: &[f64], g: usize) -> DVec3 {
+        let (nx, ny, nz) = (self.nx, self.ny, self.nz);
         let (i, rest) = (g % nx, g / nx);
         let (j, k) = (rest % ny, rest / ny);
-        let v = |i: usize, j: usize, k: usize| values[(k * ny + j) * nx + i];
+        let v = |i: usize, j: usize, k: usize| values[self.id(i, j, k)];
         let d = |lo_v: f64, hi_v: f64, span: f64| (hi_v - lo_v) / span;
         let (il, ih) = (i.saturating_sub(1), (i + 1).min(nx - 1));
         let (jl, jh) = (j.saturating_sub(1), (j + 1).min(ny - 1));
@@ -283,81 +344,111 @@ pub(super) fn blobby(blob: &Blobby, ctx: &DicingContext) -> TriangleMesh {
             d(v(i, jl, k), v(i, jh, k), (jh - jl).max(1) as f64),
             d(v(i, j, kl), v(i, j, kh), (kh - kl).max(1) as f64),
         )
-    };
-    let mut out = TriangleMesh {
-        normals: Some(Vec::new()),
-        ..TriangleMesh::default()
-    };
-    let mut edge_vertex: HashMap<(usize, usize), u32> = HashMap::new();
-    for k in 0..nz - 1 {
-        for j in 0..ny - 1 {
-            for i in 0..nx - 1 {
-                let corner = |c: usize| (i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1));
-                let id = |(a, b, c): (usize, usize, usize)| (c * ny + b) * nx + a;
-                let ids: [usize; 8] = std::array::from_fn(|c| id(corner(c)));
-                let inside = ids.iter().filter(|&&g| values[g] > 0.0).count();
-                if inside == 0 || inside == 8 {
-                    continue;
-                }
-                for tet in TETRAHEDRA {
-                    let g = tet.map(|c| ids[c]);
-                    let mut vertex = |a: usize, b: usize, out: &mut TriangleMesh| -> u32 {
-                        let key = (a.min(b), a.max(b));
-                        if let Some(&v) = edge_vertex.get(&key) {
-                            return v;
-                        }
-                        let pos = |g: usize| {
-                            let (x, rest) = (g % nx, g / nx);
-                            at(x, rest % ny, rest / ny)
-                        };
-                        let (fa, fb) = (values[a], values[b]);
-                        let t = (fa / (fa - fb)).clamp(0.0, 1.0);
-                        let p = pos(a).lerp(pos(b), t);
-                        let n = -gradient(a).lerp(gradient(b), t);
-                        let v = out.positions.len() as u32;
-                        out.positions.push(p.as_vec3a());
-                        if let Some(ns) = out.normals.as_mut() {
-                            ns.push(n.normalize_or(DVec3::Z).as_vec3a());
-                        }
-                        edge_vertex.insert(key, v);
-                        v
-                    };
-                    let (ins, outs): (Vec<usize>, Vec<usize>) = g.iter().partition(|&&x| values[x] > 0.0);
-                    let tris: Vec<[u32; 3]> = match (ins.len(), outs.len()) {
-                        (1, 3) => vec![[
-                            vertex(ins[0], outs[0], &mut out),
-                            vertex(ins[0], outs[1], &mut out),
-                            vertex(ins[0], outs[2], &mut out),
-                        ]],
-                        (3, 1) => vec![[
-                            vertex(outs[0], ins[0], &mut out),
-                            vertex(outs[0], ins[1], &mut out),
-                            vertex(outs[0], ins[2], &mut out),
-                        ]],
-                        (2, 2) => {
-                            let a = vertex(ins[0], outs[0], &mut out);
-                            let b = vertex(ins[0], outs[1], &mut out);
-                            let c = vertex(ins[1], outs[1], &mut out);
-                            let d = vertex(ins[1], outs[0], &mut out);
-                            vec![[a, b, c], [a, c, d]]
-                        }
-                        _ => Vec::new(),
-                    };
-                    for mut t in tris {
-                        let p = |v: u32| out.positions[v as usize];
-                        let n = out.normals.as_ref().map_or(glam::Vec3A::Z, |ns| {
-                            ns[t[0] as usize] + ns[t[1] as usize] + ns[t[2] as usize]
-                        });
-                        if (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).dot(n) < 0.0 {
-                            t.swap(1, 2);
-                        }
-                        out.triangles.push(t);
+    }
+}
+
+/// Marching tetrahedra over a grid's values: the triangles where they cross 0, each crossing's
+/// vertex shared by the tetrahedra around its edge.
+struct Polygoniser<'a> {
+    grid: &'a Grid,
+    values: &'a [f64],
+    /// The vertex on each grid edge crossed so far, by its two grid points (lower index first).
+    edge_vertex: HashMap<(usize, usize), u32>,
+    out: TriangleMesh,
+}
+
+impl<'a> Polygoniser<'a> {
+    fn new(grid: &'a Grid, values: &'a [f64]) -> Self {
+        Polygoniser {
+            grid,
+            values,
+            edge_vertex: HashMap::new(),
+            out: TriangleMesh {
+                normals: Some(Vec::new()),
+                ..TriangleMesh::default()
+            },
+        }
+    }
+
+    /// The surface through every cube the level crosses.
+    fn run(mut self) -> TriangleMesh {
+        let (nx, ny, nz) = (self.grid.nx, self.grid.ny, self.grid.nz);
+        for k in 0..nz - 1 {
+            for j in 0..ny - 1 {
+                for i in 0..nx - 1 {
+                    let ids: [usize; 8] = std::array::from_fn(|c| {
+                        self.grid.id(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))
+                    });
+                    let inside = ids.iter().filter(|&&g| self.values[g] > 0.0).count();
+                    if inside == 0 || inside == 8 {
+                        continue;
+                    }
+                    for tet in TETRAHEDRA {
+                        self.tetrahedron(tet.map(|c| ids[c]));
                     }
                 }
             }
         }
+        self.out
     }
-    out
+
+    /// The vertex where the level crosses the edge from grid point `a` to `b` (one inside, one
+    /// outside), made once per edge.
+    fn vertex(&mut self, a: usize, b: usize) -> u32 {
+        let key = (a.min(b), a.max(b));
+        if let Some(&v) = self.edge_vertex.get(&key) {
+            return v;
+        }
+        let (grid, values) = (self.grid, self.values);
+        let (fa, fb) = (values[a], values[b]);
+        let t = (fa / (fa - fb)).clamp(0.0, 1.0);
+        let p = grid.position(a).lerp(grid.position(b), t);
+        let n = -grid.gradient(values, a).lerp(grid.gradient(values, b), t);
+        let v = self.out.positions.len() as u32;
+        self.out.positions.push(p.as_vec3a());
+        if let Some(ns) = self.out.normals.as_mut() {
+            ns.push(n.normalize_or(DVec3::Z).as_vec3a());
+        }
+        self.edge_vertex.insert(key, v);
+        v
+    }
+
+    /// The triangles of the tetrahedron of grid points `g`, wound to face along their normals.
+    fn tetrahedron(&mut self, g: [usize; 4]) {
+        let values = self.values;
+        let (ins, outs): (Vec<usize>, Vec<usize>) = g.iter().partition(|&&x| values[x] > 0.0);
+        let tris: Vec<[u32; 3]> = match (ins.len(), outs.len()) {
+            (1, 3) => vec![[
+                self.vertex(ins[0], outs[0]),
+                self.vertex(ins[0], outs[1]),
+                self.vertex(ins[0], outs[2]),
+            ]],
+            (3, 1) => vec![[
+                self.vertex(outs[0], ins[0]),
+                self.vertex(outs[0], ins[1]),
+                self.vertex(outs[0], ins[2]),
+            ]],
+            (2, 2) => {
+                let a = self.vertex(ins[0], outs[0]);
+                let b = self.vertex(ins[0], outs[1]);
+                let c = self.vertex(ins[1], outs[1]);
+                let d = self.vertex(ins[1], outs[0]);
+                vec![[a, b, c], [a, c, d]]
+            }
+            _ => Vec::new(),
+        };
+        let out = &mut self.out;
+        for mut t in tris {
+            let p = |v: u32| out.positions[v as usize];
+            let n = out.normals.as_ref().map_or(glam::Vec3A::Z, |ns| {
+                ns[t[0] as usize] + ns[t[1] as usize] + ns[t[2] as usize]
+            });
+            if (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).dot(n) < 0.0 {
+                t.swap(1, 2);
+            }
+            out.triangles.push(t);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -13,7 +13,9 @@ use std::f64::consts::TAU;
 use glam::{DVec2, DVec3, Vec2};
 
 use super::DicingContext;
-use super::quadric::{Grid, Rate, finite, fit_budget, min_segments, sweep, tessellate_fitted_st};
+use super::quadric::{
+    Grid, Rate, finite, fit_budget, min_segments, radius_z_sweep, sweep, tessellate_fitted_st,
+};
 use crate::ray::TriangleMesh;
 
 /// `Hyperboloid x1 y1 z1 x2 y2 z2 thetamax`.
@@ -86,11 +88,10 @@ pub(super) fn paraboloid(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let (rmax, z0, z1) = (f64::from(radius).abs(), f64::from(z_min), f64::from(z_max));
-    let Some(theta) = sweep(theta_max) else {
+    let Some((rmax, z0, z1, theta)) = radius_z_sweep(radius, z_min, z_max, theta_max) else {
         return Default::default();
     };
-    if !finite(&[rmax, z0, z1]) || rmax == 0.0 || z1 == 0.0 || z0 == z1 || z0 / z1 < 0.0 {
+    if z1 == 0.0 || z0 == z1 || z0 / z1 < 0.0 {
         return Default::default();
     }
     let dz = z1 - z0;

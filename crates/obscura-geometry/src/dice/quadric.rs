@@ -432,6 +432,20 @@ pub(super) fn finite(values: &[f64]) -> bool {
     values.iter().all(|v| v.is_finite())
 }
 
+/// A sphere's, cylinder's or paraboloid's radius (|radius|), z range and sweep (radians), checked:
+/// `None` when the sweep is empty, a value is not finite or the radius is 0.
+pub(super) fn radius_z_sweep(
+    radius: f32,
+    z_min: f32,
+    z_max: f32,
+    theta_max: f32,
+) -> Option<(f64, f64, f64, f64)> {
+    let r = f64::from(radius).abs();
+    let (z0, z1) = (f64::from(z_min), f64::from(z_max));
+    let theta = sweep(theta_max)?;
+    (finite(&[r, z0, z1]) && r != 0.0).then_some((r, z0, z1, theta))
+}
+
 /// `Sphere radius zmin zmax thetamax`.
 pub(super) fn sphere(
     radius: f32,
@@ -441,14 +455,9 @@ pub(super) fn sphere(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let r = f64::from(radius).abs();
-    let (z0, z1) = (f64::from(z_min), f64::from(z_max));
-    let Some(theta) = sweep(theta_max) else {
+    let Some((r, z0, z1, theta)) = radius_z_sweep(radius, z_min, z_max, theta_max) else {
         return Default::default();
     };
-    if !finite(&[r, z0, z1]) || r == 0.0 {
-        return Default::default();
-    }
     let (z0, z1) = (z0.clamp(-r, r), z1.clamp(-r, r));
     if z0 == z1 {
         return Default::default();
@@ -496,12 +505,10 @@ pub(super) fn cylinder(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let r = f64::from(radius).abs();
-    let (z0, z1) = (f64::from(z_min), f64::from(z_max));
-    let Some(theta) = sweep(theta_max) else {
+    let Some((r, z0, z1, theta)) = radius_z_sweep(radius, z_min, z_max, theta_max) else {
         return Default::default();
     };
-    if !finite(&[r, z0, z1]) || r == 0.0 || z0 == z1 {
+    if z0 == z1 {
         return Default::default();
     }
     let dz = z1 - z0;
@@ -514,6 +521,14 @@ pub(super) fn cylinder(
     })
 }
 
+/// A cone's or disk's height, radius (|radius|) and sweep (radians), checked: `None` when the sweep
+/// is empty, a value is not finite or the radius is 0.
+fn height_radius_sweep(height: f32, radius: f32, theta_max: f32) -> Option<(f64, f64, f64)> {
+    let (h, r) = (f64::from(height), f64::from(radius).abs());
+    let theta = sweep(theta_max)?;
+    (finite(&[h, r]) && r != 0.0).then_some((h, r, theta))
+}
+
 /// `Cone height radius thetamax`: base circle at z = 0, apex at (0, 0, height).
 pub(super) fn cone(
     height: f32,
@@ -522,13 +537,9 @@ pub(super) fn cone(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let (h, r) = (f64::from(height), f64::from(radius).abs());
-    let Some(theta) = sweep(theta_max) else {
+    let Some((h, r, theta)) = height_radius_sweep(height, radius, theta_max) else {
         return Default::default();
     };
-    if !finite(&[h, r]) || r == 0.0 {
-        return Default::default();
-    }
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, 0.5 * h), r.hypot(0.5 * h));
     // The outward normal is the gradient of √(x² + y²) − R·(1 − z/h), scaled by |h|.
     let up = if h < 0.0 { -1.0 } else { 1.0 };
@@ -555,13 +566,9 @@ pub(super) fn disk(
     ctx: &DicingContext,
     with_st: bool,
 ) -> (TriangleMesh, Option<Vec<Vec2>>) {
-    let (h, r) = (f64::from(height), f64::from(radius).abs());
-    let Some(theta) = sweep(theta_max) else {
+    let Some((h, r, theta)) = height_radius_sweep(height, radius, theta_max) else {
         return Default::default();
     };
-    if !finite(&[h, r]) || r == 0.0 {
-        return Default::default();
-    }
     let rate = Rate::new(ctx, DVec3::new(0.0, 0.0, h), r);
     let centre = (DVec3::new(0.0, 0.0, h), DVec3::Z);
     let grid = swept_grid(&rate, r, theta, r, Some(centre));

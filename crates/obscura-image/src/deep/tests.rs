@@ -4,6 +4,7 @@
 //! Python's `OpenEXR` (the reference C++ library) through `tests/deep_read.py`.
 
 use super::*;
+use crate::testing::rect;
 use miniz_oxide::inflate::decompress_to_vec_zlib;
 use proptest::prelude::*;
 use std::collections::HashMap;
@@ -159,12 +160,7 @@ fn parse(bytes: &[u8]) -> Parsed {
     let image = DeepImage {
         width: (disp[2] + 1) as u32,
         height: (disp[3] + 1) as u32,
-        data_window: PixelRect {
-            x0: dw[0] as u32,
-            x1: (dw[2] + 1) as u32,
-            y0: dw[1] as u32,
-            y1: (dw[3] + 1) as u32,
-        },
+        data_window: rect(dw[0] as u32, (dw[2] + 1) as u32, dw[1] as u32, (dw[3] + 1) as u32),
         pixels,
     };
     Parsed {
@@ -218,12 +214,7 @@ fn tiny_image() -> DeepImage {
     DeepImage {
         width: 4,
         height: 4,
-        data_window: PixelRect {
-            x0: 1,
-            x1: 3,
-            y0: 3,
-            y1: 4,
-        },
+        data_window: rect(1, 3, 3, 4),
         pixels: vec![vec![s], Vec::new()],
     }
 }
@@ -238,12 +229,7 @@ fn roundtrip(image: &DeepImage, compression: DeepCompression) -> Parsed {
 
 #[test]
 fn deep_files_parse_back_exactly_with_both_compressions() {
-    let dw = PixelRect {
-        x0: 3,
-        x1: 40,
-        y0: 2,
-        y1: 9,
-    };
+    let dw = rect(3, 40, 2, 9);
     let image = sample_image(48, 12, dw);
     for compression in [DeepCompression::None, DeepCompression::Zips] {
         let parsed = roundtrip(&image, compression);
@@ -259,12 +245,7 @@ fn deep_files_parse_back_exactly_with_both_compressions() {
 #[test]
 fn deep_zips_actually_compresses_and_falls_back_to_raw() {
     // A large smooth image shrinks...
-    let dw = PixelRect {
-        x0: 0,
-        x1: 300,
-        y0: 0,
-        y1: 4,
-    };
+    let dw = rect(0, 300, 0, 4);
     let image = sample_image(300, 4, dw);
     let dir = tempfile::tempdir().unwrap();
     let (a, b) = (dir.path().join("a.exr"), dir.path().join("b.exr"));
@@ -293,12 +274,7 @@ fn deep_zips_actually_compresses_and_falls_back_to_raw() {
 
 #[test]
 fn deep_empty_lines_and_empty_images() {
-    let dw = PixelRect {
-        x0: 0,
-        x1: 3,
-        y0: 0,
-        y1: 2,
-    };
+    let dw = rect(0, 3, 0, 2);
     let image = DeepImage {
         width: 3,
         height: 2,
@@ -314,42 +290,18 @@ fn deep_empty_lines_and_empty_images() {
 fn deep_inconsistent_images_are_errors_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.exr");
-    let good = sample_image(
-        4,
-        4,
-        PixelRect {
-            x0: 0,
-            x1: 4,
-            y0: 0,
-            y1: 4,
-        },
-    );
+    let good = sample_image(4, 4, rect(0, 4, 0, 4));
     let mut short = good.clone();
     short.pixels.pop();
     let mut empty = good.clone();
-    empty.data_window = PixelRect {
-        x0: 2,
-        x1: 2,
-        y0: 0,
-        y1: 4,
-    };
+    empty.data_window = rect(2, 2, 0, 4);
     empty.pixels.clear();
     let mut inverted = good.clone();
-    inverted.data_window = PixelRect {
-        x0: 3,
-        x1: 1,
-        y0: 0,
-        y1: 4,
-    };
+    inverted.data_window = rect(3, 1, 0, 4);
     let mut no_format = good.clone();
     no_format.width = 0;
     let mut huge = good.clone();
-    huge.data_window = PixelRect {
-        x0: u32::MAX - 4,
-        x1: u32::MAX,
-        y0: 0,
-        y1: 4,
-    };
+    huge.data_window = rect(u32::MAX - 4, u32::MAX, 0, 4);
     for image in [short, empty, inverted, no_format, huge] {
         let err = write_deep_exr(&path, &image, DeepCompression::Zips).unwrap_err();
         assert!(matches!(err, OutputError::InvalidDeepImage { .. }), "{err}");
@@ -385,28 +337,9 @@ fn read_with_python(path: &Path) -> Option<(String, PythonSamples)> {
 #[test]
 fn deep_files_read_back_with_python_openexr() {
     let dir = tempfile::tempdir().unwrap();
-    let small = PixelRect {
-        x0: 5,
-        x1: 21,
-        y0: 3,
-        y1: 11,
-    };
-    let wide = PixelRect {
-        x0: 0,
-        x1: 300,
-        y0: 0,
-        y1: 3,
-    };
-    let mut sparse = sample_image(
-        7,
-        5,
-        PixelRect {
-            x0: 0,
-            x1: 7,
-            y0: 0,
-            y1: 5,
-        },
-    );
+    let small = rect(5, 21, 3, 11);
+    let wide = rect(0, 300, 0, 3);
+    let mut sparse = sample_image(7, 5, rect(0, 7, 0, 5));
     for (i, p) in sparse.pixels.iter_mut().enumerate() {
         if i / 7 != 2 {
             p.clear(); // only row 2 has samples

@@ -1,16 +1,8 @@
 //! Tests of [`super`] (film.rs).
 
 use super::*;
+use crate::testing::{ALL_FILTERS, rect};
 use obscura_scene::{FilterKind, PixelFilter};
-
-const ALL: [FilterKind; 6] = [
-    FilterKind::Box,
-    FilterKind::Triangle,
-    FilterKind::Gaussian,
-    FilterKind::CatmullRom,
-    FilterKind::Mitchell,
-    FilterKind::BlackmanHarris,
-];
 
 fn filter(kind: FilterKind, w: f32) -> Filter {
     Filter::new(&PixelFilter {
@@ -19,10 +11,6 @@ fn filter(kind: FilterKind, w: f32) -> Filter {
         width_y: w,
     })
     .unwrap()
-}
-
-fn rect(x0: u32, x1: u32, y0: u32, y1: u32) -> PixelRect {
-    PixelRect { x0, x1, y0, y1 }
 }
 
 /// A small deterministic generator (SplitMix64) for sample positions.
@@ -127,7 +115,7 @@ fn a_constant_sample_value_is_reproduced_exactly_with_any_filter_and_tiling() {
         alpha: 0.75,
         ..hit(0.0, 2.0)
     };
-    for kind in ALL {
+    for kind in ALL_FILTERS {
         for w in [1.0, 2.0, 3.3, 4.0] {
             let mut pos = samples(crop, 3, 7);
             for s in &mut pos {
@@ -159,7 +147,7 @@ fn a_constant_sample_value_is_reproduced_exactly_with_any_filter_and_tiling() {
 fn any_tile_split_in_any_order_gives_the_single_tile_film() {
     let crop = rect(2, 23, 1, 19);
     let pos = samples(crop, 2, 11);
-    for kind in ALL {
+    for kind in ALL_FILTERS {
         let f = filter(kind, if kind == FilterKind::Box { 1.0 } else { 3.0 });
         let one = render(f, crop, &pos, 100, 100, false);
         for (tw, th, rev) in [(4, 4, false), (7, 3, true), (1, 1, true), (21, 1, false)] {
@@ -191,7 +179,7 @@ fn a_crop_fed_its_margin_samples_equals_the_same_region_of_the_full_film() {
     let (w, h) = (16u32, 12u32);
     let full_rect = rect(0, w, 0, h);
     let all = samples(full_rect, 2, 3);
-    for kind in ALL {
+    for kind in ALL_FILTERS {
         let f = filter(kind, 3.0);
         let full = render(f, full_rect, &all, 5, 4, false);
         let crop = rect(4, 11, 3, 9);
@@ -257,7 +245,7 @@ fn a_width_one_box_sample_at_a_pixel_centre_touches_only_that_pixel() {
 
 #[test]
 fn an_impulse_reproduces_the_filter_shape() {
-    for kind in ALL {
+    for kind in ALL_FILTERS {
         let f = filter(kind, 4.0);
         let crop = rect(0, 9, 0, 9);
         let mut film = Film::new(9, 9, crop, f);
@@ -292,7 +280,7 @@ fn an_impulse_reproduces_the_filter_shape() {
 #[test]
 fn black_tinted_samples_halve_ci_but_keep_alpha() {
     let crop = rect(0, 6, 0, 5);
-    for kind in ALL {
+    for kind in ALL_FILTERS {
         let mut film = Film::new(6, 5, crop, filter(kind, 2.0));
         let mut t = film.tile(crop);
         let white = SampleValues {

@@ -2,6 +2,7 @@
 
 use super::*;
 use crate::filter::Filter;
+use crate::testing::rect;
 use exr::prelude::{ReadChannels, ReadLayers, read};
 use glam::Vec3;
 use obscura_host::PixelRect;
@@ -40,12 +41,7 @@ fn pixel_value(x: u32, y: u32) -> SampleValues {
 fn ground_truth_channels_are_named_and_ids_are_exact_integers() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("truth.exr");
-    let crop = PixelRect {
-        x0: 0,
-        x1: 5,
-        y0: 0,
-        y1: 3,
-    };
+    let crop = rect(0, 5, 0, 3);
     let mut f = film(5, 3, crop);
     let flow = (0..15)
         .map(|i| crate::samples::FlowPixel {
@@ -175,12 +171,7 @@ fn read_back(path: &Path) -> Image<Layer<AnyChannels<FlatSamples>>> {
 fn output_exr_float_channels_values_and_windows() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("beauty.exr");
-    let crop = PixelRect {
-        x0: 3,
-        x1: 10,
-        y0: 2,
-        y1: 6,
-    };
+    let crop = rect(3, 10, 2, 6);
     let f = film(12, 8, crop);
     let aovs = [
         Aov::Ci,
@@ -276,12 +267,7 @@ fn output_exr_float_channels_values_and_windows() {
 fn output_exr_half_rounds_like_half() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("half.exr");
-    let crop = PixelRect {
-        x0: 0,
-        x1: 5,
-        y0: 0,
-        y1: 3,
-    };
+    let crop = rect(0, 5, 0, 3);
     let f = film(5, 3, crop);
     write_exr(&path, &f, &[Aov::Ci, Aov::Z], true, 1.0, &[]).unwrap();
     let image = read_back(&path);
@@ -304,12 +290,7 @@ fn output_exr_half_rounds_like_half() {
 #[test]
 fn output_exr_reads_back_with_python_openexr() {
     let dir = tempfile::tempdir().unwrap();
-    let crop = PixelRect {
-        x0: 3,
-        x1: 10,
-        y0: 2,
-        y1: 6,
-    };
+    let crop = rect(3, 10, 2, 6);
     let f = film(12, 8, crop);
     for half in [false, true] {
         let path = dir.path().join(format!("flat-{half}.exr"));
@@ -365,33 +346,14 @@ fn output_exr_reads_back_with_python_openexr() {
 fn output_exr_refuses_what_it_cannot_write_and_names_the_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("x.exr");
-    let f = film(
-        4,
-        4,
-        PixelRect {
-            x0: 0,
-            x1: 4,
-            y0: 0,
-            y1: 4,
-        },
-    );
+    let f = film(4, 4, rect(0, 4, 0, 4));
     let err = write_exr(&path, &f, &[], false, 1.0, &[]).unwrap_err();
     assert!(matches!(err, OutputError::NoChannels { .. }) && err.to_string().contains("x.exr"));
     for name in ["", "dataWindow", "a\0b"] {
         let err = write_exr(&path, &f, &[Aov::Ci], false, 1.0, &[(name, "v".into())]).unwrap_err();
         assert!(matches!(err, OutputError::Attribute { .. }), "{err}");
     }
-    let empty = Film::new(
-        4,
-        4,
-        PixelRect {
-            x0: 2,
-            x1: 2,
-            y0: 0,
-            y1: 4,
-        },
-        *f.filter(),
-    );
+    let empty = Film::new(4, 4, rect(2, 2, 0, 4), *f.filter());
     assert!(matches!(
         write_exr(&path, &empty, &[Aov::Ci], false, 1.0, &[]),
         Err(OutputError::EmptyImage { .. })
@@ -406,16 +368,7 @@ fn output_exr_refuses_what_it_cannot_write_and_names_the_file() {
 #[test]
 fn output_writes_into_a_missing_directory_fail_naming_the_path_and_leave_no_temporary() {
     let dir = tempfile::tempdir().unwrap();
-    let f = film(
-        4,
-        4,
-        PixelRect {
-            x0: 0,
-            x1: 4,
-            y0: 0,
-            y1: 4,
-        },
-    );
+    let f = film(4, 4, rect(0, 4, 0, 4));
     for name in ["a.exr", "a.png"] {
         let path = dir.path().join("missing").join(name);
         let err = if name.ends_with("exr") {
@@ -449,12 +402,7 @@ fn output_srgb_curve() {
 fn output_png_reads_back_with_the_png_decoder() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("preview.png");
-    let crop = PixelRect {
-        x0: 1,
-        x1: 6,
-        y0: 2,
-        y1: 5,
-    };
+    let crop = rect(1, 6, 2, 5);
     let f = Filter::new(&PixelFilter::default()).unwrap();
     let mut film = Film::new(8, 6, crop, f);
     let mut t = film.tile(crop);
@@ -510,16 +458,7 @@ fn output_png_reads_back_with_the_png_decoder() {
 #[test]
 fn output_exr_bytes_do_not_depend_on_the_attribute_order() {
     let dir = tempfile::tempdir().unwrap();
-    let f = film(
-        6,
-        4,
-        PixelRect {
-            x0: 0,
-            x1: 6,
-            y0: 0,
-            y1: 4,
-        },
-    );
+    let f = film(6, 4, rect(0, 6, 0, 4));
     let attributes = [
         ("obscura:projection", "PxrPerspective".to_string()),
         ("obscura:parameters", "fov=40".to_string()),

@@ -105,6 +105,22 @@ fn camera_rays() -> Vec<Ray> {
     rays
 }
 
+/// Direct lighting only: one scattering event.
+const DIRECT: PathOptions = PathOptions {
+    max_depth: 1,
+    rr_start: 3,
+};
+
+/// [`scene`] with a grey PxrDiffuse of albedo `albedo` lit by `light` alone.
+fn lit_diffuse(albedo: f32, light: Light) -> ShadingScene {
+    scene(
+        Material::Diffuse {
+            color: Rgb::new(albedo, albedo, albedo),
+        },
+        Lights::new(&[light], Path::new(".")).unwrap(),
+    )
+}
+
 /// Mean radiance (red channel) and its standard error over `n` paths.
 fn mean(scene: &ShadingScene, tracer: &dyn Tracer, ray: &Ray, n: usize, opts: &PathOptions) -> (f64, f64) {
     let mut rng = Rng::new(99, 7);
@@ -200,18 +216,9 @@ fn distant_light_direct_lighting_is_albedo_over_pi_times_irradiance() {
         enable_shadows: true,
         transform: Mat4::IDENTITY,
     };
-    let s = scene(
-        Material::Diffuse {
-            color: Rgb::new(0.8, 0.8, 0.8),
-        },
-        Lights::new(&[light], Path::new(".")).unwrap(),
-    );
-    let opts = PathOptions {
-        max_depth: 1,
-        rr_start: 3,
-    };
+    let s = lit_diffuse(0.8, light);
     for ray in camera_rays() {
-        let r = trace_path(&s, &tracer, &ray, &mut Rng::new(3, 3), &opts);
+        let r = trace_path(&s, &tracer, &ray, &mut Rng::new(3, 3), &DIRECT);
         let want = match tracer.intersect(&ray) {
             Some(h) => 0.8 / PI * 4.0 * h.geometric_normal.dot(-Vec3A::Z).max(0.0),
             None => 0.0,
@@ -232,29 +239,14 @@ fn sphere_light_direct_lighting_matches_the_closed_form() {
         exposure: 0.0,
         transform: Mat4::from_scale_rotation_translation(Vec3::splat(1.5), Quat::IDENTITY, centre),
     };
-    let s = scene(
-        Material::Diffuse {
-            color: Rgb::new(0.5, 0.5, 0.5),
-        },
-        Lights::new(&[light], Path::new(".")).unwrap(),
-    );
-    let opts = PathOptions {
-        max_depth: 1,
-        rr_start: 3,
-    };
+    let s = lit_diffuse(0.5, light);
     let o = Vec3A::new(0.0, 3.0, -3.0);
     for target in [
         Vec3A::new(0.0, 0.3, -0.95),
         Vec3A::new(0.2, 0.0, -1.0),
         Vec3A::new(-0.3, 0.2, -0.9),
     ] {
-        let ray = Ray {
-            origin: o,
-            direction: (target - o).normalize(),
-            t_min: 0.0,
-            t_max: f32::INFINITY,
-            time: 0.0,
-        };
+        let ray = Ray::new(o, (target - o).normalize());
         let h = tracer.intersect(&ray).unwrap();
         let to_c = Vec3A::from(centre) - h.position;
         let (d, r) = (to_c.length(), 0.75f32);
@@ -262,21 +254,15 @@ fn sphere_light_direct_lighting_matches_the_closed_form() {
         let cos = h.geometric_normal.dot(to_c / d);
         assert!(cos > sin2.sqrt() + 0.05, "light must be above the horizon");
         let want = f64::from(0.5 / PI * PI * 5.0 * sin2 * cos);
-        let (m, se) = mean(&s, &tracer, &ray, 20_000, &opts);
+        let (m, se) = mean(&s, &tracer, &ray, 20_000, &DIRECT);
         assert!(
             (m - want).abs() < 0.02 * want && (m - want).abs() < 5.0 * se + 1e-4,
             "{m} ± {se} vs {want}"
         );
     }
     // A camera ray that sees the light itself: its radiance, alpha 1, no geometry hit.
-    let ray = Ray {
-        origin: Vec3A::new(0.0, 0.0, -9.0),
-        direction: Vec3A::Z,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    };
-    let r = trace_path(&s, &tracer, &ray, &mut Rng::new(1, 1), &opts);
+    let ray = Ray::new(Vec3A::new(0.0, 0.0, -9.0), Vec3A::Z);
+    let r = trace_path(&s, &tracer, &ray, &mut Rng::new(1, 1), &DIRECT);
     assert_eq!((r.radiance, r.alpha, r.first_hit), (Vec3A::splat(5.0), 1.0, None));
 }
 
@@ -298,13 +284,7 @@ fn constant_material_is_unlit_emission() {
         emissive: Default::default(),
         local_shading: Vec::new(),
     };
-    let ray = Ray {
-        origin: Vec3A::new(0.0, 0.0, -5.0),
-        direction: Vec3A::Z,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    };
+    let ray = Ray::new(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z);
     let r = trace_path(&s, &tracer, &ray, &mut Rng::new(5, 5), &DEEP);
     assert_eq!(r.radiance, Vec3A::new(0.25, 0.5, 2.0));
     assert_eq!(r.alpha, 1.0);
@@ -323,13 +303,7 @@ fn max_depth_zero_sees_only_emission() {
         max_depth: 0,
         rr_start: 0,
     };
-    let ray = Ray {
-        origin: Vec3A::new(0.0, 0.0, -5.0),
-        direction: Vec3A::Z,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    };
+    let ray = Ray::new(Vec3A::new(0.0, 0.0, -5.0), Vec3A::Z);
     assert_eq!(
         trace_path(&s, &tracer, &ray, &mut Rng::new(5, 5), &opts).radiance,
         Vec3A::ZERO
@@ -509,13 +483,7 @@ fn a_classic_surface_inside_a_closed_sphere_shows_exactly_its_ambient_term() {
     for k in 0..64 {
         let a = k as f32 * 0.7;
         let direction = Vec3A::new(a.cos(), (0.3 * a).sin(), a.sin()).normalize();
-        let ray = Ray {
-            origin: Vec3A::new(0.5, -1.0, 2.0),
-            direction,
-            t_min: 0.0,
-            t_max: f32::INFINITY,
-            time: 0.0,
-        };
+        let ray = Ray::new(Vec3A::new(0.5, -1.0, 2.0), direction);
         let r = trace_path(&s, &tracer, &ray, &mut rng, &DEEP);
         assert!(
             (r.radiance - want).abs().max_element() < 1e-6,
@@ -545,13 +513,7 @@ fn a_path_traced_surface_adds_the_ambient_term_at_every_bounce() {
         )
         .unwrap(),
     );
-    let ray = Ray {
-        origin: Vec3A::ZERO,
-        direction: Vec3A::Z,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    };
+    let ray = Ray::new(Vec3A::ZERO, Vec3A::Z);
     let (m, se) = mean(&s, &tracer, &ray, 16_384, &DEEP);
     let want = 0.4 * rho / (1.0 - rho);
     assert!((m - want).abs() < 5.0 * se + 1e-3, "{m} ± {se} vs {want}");

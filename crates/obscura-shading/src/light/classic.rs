@@ -12,6 +12,7 @@
 //! only and are not seen by camera or BSDF rays.
 
 use glam::Vec3A;
+use obscura_scene::PointEmitter;
 
 /// A point light, with the spot's cone when it has one.
 #[derive(Debug, Clone)]
@@ -24,6 +25,22 @@ pub(super) struct PointLight {
     pub(super) spot: Option<SpotBeam>,
     /// `enable_shadows`: surfaces between a point and the light block it.
     pub(super) shadows: bool,
+}
+
+impl PointLight {
+    /// The light of `emitter` (its strength `S = color · intensity`), with the spot's beam when it
+    /// has one; `None` at a non-finite position.
+    pub(super) fn new(emitter: &PointEmitter, spot: Option<SpotBeam>) -> Option<PointLight> {
+        if !emitter.position.is_finite() {
+            return None;
+        }
+        Some(PointLight {
+            strength: super::strength(emitter.color, emitter.intensity, 0.0),
+            position: Vec3A::from(emitter.position),
+            spot,
+            shadows: emitter.enable_shadows,
+        })
+    }
 }
 
 /// A spot light's beam.

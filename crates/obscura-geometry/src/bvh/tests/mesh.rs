@@ -63,7 +63,7 @@ fn heightfield_rays_through_grid_lines_match_brute_force_and_never_leak() {
                 if x > 1.0 || z > 1.0 {
                     continue;
                 }
-                let r = ray(Vec3A::new(x, 1.0, z), Vec3A::NEG_Y);
+                let r = Ray::new(Vec3A::new(x, 1.0, z), Vec3A::NEG_Y);
                 check_mesh_ray(&bvh, &r, 1.0).unwrap();
                 assert!(
                     bvh.intersect(&r).is_some(),
@@ -104,7 +104,7 @@ fn large_mesh_matches_brute_force() {
         } else {
             rng.vec(1.0)
         };
-        let r = ray(origin, direction);
+        let r = Ray::new(origin, direction);
         check_mesh_ray(&bvh, &r, 1.0).unwrap();
         hits += usize::from(bvh.intersect(&r).is_some());
     }
@@ -126,7 +126,7 @@ fn rays_through_vertices_and_edges_match_brute_force() {
     for [a, b, c] in &triangles {
         for target in [*a, *b, *c, (*a + *b) * 0.5, (*b + *c) * 0.5, (*c + *a) * 0.5] {
             let origin = rng.vec(3.0);
-            check_mesh_ray(&bvh, &ray(origin, target - origin), 1.0).unwrap();
+            check_mesh_ray(&bvh, &Ray::new(origin, target - origin), 1.0).unwrap();
         }
     }
 }
@@ -145,12 +145,12 @@ fn duplicate_triangles_report_the_lower_index() {
     let bvh = MeshBvh::build(soup(&triangles, 1.0));
     for scalar in KERNELS {
         assert_eq!(
-            bvh.intersect_with(&ray(Vec3A::new(0.1, 0.0, -3.0), Vec3A::Z), scalar)
+            bvh.intersect_with(&Ray::new(Vec3A::new(0.1, 0.0, -3.0), Vec3A::Z), scalar)
                 .map(|h| h.1),
             Some(17)
         );
         assert_eq!(
-            bvh.intersect_with(&ray(Vec3A::new(0.1, 0.0, 3.0), Vec3A::NEG_Z), scalar)
+            bvh.intersect_with(&Ray::new(Vec3A::new(0.1, 0.0, 3.0), Vec3A::NEG_Z), scalar)
                 .map(|h| h.1),
             Some(9)
         );
@@ -181,14 +181,14 @@ fn skipped_triangles_are_never_hit() {
     let bvh = MeshBvh::build(mesh);
     assert_eq!(bvh.triangle_count(), 1);
     assert_eq!(bvh.mesh().len(), 6, "the mesh is kept as given");
-    let r = ray(Vec3A::new(0.0, -0.5, 1.0), Vec3A::NEG_Z);
+    let r = Ray::new(Vec3A::new(0.0, -0.5, 1.0), Vec3A::NEG_Z);
     for scalar in KERNELS {
         assert_eq!(bvh.intersect_with(&r, scalar), None);
         assert!(!bvh.occluded_with(&r, scalar));
     }
     // The one valid triangle is still found.
     assert_eq!(
-        bvh.intersect(&ray(Vec3A::new(0.5, 0.9, 1.0), Vec3A::NEG_Z))
+        bvh.intersect(&Ray::new(Vec3A::new(0.5, 0.9, 1.0), Vec3A::NEG_Z))
             .map(|h| h.1),
         Some(5)
     );
@@ -215,29 +215,29 @@ fn odd_rays_miss_without_panicking() {
     let accel = SceneAccel::build(vec![mesh], vec![moving]);
     let nan = f32::NAN;
     let rays = [
-        ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::new(nan, 0.0, -1.0)),
-        ray(Vec3A::new(nan, 0.0, 1.0), Vec3A::NEG_Z),
-        ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::ZERO),
-        ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::splat(nan)),
+        Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::new(nan, 0.0, -1.0)),
+        Ray::new(Vec3A::new(nan, 0.0, 1.0), Vec3A::NEG_Z),
+        Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::ZERO),
+        Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::splat(nan)),
         Ray {
             t_min: nan,
-            ..ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
+            ..Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
         },
         Ray {
             t_max: nan,
-            ..ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
+            ..Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
         },
         Ray {
             t_min: 5.0,
             t_max: 1.0,
-            ..ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
+            ..Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
         },
         Ray {
             time: nan,
             t_max: nan,
-            ..ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
+            ..Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
         },
-        ray(Vec3A::splat(f32::INFINITY), Vec3A::NEG_Z),
+        Ray::new(Vec3A::splat(f32::INFINITY), Vec3A::NEG_Z),
     ];
     for r in &rays {
         for scalar in KERNELS {
@@ -250,7 +250,7 @@ fn odd_rays_miss_without_panicking() {
     // A NaN time alone is the first sample.
     let r = Ray {
         time: nan,
-        ..ray(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
+        ..Ray::new(Vec3A::new(0.0, 0.0, 1.0), Vec3A::NEG_Z)
     };
     assert_eq!(accel.intersect(&r).map(|h| h.t), Some(1.0));
 }
@@ -272,7 +272,7 @@ fn tree_depth_stays_bounded_on_adversarial_input() {
     for (k, i) in (-120..120).enumerate() {
         // All triangles containing the point lie at the same t; the smallest has the lowest index.
         let p = 0.3 * 2f32.powi(i);
-        let r = ray(Vec3A::new(p, p, 1.0), Vec3A::NEG_Z);
+        let r = Ray::new(Vec3A::new(p, p, 1.0), Vec3A::NEG_Z);
         check_mesh_ray(&bvh, &r, 1.0).unwrap();
         // Beyond 2^±60 the edge functions (products of two coordinates) leave the f32 range.
         if (-60..60).contains(&i) {
@@ -315,6 +315,6 @@ fn sphere_3e38_builds_a_real_tree() {
     let mut rng = SplitMix(3);
     for _ in 0..64 {
         let d = Vec3A::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5);
-        check_mesh_ray(&bvh, &ray(Vec3A::ZERO, d.normalize()), radius).unwrap();
+        check_mesh_ray(&bvh, &Ray::new(Vec3A::ZERO, d.normalize()), radius).unwrap();
     }
 }

@@ -6,25 +6,23 @@ mod scene;
 mod triangle;
 mod visibility;
 
-use glam::Vec3A;
+use glam::{Affine3A, Vec3A};
 use proptest::prelude::*;
 
-use super::MeshBvh;
 use super::triangle::{TriRay, triangle_vertices};
+use super::{Instance, MeshBvh};
 use crate::ray::{Ray, TriangleMesh};
+
+/// Instance of mesh `mesh` that stays at `transform`.
+fn still(mesh: u32, transform: Affine3A) -> Instance {
+    Instance {
+        mesh,
+        transform: vec![(0.0, transform)],
+    }
+}
 
 /// `(t, triangle, u, v)`.
 type MeshHit = (f32, u32, f32, f32);
-
-fn ray(origin: Vec3A, direction: Vec3A) -> Ray {
-    Ray {
-        origin,
-        direction,
-        t_min: 0.0,
-        t_max: f32::INFINITY,
-        time: 0.0,
-    }
-}
 
 /// Both traversal kernels (`true` = scalar only); without AVX2 both runs use the scalar one.
 const KERNELS: [bool; 2] = [false, true];

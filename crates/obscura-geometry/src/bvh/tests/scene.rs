@@ -9,13 +9,14 @@ use crate::bvh::tree::Aabb;
 use crate::bvh::{Instance, SceneAccel};
 use crate::motion::tests::rotating_transform;
 use crate::ray::{Hit, Tracer};
+use crate::testing::CUBE_QUADS;
 
 #[test]
 fn empty_inputs_build_and_miss() {
     let empty = MeshBvh::build(TriangleMesh::default());
     assert_eq!(empty.triangle_count(), 0);
     assert_eq!(empty.bounds(), (Vec3A::INFINITY, Vec3A::NEG_INFINITY));
-    let r = ray(Vec3A::ZERO, Vec3A::Z);
+    let r = Ray::new(Vec3A::ZERO, Vec3A::Z);
     assert_eq!(empty.intersect(&r), None);
     assert!(!empty.occluded(&r));
 
@@ -220,7 +221,7 @@ proptest! {
         let meshes = vec![soup(&mesh_a, 1.0), soup(&mesh_b, 1.0)];
         // Mesh index 2 does not exist: such instances must be ignored.
         let instances: Vec<Instance> =
-            placements.iter().map(|(mesh, m)| Instance { mesh: *mesh, transform: vec![(0.0, *m)] }).collect();
+            placements.iter().map(|(mesh, m)| still(*mesh, *m)).collect();
         let accel = SceneAccel::build(meshes.clone(), instances.clone());
         let targets: Vec<[Vec3A; 3]> = instances
             .iter()
@@ -238,18 +239,10 @@ proptest! {
 /// A box-shaped mesh (12 triangles) spanning `lo..hi`.
 fn cuboid(lo: Vec3A, hi: Vec3A) -> TriangleMesh {
     let b = Aabb { lo, hi };
-    let faces: [[u32; 4]; 6] = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
     TriangleMesh {
         positions: b.corners().to_vec(),
         normals: None,
-        triangles: faces
+        triangles: CUBE_QUADS
             .iter()
             .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
             .collect(),
@@ -279,7 +272,7 @@ fn translated_triangle_is_hit_only_mid_shutter() {
     let accel = SceneAccel::build(vec![tri.clone()], vec![instance.clone()]);
     let at = |time: f32| Ray {
         time,
-        ..ray(Vec3A::new(1.0, -0.9, 5.0), Vec3A::NEG_Z)
+        ..Ray::new(Vec3A::new(1.0, -0.9, 5.0), Vec3A::NEG_Z)
     };
     let hit = accel.intersect(&at(0.5)).expect("hit at mid-shutter");
     assert!((hit.t - 5.0).abs() < 1e-5);
@@ -340,7 +333,7 @@ fn rotating_instance_matches_brute_force_at_random_times() {
         let origin = rng.vec(6.0);
         let r = Ray {
             time,
-            ..ray(origin, target - origin)
+            ..Ray::new(origin, target - origin)
         };
         borderline += check_scene_ray(&meshes, &instances, &accel, &r).unwrap();
         hits += usize::from(accel.intersect(&r).is_some());
@@ -432,20 +425,14 @@ fn shading_normals_interpolate_vertex_normals() {
     let accel = SceneAccel::build(
         vec![mesh],
         vec![
-            Instance {
-                mesh: 0,
-                transform: vec![(0.0, Affine3A::IDENTITY)],
-            },
-            Instance {
-                mesh: 0,
-                transform: vec![(0.0, Affine3A::from_translation(glam::Vec3::Z * -10.0) * scale)],
-            },
+            still(0, Affine3A::IDENTITY),
+            still(0, Affine3A::from_translation(glam::Vec3::Z * -10.0) * scale),
         ],
     );
     for x in [-0.9f32, -0.3, 0.0, 0.5, 0.8] {
         // From above: normals point up (+z).
         let hit = accel
-            .intersect(&ray(Vec3A::new(x, 0.3, 3.0), Vec3A::new(0.0, 0.0, -2.0)))
+            .intersect(&Ray::new(Vec3A::new(x, 0.3, 3.0), Vec3A::new(0.0, 0.0, -2.0)))
             .unwrap();
         assert_eq!(hit.instance, 0);
         assert!(hit.geometric_normal.abs_diff_eq(Vec3A::Z, 1e-6));
@@ -455,14 +442,16 @@ fn shading_normals_interpolate_vertex_normals() {
             hit.shading_normal
         );
         // From below: both flip.
-        let hit = accel.intersect(&ray(Vec3A::new(x, 0.3, -3.0), Vec3A::Z)).unwrap();
+        let hit = accel
+            .intersect(&Ray::new(Vec3A::new(x, 0.3, -3.0), Vec3A::Z))
+            .unwrap();
         assert_eq!(hit.instance, 0);
         assert!(hit.geometric_normal.abs_diff_eq(Vec3A::NEG_Z, 1e-6));
         assert!(hit.shading_normal.abs_diff_eq(-expected(x), 1e-5));
         // The scaled copy: world x = 2·object x, and normals go through the inverse transpose
         // diag(1/2, 1, 1).
         let hit = accel
-            .intersect(&ray(Vec3A::new(2.0 * x, 0.3, -5.0), Vec3A::NEG_Z))
+            .intersect(&Ray::new(Vec3A::new(2.0 * x, 0.3, -5.0), Vec3A::NEG_Z))
             .unwrap();
         assert_eq!(hit.instance, 1);
         let n = expected(x);
@@ -488,12 +477,12 @@ fn geometric_normals_are_unit_and_face_the_ray() {
         let time = rng.next_f32();
         let r = Ray {
             time,
-            ..ray(rng.vec(5.0), rng.vec(1.0))
+            ..Ray::new(rng.vec(5.0), rng.vec(1.0))
         };
         // Also from inside the box, where the ray meets back faces.
         let inside = Ray {
             time,
-            ..ray(
+            ..Ray::new(
                 rotating_transform(time).transform_point3a(Vec3A::new(2.0, 0.1, -0.1)),
                 rng.vec(1.0),
             )

@@ -5,10 +5,10 @@
 use glam::{Affine3A, Vec3, Vec3A};
 use obscura_scene::Sides;
 
-use super::{SplitMix, ray};
+use super::{SplitMix, still};
+use crate::bvh::SceneAccel;
 use crate::bvh::triangle::TriRay;
-use crate::bvh::{Instance, SceneAccel};
-use crate::ray::{Tracer, TriangleMesh};
+use crate::ray::{Ray, Tracer, TriangleMesh};
 
 #[test]
 fn the_determinants_sign_is_the_side_the_ray_meets() {
@@ -60,20 +60,14 @@ fn facing_the_origin() -> TriangleMesh {
 }
 
 fn accel(transform: Affine3A, sides: Sides, planes: &[(Vec3A, Vec3A)]) -> SceneAccel {
-    SceneAccel::build(
-        vec![facing_the_origin()],
-        vec![Instance {
-            mesh: 0,
-            transform: vec![(0.0, transform)],
-        }],
-    )
-    .with_camera_visibility(vec![sides], planes)
+    SceneAccel::build(vec![facing_the_origin()], vec![still(0, transform)])
+        .with_camera_visibility(vec![sides], planes)
 }
 
 #[test]
 fn one_sided_instances_show_camera_rays_one_side_and_mirrors_keep_it() {
-    let towards = ray(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
-    let away = ray(Vec3A::new(-0.2, -0.2, 4.0), Vec3A::new(0.0, 0.0, -1.0));
+    let towards = Ray::new(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
+    let away = Ray::new(Vec3A::new(-0.2, -0.2, 4.0), Vec3A::new(0.0, 0.0, -1.0));
     let id = Affine3A::IDENTITY;
     for (sides, sees_front, sees_back) in [
         (Sides::Both, true, true),
@@ -95,8 +89,8 @@ fn one_sided_instances_show_camera_rays_one_side_and_mirrors_keep_it() {
     // vertices now wind the other way on screen.
     let mirror = Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0));
     let a = accel(mirror, Sides::Front, &[]);
-    let towards_mirrored = ray(Vec3A::ZERO, Vec3A::new(0.2, -0.2, 1.0));
-    let away_mirrored = ray(Vec3A::new(0.2, -0.2, 4.0), Vec3A::new(0.0, 0.0, -1.0));
+    let towards_mirrored = Ray::new(Vec3A::ZERO, Vec3A::new(0.2, -0.2, 1.0));
+    let away_mirrored = Ray::new(Vec3A::new(0.2, -0.2, 4.0), Vec3A::new(0.0, 0.0, -1.0));
     assert!(a.intersect_camera(&towards_mirrored).is_some());
     assert!(a.intersect_camera(&away_mirrored).is_none());
 }
@@ -108,20 +102,11 @@ fn clipping_planes_pass_camera_rays_on_to_the_next_hit() {
     let build = |planes: &[(Vec3A, Vec3A)]| {
         SceneAccel::build(
             vec![facing_the_origin()],
-            vec![
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, Affine3A::IDENTITY)],
-                },
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, behind)],
-                },
-            ],
+            vec![still(0, Affine3A::IDENTITY), still(0, behind)],
         )
         .with_camera_visibility(vec![], planes)
     };
-    let r = ray(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
+    let r = Ray::new(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
     let t = |a: &SceneAccel| a.intersect_camera(&r).map(|h| h.position.z);
     assert_eq!(t(&build(&[])), Some(2.0));
     // Clip z < 2.5 (the normal −z points to the clipped side): the ray goes on to z = 3.
@@ -143,22 +128,10 @@ fn hidden_and_shadowless_instances_are_passed_by_camera_and_shadow_rays_only() {
     // one past what they do not see; every other ray stops at the near one.
     let near = Affine3A::IDENTITY;
     let far = Affine3A::from_translation(Vec3::new(0.0, 0.0, 1.0));
-    let r = ray(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
+    let r = Ray::new(Vec3A::ZERO, Vec3A::new(-0.2, -0.2, 1.0));
     for (camera, shadows) in [(true, true), (false, true), (true, false), (false, false)] {
-        let accel = SceneAccel::build(
-            vec![facing_the_origin()],
-            vec![
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, near)],
-                },
-                Instance {
-                    mesh: 0,
-                    transform: vec![(0.0, far)],
-                },
-            ],
-        )
-        .with_ray_visibility(&[camera, true], &[shadows, true]);
+        let accel = SceneAccel::build(vec![facing_the_origin()], vec![still(0, near), still(0, far)])
+            .with_ray_visibility(&[camera, true], &[shadows, true]);
         let instance = |h: Option<crate::ray::Hit>| h.map(|h| h.instance);
         let first = |seen: bool| Some(if seen { 0 } else { 1 });
         assert_eq!(instance(accel.intersect(&r)), Some(0), "{camera} {shadows}");

@@ -14,8 +14,10 @@ use glam::{Mat4, Vec3, Vec3A};
 use obscura_scene::{Mesh, Shape, SubdivMesh};
 use obscura_sdk::{DicingHint, Format, ScreenWindow};
 
+use super::blobby::cube_corner;
 use super::subdivision::{Topology, control_level, subdivision_level};
 use super::*;
+use crate::testing::CUBE_QUADS;
 
 fn context(hint: DicingHint, fov: f32, distance: f32) -> DicingContext {
     let mut ctx = DicingContext::new(hint, fov, Format::new(640, 480));
@@ -81,27 +83,11 @@ fn within(value: f64, expected: f64, relative: f64) -> bool {
 
 /// The cube [−1, 1]³, faces wound counter-clockwise seen from outside.
 fn cube() -> SubdivMesh {
-    let positions = (0..8)
-        .map(|i| {
-            Vec3::new(
-                if i & 1 == 0 { -1.0 } else { 1.0 },
-                if i & 2 == 0 { -1.0 } else { 1.0 },
-                if i & 4 == 0 { -1.0 } else { 1.0 },
-            )
-        })
-        .collect();
-    let faces: [[u32; 4]; 6] = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
+    let positions = (0..8).map(cube_corner).collect();
     SubdivMesh {
         positions,
         face_counts: vec![4; 6],
-        face_indices: faces.concat(),
+        face_indices: CUBE_QUADS.concat(),
         creases: Vec::new(),
         interpolate_boundary: true,
     }
