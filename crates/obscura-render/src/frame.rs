@@ -10,7 +10,7 @@
 
 use std::path::{Path, PathBuf};
 
-use obscura_scene::{Aov, Display, DisplayDriver, Scene};
+use obscura_scene::{Aov, AovKind, Display, DisplayDriver, Scene};
 
 use crate::flow::{FlowTarget, SHUTTER_CLOSE};
 use crate::metadata::{camera_json, sidecar_path, write_json};
@@ -107,7 +107,7 @@ pub fn write_sidecars(
     let mut written = Vec::new();
     let ids = prepared.ids().to_json();
     for d in displays.iter().filter(|d| d.driver == DisplayDriver::OpenExr) {
-        let has_ids = (d.aovs.iter()).any(|a| matches!(a, Aov::ObjectId | Aov::InstanceId | Aov::MaterialId));
+        let has_ids = (d.aovs.iter()).any(|a| a.spec().kind == AovKind::Id);
         if has_ids {
             let path = sidecar_path(&d.path, "ids.json");
             write_json(&path, &ids).map_err(|e| OutputError::from(e).to_string())?;
