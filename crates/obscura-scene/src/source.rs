@@ -180,3 +180,81 @@ pub fn open(path: &Path, camera: CameraDesc, fps: f32) -> Result<Box<dyn SceneSo
     }
     Ok(Box::new(Images::new(frames, base_dir)))
 }
+
+#[cfg(test)]
+mod tests {
+    use obscura_sdk::Format;
+
+    use super::*;
+
+    fn camera() -> CameraDesc {
+        CameraDesc::new(Format::new(64, 48))
+    }
+
+    /// A RIB file of three worlds numbered by `FrameBegin` 5, 7 and 9, the middle one with another
+    /// field of view.
+    fn three_frames(dir: &Path) -> PathBuf {
+        let frame = |n: u32, fov: u32| {
+            format!(
+                "FrameBegin {n}\nFormat 64 48 1\nProjection \"perspective\" \"fov\" [{fov}]\nWorldBegin\n\
+                 Sphere 1 -1 1 360\nWorldEnd\nFrameEnd\n"
+            )
+        };
+        let path = dir.join("three.rib");
+        std::fs::write(&path, [frame(5, 40), frame(7, 55), frame(9, 40)].concat()).unwrap();
+        path
+    }
+
+    #[test]
+    fn a_rib_file_is_its_numbered_images_and_a_frame_is_the_image_of_that_number() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = three_frames(dir.path());
+        let source = open(&path, camera(), 24.0).unwrap();
+        let numbers: Vec<(u32, bool)> = source.images().iter().map(|i| (i.number, i.numbered)).collect();
+        assert_eq!(numbers, [(5, true), (7, true), (9, true)]);
+        assert!(
+            source.images()[1].label.ends_with("three.rib:11"),
+            "{}",
+            source.images()[1].label
+        );
+        assert_eq!(source.animation(), None);
+        assert_eq!(source.base_dir(), dir.path());
+        // The same scenes as the reader gives, in file order.
+        let frames = crate::load_frames(&path, camera()).unwrap();
+        assert_eq!(source.frame(7).unwrap(), frames[1].scene);
+        assert_eq!(source.image(2).unwrap(), frames[2].scene);
+        assert_ne!(source.frame(7).unwrap(), source.frame(5).unwrap());
+        let missing = source.frame(6).unwrap_err();
+        assert!(matches!(missing, LoadError::NoFrame(6)), "{missing}");
+        assert_eq!(missing.to_string(), "the scene holds no frame 6");
+    }
+
+    #[test]
+    fn a_still_is_every_frame() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("still.rib");
+        std::fs::write(&path, "Format 64 48 1\nWorldBegin\nSphere 1 -1 1 360\nWorldEnd\n").unwrap();
+        let source = open(&path, camera(), 24.0).unwrap();
+        assert_eq!(source.images().len(), 1);
+        assert!(!source.images()[0].numbered);
+        assert_eq!(source.frame(1).unwrap(), source.frame(1234).unwrap());
+    }
+
+    #[test]
+    fn an_animated_gltf_is_posed_at_each_frame_of_its_fps() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/animated/boxes.gltf");
+        let source = open(&path, camera(), 12.0).unwrap();
+        let animation = source.animation().expect("boxes.gltf has animations");
+        assert_eq!(animation.fps, 12.0);
+        assert!(animation.seconds > 0.0);
+        // Frame N is the animation at (N − 1)/fps seconds, as the reader poses it.
+        let third = gltf_scene::load_gltf_at(&path, camera(), 2.0 / 12.0, 12.0).unwrap();
+        assert_eq!(source.frame(3).unwrap(), third);
+        assert_eq!(source.image(0).unwrap(), source.frame(1).unwrap());
+        assert_ne!(
+            source.frame(3).unwrap(),
+            source.frame(1).unwrap(),
+            "the boxes move"
+        );
+    }
+}
