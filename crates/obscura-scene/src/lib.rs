@@ -25,6 +25,8 @@ pub mod texture;
 pub mod types;
 pub mod visibility;
 
+#[cfg(any(test, feature = "fixtures"))]
+pub mod fixtures;
 #[cfg(test)]
 mod test_support;
 

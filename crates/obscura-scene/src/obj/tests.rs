@@ -1,54 +1,8 @@
 //! The OBJ reader's tests: files and material libraries written to a temporary folder.
 
 use super::*;
+use crate::fixtures::{CUBE, MTL, write};
 use obscura_sdk::Format;
-
-const CUBE: &str = "\
-# a unit cube, two materials
-mtllib cube.mtl
-o cube
-v 0 0 0
-v 1 0 0
-v 1 1 0
-v 0 1 0
-v 0 0 1
-v 1 0 1
-v 1 1 1
-v 0 1 1
-vn 0 0 -1
-vn 0 0 1
-vn 0 -1 0
-vn 0 1 0
-vn -1 0 0
-vn 1 0 0
-usemtl red
-f 1//1 4//1 3//1 2//1
-f 5//2 6//2 7//2 8//2
-f 1//3 2//3 6//3 5//3
-usemtl shiny
-f 4//4 8//4 7//4 3//4
-f 1//5 5//5 8//5 4//5
-f 2//6 3//6 7//6 6//6
-";
-
-const MTL: &str = "\
-newmtl red
-Kd 0.8 0.1 0.1
-
-newmtl shiny
-Kd 0.2 0.2 0.2
-Ks 0.5 0.5 0.5
-Ns 98
-
-newmtl lamp
-Ke 4 4 3
-";
-
-fn write(dir: &tempfile::TempDir, name: &str, text: &str) -> PathBuf {
-    let path = dir.path().join(name);
-    std::fs::write(&path, text).unwrap();
-    path
-}
 
 fn camera() -> CameraDesc {
     CameraDesc::new(Format::new(640, 480))
