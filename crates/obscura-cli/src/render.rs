@@ -155,14 +155,18 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     }
     let jobs = frame_jobs(a.frames.as_ref(), source.as_ref())?;
     let images = source.images();
-    let mut scenes = Vec::new();
+    // The displays of each image, read from its scene once (a still selected as many frames is one
+    // image); the scene itself is read again when it renders, so one at a time is held.
+    let mut displays_of: Vec<Option<Vec<Display>>> = vec![None; images.len()];
     for &(_, i) in &jobs {
-        scenes.push((i, source.image(i).map_err(|e| e.to_string())?));
+        if displays_of[i].is_none() {
+            let scene = source.image(i).map_err(|e| e.to_string())?;
+            displays_of[i] = Some(image_displays(a, &scene));
+        }
     }
-    let scene_of = |i: usize| scenes.iter().find(|(j, _)| *j == i).map(|(_, s)| s);
     let lists = sequence_displays(
         &(jobs.iter())
-            .map(|&(n, i)| (n, scene_of(i).map_or_else(Vec::new, |s| image_displays(a, s))))
+            .map(|&(n, i)| (n, displays_of[i].clone().unwrap_or_default()))
             .collect::<Vec<_>>(),
     );
     // Each image renders once; a still selected as several frames is written as each of them.
@@ -179,15 +183,8 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 displays: l.as_slice(),
             })
             .collect();
-        let Some(scene) = scene_of(image) else { continue };
-        render_image(
-            a,
-            search,
-            scene.clone(),
-            source.base_dir(),
-            calibration.clone(),
-            &writes,
-        )?;
+        let scene = source.image(image).map_err(|e| e.to_string())?;
+        render_image(a, search, scene, source.base_dir(), calibration.clone(), &writes)?;
     }
     Ok(())
 }

@@ -120,8 +120,13 @@ fn aov_named(name: &str) -> PyResult<Aov> {
         .map(|s| s.aov)
         .ok_or_else(|| {
             let names: Vec<&str> = AOVS.iter().map(|s| s.array).collect();
+            // RenderMan's display name of an AOV whose array is named otherwise (`Ci` → `beauty`).
+            let hint = (AOVS.iter())
+                .find(|s| s.name == name)
+                .map(|s| format!(" (RenderMan's {name:?} is {:?} here)", s.array))
+                .unwrap_or_default();
             PyValueError::new_err(format!(
-                "aovs: unknown AOV {name:?}; expected some of {}",
+                "aovs: unknown AOV {name:?}{hint}; expected some of {}",
                 names.join(", ")
             ))
         })

@@ -182,6 +182,8 @@ def test_render_returns_aovs_and_reports_progress():
     assert set(only) == {"alpha", "stats"}
     with pytest.raises(ValueError, match="unknown AOV"):
         obscura.render(None, camera=cam, aovs=["Ci"])
+    with pytest.raises(ValueError, match='RenderMan\'s "Ci" is "beauty" here'):
+        obscura.render(None, camera=cam, aovs=["Ci"])
 
 
 def test_render_writes_the_same_files_as_the_command(tmp_path, obscura_bin):
