@@ -31,6 +31,7 @@ mod render;
 mod signals;
 mod stdout;
 mod stmap;
+mod usd;
 
 use crate::stdout::{out, outln};
 
@@ -77,11 +78,14 @@ enum Command {
     /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
     /// drawing with traced ray fans (--diagram out.svg|png).
     Lens(Box<lens::LensArgs>),
+    /// A USD stage's cameras as JSON: every UsdGeomCamera attribute (authored or its schema fallback),
+    /// the world transform and the lens-distortion model, at Default and at time codes.
+    UsdCameras(Box<usd::UsdCamerasArgs>),
 }
 
 #[derive(Args, Debug)]
 struct RenderArgs {
-    /// A scene: .rib, .gltf, .glb or .obj. Without one, the built-in scene.
+    /// A scene: .rib, .gltf, .glb, .obj or USD (.usd, .usda, .usdc, .usdz). Without one, the built-in scene.
     scene: Option<PathBuf>,
     /// Output EXR (beauty, alpha, z, N, P, cameraDirection) plus a PNG preview beside it. Default: the
     /// scene's Display, else render.exr.
@@ -100,9 +104,14 @@ struct RenderArgs {
     /// the calibration's; --format resamples the same camera. --param adds to or replaces its parameters.
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
-    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
-    #[arg(long, value_name = "ID", requires = "calibration")]
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …), or
+    /// of a USD stage (a Camera prim's path or name; default: the RenderSettings' camera).
+    #[arg(long, value_name = "ID")]
     camera: Option<String>,
+    /// Also write the camera rendered with (transform over the frames, gate, lens-distortion schema)
+    /// as a USD layer (.usda).
+    #[arg(long, value_name = "FILE")]
+    export_usd: Option<PathBuf>,
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
     #[arg(long = "param", value_name = "PARAM")]
     params: Vec<String>,
@@ -398,6 +407,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
+        Command::UsdCameras(a) => usd::run(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

@@ -137,8 +137,17 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
         limits::check_output(output, kind).map_err(|e| e.to_string())?;
     }
     let (width, height) = a.format.unwrap_or(job::DEFAULT_FORMAT);
-    let source =
-        job::open_scene(a.scene.as_deref(), Format::new(width, height), a.fps).map_err(|e| e.to_string())?;
+    let is_usd = a.scene.as_deref().is_some_and(obscura_usd::is_usd);
+    if a.camera.is_some() && a.calibration.is_none() && !is_usd {
+        return Err(
+            "--camera names the camera of a calibration file (--calibration) or of a USD stage".into(),
+        );
+    }
+    let usd = obscura_usd::Options {
+        camera: a.camera.clone().filter(|_| a.calibration.is_none()),
+    };
+    let source = job::open_scene_with(a.scene.as_deref(), Format::new(width, height), a.fps, &usd)
+        .map_err(|e| e.to_string())?;
     let calibration = a
         .calibration
         .as_deref()
@@ -172,6 +181,7 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     // Each image renders once; a still selected as several frames is written as each of them.
     let mut order: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
     order.dedup();
+    let mut exported: Vec<(u32, Scene)> = Vec::new();
     for image in order {
         if !a.quiet && images.len() > 1 {
             outln!("frame {} ({})", images[image].number, images[image].label);
@@ -184,9 +194,31 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             })
             .collect();
         let scene = source.image(image).map_err(|e| e.to_string())?;
-        render_image(a, search, scene, source.base_dir(), calibration.clone(), &writes)?;
+        let rendered = render_image(a, search, scene, source.base_dir(), calibration.clone(), &writes)?;
+        if a.export_usd.is_some() {
+            exported.push((images[image].number, rendered));
+        }
+    }
+    if let Some(path) = &a.export_usd {
+        export_usd(path, &exported, a.fps)?;
     }
     Ok(())
+}
+
+/// `--export-usd`: the camera of the rendered frames (time code = frame number) as a `.usda` layer,
+/// written atomically.
+fn export_usd(path: &std::path::Path, rendered: &[(u32, Scene)], fps: f32) -> Result<(), String> {
+    let frames: Vec<obscura_usd::export::Frame<'_>> = rendered
+        .iter()
+        .map(|(n, scene)| obscura_usd::export::Frame {
+            time_code: f64::from(*n),
+            scene,
+        })
+        .collect();
+    let text = obscura_usd::export::camera_usda(&frames, f64::from(fps))
+        .map_err(|e| format!("--export-usd {}: {e}", path.display()))?;
+    obscura_image::atomic::write_atomically(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        .map_err(|e| format!("--export-usd {}: {e}", path.display()))
 }
 
 /// The displays of one image: the scene's (or `-o`'s) with the `--aov`s added; a still has no
@@ -297,7 +329,7 @@ fn render_image(
     base_dir: &std::path::Path,
     calibration: Option<Calibrated>,
     writes: &[FrameWrite<'_>],
-) -> Result<(), String> {
+) -> Result<Scene, String> {
     let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
     let source = scene_size_source(a);
     let opts = render_options(a);
@@ -328,7 +360,7 @@ fn render_image(
     if let Some(signal) = signals::received() {
         eprintln!("note: signal {signal} arrived after every tile was rendered; the outputs are complete");
     }
-    Ok(())
+    Ok(scene)
 }
 
 /// The summary of one image: size, projection, times, the camera stage's share, the files written.

@@ -59,6 +59,24 @@ pub fn load_scene(path: Option<&Path>, format: Format) -> Result<(Scene, PathBuf
 /// # Errors
 /// As [`load_scene`].
 pub fn open_scene(path: Option<&Path>, format: Format, fps: f32) -> Result<Box<dyn SceneSource>, LoadError> {
+    open_scene_with(path, format, fps, &obscura_usd::Options::default())
+}
+
+/// [`open_scene`] with the choices a USD stage takes (`--camera PRIM`); a `.usd`, `.usda`, `.usdc`
+/// or `.usdz` file is read by `obscura_usd` (one image per time code), staged like every other format.
+///
+/// # Errors
+/// The [`LoadError`] of the file.
+pub fn open_scene_with(
+    path: Option<&Path>,
+    format: Format,
+    fps: f32,
+    usd: &obscura_usd::Options,
+) -> Result<Box<dyn SceneSource>, LoadError> {
+    if let Some(path) = path.filter(|p| obscura_usd::is_usd(p)) {
+        let source = obscura_usd::open(path, CameraDesc::new(format), usd)?;
+        return Ok(Box::new(crate::staging::Placed::new(Box::new(source), path)));
+    }
     match path {
         None => {
             let (scene, dir) = load_scene(None, format)?;

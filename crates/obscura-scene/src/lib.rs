@@ -54,6 +54,9 @@ pub enum LoadError {
     /// The extension names no format we read.
     #[error("{0}: unknown scene format; expected .rib (.ribz, .rib.gz), .gltf, .glb or .obj")]
     Format(String),
+    /// A USD stage's error, located by the USD reader (`obscura-usd`): file, prim, what was expected.
+    #[error("{0}")]
+    Usd(String),
     /// A frame the file does not hold was asked for.
     #[error("the scene holds no frame {0}")]
     NoFrame(u32),
