@@ -16,16 +16,20 @@ venv="$target/python-venv"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 py="$venv/bin/python"
 export PATH="$venv/bin:$PATH"
-if ! "$py" -c "import maturin, pytest, numpy, OpenEXR, cv2, pycolmap; cv2.omnidir" 2>/dev/null; then
+if ! "$py" -c "import maturin, pytest, numpy, OpenEXR, cv2, pycolmap; cv2.omnidir; from pxr import Usd" 2>/dev/null; then
   # opencv-contrib-python-headless has cv2.omnidir; a plain OpenCV wheel installing cv2 too would
   # shadow it, so any is removed first.
   "$py" -m pip uninstall --quiet --yes opencv-python-headless opencv-python 2>/dev/null || true
   "$py" -m pip install --quiet --disable-pip-version-check \
-    maturin pytest numpy OpenEXR opencv-contrib-python-headless pycolmap
+    maturin pytest numpy OpenEXR opencv-contrib-python-headless pycolmap usd-core
 fi
 export OBSCURA_REQUIRE_INDEPENDENT_EXR=1
 export OBSCURA_REQUIRE_OPENCV=1
 export OBSCURA_REQUIRE_PYCOLMAP=1
+# USD (issue 25): Pixar's usd-core (PyPI) is the reference reader the USD tests compare with; the shared
+# corpus of public USD files must be there (CI runs on this machine kind).
+export OBSCURA_REQUIRE_USD=1
+export OBSCURA_REQUIRE_CORPORA=1
 
 echo "== cargo test --workspace"
 cargo test --workspace

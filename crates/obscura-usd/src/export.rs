@@ -36,8 +36,60 @@ pub struct Frame<'a> {
 /// # Errors
 /// A projection USD cannot describe, named.
 pub fn camera_usda(frames: &[Frame<'_>], time_codes_per_second: f64) -> Result<String, String> {
-    let first = frames.first().ok_or("no frame to export")?;
-    let scene = first.scene;
+    if frames.is_empty() {
+        return Err("no frame to export".into());
+    }
+    // Each frame's attributes as (declaration, value) in order; a value that differs between frames
+    // is written as time samples.
+    let per_frame = frames
+        .iter()
+        .map(|f| attributes(f.scene))
+        .collect::<Result<Vec<_>, _>>()?;
+    let (first, api) = &per_frame[0];
+    let mut body = String::new();
+    for (i, (decl, value)) in first.iter().enumerate() {
+        let values: Vec<&String> = per_frame
+            .iter()
+            .map(|(a, _)| a.get(i).map_or(value, |(_, v)| v))
+            .collect();
+        if frames.len() == 1 || decl.starts_with("uniform") || values.iter().all(|v| *v == value) {
+            let _ = writeln!(body, "    {decl} = {value}");
+        } else {
+            let _ = writeln!(body, "    {decl}.timeSamples = {{");
+            for (f, v) in frames.iter().zip(values) {
+                let _ = writeln!(body, "        {}: {v},", num(f.time_code));
+            }
+            body.push_str("    }\n");
+        }
+    }
+    let mut out = String::from("#usda 1.0\n(\n    defaultPrim = \"ObscuraCamera\"\n");
+    if frames.len() > 1 {
+        let _ = writeln!(out, "    startTimeCode = {}", num(frames[0].time_code));
+        let _ = writeln!(
+            out,
+            "    endTimeCode = {}",
+            num(frames[frames.len() - 1].time_code)
+        );
+    }
+    let _ = writeln!(out, "    timeCodesPerSecond = {}", num(time_codes_per_second));
+    out.push_str("    upAxis = \"Y\"\n    doc = \"The camera Obscura rendered with\"\n)\n\n");
+    out.push_str("def Camera \"ObscuraCamera\"");
+    if api.is_empty() {
+        out.push('\n');
+    } else {
+        let list: Vec<String> = api.iter().map(|a| format!("\"{a}\"")).collect();
+        let _ = write!(out, " (\n    prepend apiSchemas = [{}]\n)\n", list.join(", "));
+    }
+    out.push_str("{\n");
+    out.push_str(&body);
+    out.push_str("}\n");
+    Ok(out)
+}
+
+/// The attributes of one frame's camera as (declaration, value), and the API schemas to apply.
+type Attributes = (Vec<(String, String)>, Vec<&'static str>);
+
+fn attributes(scene: &Scene) -> Result<Attributes, String> {
     let floats = |name: &str| match scene.projection_params.get(name).map(|e| &e.value) {
         Some(ParamValue::Floats(v)) => Some(v.iter().map(|&x| f64::from(x)).collect::<Vec<_>>()),
         _ => None,
@@ -54,11 +106,9 @@ pub fn camera_usda(frames: &[Frame<'_>], time_codes_per_second: f64) -> Result<S
         f64::from(window.top),
     );
     let focal = 50.0;
-    let mut body = String::new();
+    let mut lines: Vec<String> = Vec::new();
     let mut api = Vec::new();
-    let mut attr = |line: String| {
-        let _ = writeln!(body, "        {line}");
-    };
+    let mut attr = |line: String| lines.push(line);
     match scene.projection.as_str() {
         "PxrPerspective" | "PxrCamera" => {
             let fov = floats("fov").and_then(|v| v.first().copied()).unwrap_or(90.0);
@@ -211,52 +261,28 @@ pub fn camera_usda(frames: &[Frame<'_>], time_codes_per_second: f64) -> Result<S
     let (open, close) = scene.camera.shutter;
     attr(format!("double shutter:open = {}", num(f64::from(open))));
     attr(format!("double shutter:close = {}", num(f64::from(close))));
-    let matrix = |s: &Scene| -> Result<String, String> {
-        let w = s
-            .camera
-            .world_to_camera
-            .first()
-            .map_or(Mat4::IDENTITY, |m| Mat4::from_cols_array_2d(&m.world_to_camera.0));
-        let w = w.as_dmat4();
-        let m = flip_z() * w;
-        if m.determinant().abs() < 1e-300 {
-            return Err("the camera's world-to-camera transform is singular".into());
-        }
-        Ok(usd_matrix(m.inverse()))
-    };
-    if frames.len() == 1 {
-        attr(format!("matrix4d xformOp:transform = {}", matrix(scene)?));
-    } else {
-        let mut s = String::from("matrix4d xformOp:transform.timeSamples = {\n");
-        for f in frames {
-            let _ = writeln!(s, "            {}: {},", num(f.time_code), matrix(f.scene)?);
-        }
-        s.push_str("        }");
-        attr(s);
+    let w = scene
+        .camera
+        .world_to_camera
+        .first()
+        .map_or(Mat4::IDENTITY, |m| Mat4::from_cols_array_2d(&m.world_to_camera.0));
+    let m = flip_z() * w.as_dmat4();
+    if m.determinant().abs() < 1e-300 {
+        return Err("the camera's world-to-camera transform is singular".into());
     }
+    attr(format!(
+        "matrix4d xformOp:transform = {}",
+        usd_matrix(m.inverse())
+    ));
     attr("uniform token[] xformOpOrder = [\"xformOp:transform\"]".into());
-    let mut out = String::from("#usda 1.0\n(\n    defaultPrim = \"ObscuraCamera\"\n");
-    if frames.len() > 1 {
-        let _ = writeln!(out, "    startTimeCode = {}", num(frames[0].time_code));
-        let _ = writeln!(
-            out,
-            "    endTimeCode = {}",
-            num(frames[frames.len() - 1].time_code)
-        );
-    }
-    let _ = writeln!(out, "    timeCodesPerSecond = {}", num(time_codes_per_second));
-    out.push_str("    upAxis = \"Y\"\n    doc = \"The camera Obscura rendered with\"\n)\n\n");
-    out.push_str("def Camera \"ObscuraCamera\"");
-    if api.is_empty() {
-        out.push('\n');
-    } else {
-        let list: Vec<String> = api.iter().map(|a| format!("\"{a}\"")).collect();
-        let _ = write!(out, " (\n    prepend apiSchemas = [{}]\n)\n", list.join(", "));
-    }
-    out.push_str("{\n");
-    out.push_str(&body);
-    out.push_str("}\n");
-    Ok(out)
+    let pairs = lines
+        .into_iter()
+        .map(|l| {
+            let (decl, value) = l.split_once(" = ").unwrap_or((l.as_str(), ""));
+            (decl.to_string(), value.to_string())
+        })
+        .collect();
+    Ok((pairs, api))
 }
 
 /// A column-vector matrix in USD's row-vector spelling `( (..), (..), (..), (..) )`.

@@ -55,7 +55,7 @@ pub fn cameras_json(stage: &Stage, times: Option<&[f64]>) -> Result<Value, UsdEr
         "timeCodesPerSecond": stage.time_codes_per_second,
         "timeRange": stage.time_range.map(|(a, b)| vec![a, b]),
         "renderSettings": stage.render_settings(),
-        "warnings": stage.warnings,
+        "warnings": stage.composition_warnings(),
         "cameras": cameras,
     }))
 }

@@ -102,7 +102,8 @@ pub struct Stage {
     pub time_codes_per_second: f64,
     /// `(startTimeCode, endTimeCode)` when both are authored.
     pub time_range: Option<(f64, f64)>,
-    /// Composition problems (a missing reference, …), each naming the layer and the arc.
+    /// Composition problems found while opening (a missing sublayer, …), each naming the layer and
+    /// the arc; [`Stage::composition_warnings`] has those found since, while prims were composed.
     pub warnings: Vec<String>,
 }
 
@@ -155,6 +156,17 @@ impl Stage {
             time_range,
             warnings,
         })
+    }
+
+    /// Every composition problem found so far (a missing reference or payload is found when the prim
+    /// holding it is composed), each naming the stage's file.
+    #[must_use]
+    pub fn composition_warnings(&self) -> Vec<String> {
+        self.stage
+            .composition_errors()
+            .iter()
+            .map(|e| format!("{}: {e}", self.file))
+            .collect()
     }
 
     pub(crate) fn values(&self) -> values::Values<'_> {
@@ -409,7 +421,13 @@ impl SceneSource for UsdSource {
     fn image(&self, index: usize) -> Result<Scene, LoadError> {
         let t = self.time_code(index);
         let mut scene = scene::build(&self.stage, self.camera.clone(), self.camera_prim.as_deref(), t)?;
-        scene.warnings.splice(0..0, self.notes.iter().cloned());
+        let mut notes = self.notes.clone();
+        for w in self.stage.composition_warnings() {
+            if !notes.contains(&w) {
+                notes.push(w);
+            }
+        }
+        scene.warnings.splice(0..0, notes);
         Ok(scene)
     }
 }

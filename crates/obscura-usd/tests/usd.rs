@@ -1,0 +1,449 @@
+//! The USD reader end to end: the rays of a stage's camera against the formula the file's numbers
+//! define (the pinhole of its gate and focal length; each lens-distortion model's documented
+//! mapping), RenderMan's projection wiring, and bad input as located errors. (Attribute values and
+//! transforms against usd-core: `crates/obscura-python/tests/test_usd.py`.)
+
+use std::path::{Path, PathBuf};
+
+use obscura_host::{Batch, CameraDesc, CameraStage};
+use obscura_plugins::builtin_registry;
+use obscura_scene::Scene;
+use obscura_scene::source::SceneSource;
+use obscura_sdk::{Format, ParamValue, Point2};
+use obscura_usd::{Options, Stage, Time, open};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+/// The scene of frame `frame` of `file` through `camera`, rendered at `w × h`.
+fn scene(file: &Path, camera: Option<&str>, w: u32, h: u32, frame: u32) -> Scene {
+    let options = Options {
+        camera: camera.map(str::to_string),
+    };
+    let source = open(file, CameraDesc::new(Format::new(w, h)), &options).unwrap();
+    source.frame(frame).unwrap()
+}
+
+/// The camera-space ray directions (Obscura's: +Z forward, +Y up) at raster positions `at`.
+fn rays(scene: &Scene, at: &[(f64, f64)]) -> Vec<[f64; 3]> {
+    let stage = CameraStage::new(
+        &mut builtin_registry(),
+        &scene.projection,
+        &scene.projection_params,
+        &scene.camera,
+    )
+    .unwrap();
+    let mut batch = Batch::with_capacity(at.len());
+    for &(x, y) in at {
+        batch.push(scene.camera.raster_to_screen(x, y), Point2::new(0.5, 0.5), 0.0);
+    }
+    let report = stage.run(&mut batch);
+    assert!(report.is_clean(), "{report:?}");
+    batch
+        .rays
+        .iter()
+        .map(|r| {
+            [
+                f64::from(r.direction.x),
+                f64::from(r.direction.y),
+                f64::from(r.direction.z),
+            ]
+        })
+        .collect()
+}
+
+/// The projection parameters without depth of field (`fov` alone).
+fn pinhole_only(s: &Scene) -> obscura_sdk::ParamList {
+    let mut list = obscura_sdk::ParamList::new();
+    let fov = s.projection_params.get("fov").unwrap();
+    list.push("float fov", fov.value.clone(), None).unwrap();
+    list
+}
+
+/// The angle between two directions, radians (accurate at small angles).
+fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let cross = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    let c = (cross[0].powi(2) + cross[1].powi(2) + cross[2].powi(2)).sqrt();
+    let d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    c.atan2(d)
+}
+
+fn grid(w: f64, h: f64, n: usize) -> Vec<(f64, f64)> {
+    let mut out = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            out.push(((i as f64 + 0.5) / n as f64 * w, (j as f64 + 0.5) / n as f64 * h));
+        }
+    }
+    out
+}
+
+const RAY_TOLERANCE: f64 = 2e-7;
+
+#[test]
+fn a_plain_camera_is_the_pinhole_of_its_gate_and_focal_length() {
+    // cameras.usda /World/Shot: 36 x 24 gate, offsets (1.5, −0.75), focal length 35 → 85 over time
+    // codes 1…5 (60 at 3); the RenderSettings crop the gate to the image (cropAperture): at 2:1 the
+    // gate is 36 x 18.
+    let (w, h) = (120.0, 60.0);
+    let mut s = scene(&data("cameras.usda"), None, 120, 60, 3);
+    assert_eq!(s.projection, "PxrPerspective");
+    // The chief rays: without the lens (its depth of field is checked below).
+    s.projection_params = pinhole_only(&s);
+    let at = grid(w, h, 9);
+    let (gw, gh, ox, oy, f) = (36.0, 18.0, 1.5, -0.75, 60.0);
+    let mut worst: f64 = 0.0;
+    for (&(x, y), d) in at.iter().zip(rays(&s, &at)) {
+        let film = [(x / w - 0.5) * gw + ox, (0.5 - y / h) * gh + oy, f];
+        worst = worst.max(angle(d, film));
+    }
+    assert!(worst <= RAY_TOLERANCE, "worst {worst:e} rad");
+    // The unauthored camera: the schema's 20.955 x 15.2908 gate and focal length 50, cropped to a
+    // 4:3 image by the stage's RenderSettings (cropAperture).
+    let s = scene(&data("cameras.usda"), Some("Plain"), 80, 60, 1);
+    let at = grid(80.0, 60.0, 7);
+    let (ga, gb) = (20.955_f64, 15.2908_f64);
+    let (gw, gh) = if 80.0 / 60.0 > ga / gb {
+        (ga, ga * 60.0 / 80.0)
+    } else {
+        (gb * 80.0 / 60.0, gb)
+    };
+    let mut worst: f64 = 0.0;
+    for (&(x, y), d) in at.iter().zip(rays(&s, &at)) {
+        worst = worst.max(angle(d, [(x / 80.0 - 0.5) * gw, (0.5 - y / 60.0) * gh, 50.0]));
+    }
+    assert!(worst <= RAY_TOLERANCE, "worst {worst:e} rad");
+}
+
+#[test]
+fn depth_of_field_shutter_clipping_and_exposure_come_from_the_camera() {
+    let s = scene(&data("cameras.usda"), None, 60, 40, 3);
+    let float = |n: &str| match s.projection_params.get(n).map(|e| &e.value) {
+        Some(ParamValue::Floats(v)) => v[0],
+        other => panic!("{n}: {other:?}"),
+    };
+    assert_eq!(float("fStop"), 2.8);
+    assert!((float("focalLength") - 6.0).abs() < 1e-6, "60 tenths of a unit");
+    assert_eq!(float("focalDistance"), 12.0);
+    assert_eq!(s.camera.shutter, (-0.25, 0.25));
+    assert_eq!(s.camera.clipping, (0.1, 500.0));
+    assert_eq!(s.exposure.gain, 2.0);
+    // The camera moves (translate and rotateX are sampled): samples at both shutter ends, distinct.
+    assert!(s.camera.world_to_camera.len() >= 2);
+    assert_ne!(s.camera.world_to_camera[0], s.camera.world_to_camera[1]);
+    // The clipping plane (0, 0, 1, 50) cuts z_usd < −50: 50 units in front of the camera (USD looks down −Z).
+    assert_eq!(s.clip_planes.len(), 1);
+    let p = &s.clip_planes[0];
+    let ahead = |z: f32| (glam::Vec3::new(0.0, 0.0, z) - p.point).dot(p.normal) > 0.0;
+    assert!(ahead(60.0) && !ahead(40.0));
+}
+
+#[test]
+fn an_orthographic_camera_is_its_gate_in_scene_units() {
+    let s = scene(&data("cameras.usda"), Some("/World/Ortho"), 100, 50, 1);
+    assert_eq!(s.projection, "PxrOrthographic");
+    let w = s.camera.screen_window();
+    // 200 x 100 tenths of a unit: 20 x 10 units.
+    assert_eq!((w.left, w.right, w.bottom, w.top), (-10.0, 10.0, -5.0, 5.0));
+}
+
+/// (x, y) on the normalised plane of OpenCV's camera (+Y down) to a pixel by the OpenCV rational
+/// model with thin prism, as OpenCV documents it.
+fn opencv_pinhole(k: &[f64; 16], x: f64, y: f64) -> (f64, f64) {
+    let [fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4] = *k;
+    let r2 = x * x + y * y;
+    let radial = (1.0 + k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2)
+        / (1.0 + k4 * r2 + k5 * r2 * r2 + k6 * r2 * r2 * r2);
+    let xd = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) + s1 * r2 + s2 * r2 * r2;
+    let yd = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y + s3 * r2 + s4 * r2 * r2;
+    (fx * xd + cx, fy * yd + cy)
+}
+
+/// OpenCV's fisheye (Kannala–Brandt) model.
+fn opencv_fisheye(k: &[f64; 8], x: f64, y: f64) -> (f64, f64) {
+    let [fx, fy, cx, cy, k1, k2, k3, k4] = *k;
+    let r = (x * x + y * y).sqrt();
+    let t = r.atan();
+    let t2 = t * t;
+    let td = t * (1.0 + k1 * t2 + k2 * t2 * t2 + k3 * t2 * t2 * t2 + k4 * t2 * t2 * t2 * t2);
+    (fx * td * x / r + cx, fy * td * y / r + cy)
+}
+
+/// Checks the rays of distorted camera `camera` of lenses.usda: for each direction `(x, y, 1)` of
+/// OpenCV's frame in `dirs`, the ray at the pixel `model` maps it to (plus ½: OpenCV's pixel centres
+/// to raster positions) points along it.
+fn check_forward(
+    camera: &str,
+    size: (u32, u32),
+    dirs: &[(f64, f64)],
+    model: impl Fn(f64, f64) -> (f64, f64),
+) {
+    let s = scene(&data("lenses.usda"), Some(camera), size.0, size.1, 1);
+    assert_eq!(s.projection, "CalibratedCamera");
+    let at: Vec<(f64, f64)> = dirs
+        .iter()
+        .map(|&(x, y)| model(x, y))
+        .map(|(u, v)| (u + 0.5, v + 0.5))
+        .collect();
+    let mut worst: f64 = 0.0;
+    for (&(x, y), d) in dirs.iter().zip(rays(&s, &at)) {
+        worst = worst.max(angle([d[0], -d[1], d[2]], [x, y, 1.0]));
+    }
+    assert!(worst <= RAY_TOLERANCE, "{camera}: worst {worst:e} rad");
+}
+
+fn directions(extent: f64) -> Vec<(f64, f64)> {
+    let n = 7;
+    let mut out = Vec::new();
+    for i in 0..n {
+        for j in 0..n {
+            let x = (i as f64 / (n - 1) as f64 * 2.0 - 1.0) * extent;
+            let y = (j as f64 / (n - 1) as f64 * 2.0 - 1.0) * extent * 0.6;
+            if x != 0.0 || y != 0.0 {
+                out.push((x, y));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn omni_opencv_pinhole_rays_follow_opencvs_formula() {
+    let k = [
+        900.0, 905.0, 645.5, 355.25, -0.12, 0.03, 0.0005, -0.0003, -0.002, 0.01, 0.0, 0.0, 0.0002, 0.0, 0.0,
+        -0.0001,
+    ];
+    let k = k.map(|v: f64| f64::from(v as f32));
+    check_forward("Pinhole", (1280, 720), &directions(0.6), |x, y| {
+        opencv_pinhole(&k, x, y)
+    });
+}
+
+#[test]
+fn omni_opencv_fisheye_rays_follow_opencvs_formula() {
+    let k = [320.0, 321.0, 511.5, 512.5, 0.05, -0.01, 0.002, -0.0003].map(|v: f64| f64::from(v as f32));
+    check_forward("Fisheye", (1024, 1024), &directions(2.5), |x, y| {
+        opencv_fisheye(&k, x, y)
+    });
+}
+
+/// f-theta: the ray of pixel (u, v) is at angle θ = k0 + k1·ρ + … + k4·ρ⁴ from the axis, ρ the
+/// pixel's distance from the optical centre (NVIDIA's backward polynomial).
+fn check_ftheta(camera: &str, size: (u32, u32), centre: (f64, f64), k: [f64; 5]) {
+    let max_angle = 100_f64.to_radians(); // maxFov 200° in both cameras
+    let s = scene(&data("lenses.usda"), Some(camera), size.0, size.1, 1);
+    assert_eq!(s.projection, "CalibratedCamera");
+    let (cx, cy) = (f64::from(centre.0 as f32), f64::from(centre.1 as f32));
+    let k = k.map(|v| f64::from(v as f32));
+    let pixels: Vec<(f64, f64)> = grid(f64::from(size.0) - 1.0, f64::from(size.1) - 1.0, 9)
+        .into_iter()
+        .filter(|&(u, v)| (u - cx).hypot(v - cy) > 1.0)
+        .collect();
+    let at: Vec<(f64, f64)> = pixels.iter().map(|&(u, v)| (u + 0.5, v + 0.5)).collect();
+    let mut worst: f64 = 0.0;
+    for (&(u, v), d) in pixels.iter().zip(rays(&s, &at)) {
+        let rho = (u - cx).hypot(v - cy);
+        let theta = k[0] + k[1] * rho + k[2] * rho.powi(2) + k[3] * rho.powi(3) + k[4] * rho.powi(4);
+        if theta > max_angle {
+            // Beyond maxFov/2: no ray.
+            assert_eq!(d, [0.0; 3], "{camera}: a ray at θ = {theta} > maxFov/2");
+            continue;
+        }
+        let want = [
+            theta.sin() * (u - cx) / rho,
+            theta.sin() * (v - cy) / rho,
+            theta.cos(),
+        ];
+        worst = worst.max(angle([d[0], -d[1], d[2]], want));
+    }
+    assert!(worst <= RAY_TOLERANCE, "{camera}: worst {worst:e} rad");
+}
+
+#[test]
+fn omni_ftheta_rays_follow_nvidias_polynomial() {
+    check_ftheta(
+        "Ftheta",
+        (1936, 1216),
+        (970.9424, 600.3748),
+        [0.0, 0.00245, 1e-8, -2e-11, 0.0],
+    );
+}
+
+#[test]
+fn isaac_sims_legacy_fisheye_polynomial_is_the_same_ftheta() {
+    check_ftheta(
+        "IsaacLegacy",
+        (1920, 1080),
+        (960.0, 540.0),
+        [0.0, 0.0024, 0.0, 0.0, 0.0],
+    );
+}
+
+#[test]
+fn renderman_projections_are_wired_as_hdprman_reads_them() {
+    let file = data("ri_projection.usda");
+    let pano = scene(&file, Some("Pano"), 64, 32, 1);
+    assert_eq!(pano.projection, "PxrCylinderCamera");
+    let hsweep = pano.projection_params.get("hsweep").map(|e| e.value.clone());
+    assert_eq!(hsweep, Some(ParamValue::Floats(vec![270.0])));
+    let legacy = scene(&file, Some("Legacy"), 64, 32, 1);
+    assert_eq!(legacy.projection, "PxrSphereCamera");
+    // The RenderSettings' camera with its ri:projection:name and parameters.
+    let plain = scene(&file, None, 64, 32, 1);
+    assert_eq!(plain.projection, "PxrPanini");
+    let c = plain
+        .projection_params
+        .get("compression")
+        .map(|e| e.value.clone());
+    assert_eq!(c, Some(ParamValue::Floats(vec![0.5])));
+    // Each renders through the built-in table.
+    for s in [&pano, &legacy, &plain] {
+        assert_eq!(rays(s, &[(10.0, 10.0)]).len(), 1);
+    }
+}
+
+#[test]
+fn time_codes_are_the_frames_and_the_stage_is_turned_to_y_up() {
+    let source = open(
+        &data("cameras.usda"),
+        CameraDesc::new(Format::new(32, 32)),
+        &Options::default(),
+    )
+    .unwrap();
+    let numbers: Vec<u32> = source.images().iter().map(|i| i.number).collect();
+    assert_eq!(numbers, [1, 2, 3, 4, 5]);
+    assert!(source.frame(6).is_err());
+    let stage = Stage::open(&data("cameras.usda")).unwrap();
+    assert_eq!((stage.up_axis.as_str(), stage.meters_per_unit), ("Z", 1.0));
+    // Integer time samples on a float attribute interpolate (rotateX −15 at 1, −14 at 3).
+    let at2 = stage
+        .camera("/World/Shot", Time::Code(2.0))
+        .unwrap()
+        .camera_to_world;
+    let at1 = stage
+        .camera("/World/Shot", Time::Code(1.0))
+        .unwrap()
+        .camera_to_world;
+    let at3 = stage
+        .camera("/World/Shot", Time::Code(3.0))
+        .unwrap()
+        .camera_to_world;
+    assert_ne!(at2, at1);
+    assert_ne!(at2, at3);
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn error_of(path: &Path, camera: Option<&str>) -> String {
+    let options = Options {
+        camera: camera.map(str::to_string),
+    };
+    match open(path, CameraDesc::new(Format::new(16, 16)), &options) {
+        Err(e) => e.to_string(),
+        Ok(source) => match source.frame(1) {
+            Err(e) => e.to_string(),
+            Ok(s) => s.warnings.join("\n"),
+        },
+    }
+}
+
+#[test]
+fn bad_input_is_a_located_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A non-numeric aperture.
+    let p = write(
+        d,
+        "aperture.usda",
+        "#usda 1.0\ndef Camera \"Cam\"\n{\n    string horizontalAperture = \"wide\"\n}\n",
+    );
+    let e = error_of(&p, None);
+    assert!(
+        e.contains("aperture.usda")
+            && e.contains("</Cam>")
+            && e.contains("horizontalAperture")
+            && e.contains("expected a number"),
+        "{e}"
+    );
+    // A lens-distortion schema without its focal length.
+    let p = write(
+        d,
+        "lens.usda",
+        "#usda 1.0\ndef Camera \"Cam\" (\n    prepend apiSchemas = [\"OmniLensDistortionOpenCvPinholeAPI\"]\n)\n{\n    \
+         int2 omni:lensdistortion:opencvPinhole:imageSize = (640, 480)\n    float omni:lensdistortion:opencvPinhole:fy = 500\n    \
+         float omni:lensdistortion:opencvPinhole:cx = 320\n    float omni:lensdistortion:opencvPinhole:cy = 240\n}\n",
+    );
+    let e = error_of(&p, None);
+    assert!(
+        e.contains("</Cam>")
+            && e.contains("omni:lensdistortion:opencvPinhole:fx")
+            && e.contains("not authored"),
+        "{e}"
+    );
+    // An unknown --camera names the stage's cameras.
+    let e = error_of(&data("cameras.usda"), Some("/World/Nope"));
+    assert!(
+        e.contains("--camera /World/Nope") && e.contains("/World/Shot"),
+        "{e}"
+    );
+    // A missing reference: a warning naming the layer and the asset.
+    let p = write(
+        d,
+        "missing.usda",
+        "#usda 1.0\ndef Xform \"A\" (\n    references = @./nowhere.usda@\n)\n{\n}\n",
+    );
+    let e = error_of(&p, None);
+    assert!(e.contains("missing.usda") && e.contains("nowhere.usda"), "{e}");
+    // A cyclic sublayer.
+    write(d, "b.usda", "#usda 1.0\n(\n    subLayers = [@./a.usda@]\n)\n");
+    let p = write(
+        d,
+        "a.usda",
+        "#usda 1.0\n(\n    subLayers = [@./b.usda@]\n)\ndef Camera \"Cam\"\n{\n}\n",
+    );
+    let e = error_of(&p, None);
+    assert!(
+        e.contains("a.usda") && (e.contains("cycl") || e.contains("Cycl") || e.contains("recurs")),
+        "{e}"
+    );
+    // A file that is not USD at all.
+    let p = write(d, "junk.usda", "#usda 1.0\ndef Camera \"Cam\" {{{\n");
+    let e = error_of(&p, None);
+    assert!(
+        e.contains("junk.usda") && e.contains("cannot open the stage"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_stage_without_camera_or_light_is_staged_like_gltf() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "box.usda",
+        "#usda 1.0\ndef Mesh \"Tri\"\n{\n    point3f[] points = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (1, 1, 0)]\n    \
+         int[] faceVertexCounts = [4]\n    int[] faceVertexIndices = [0, 1, 3, 2]\n    uniform token subdivisionScheme = \"none\"\n}\n",
+    );
+    let s = scene(&p, None, 32, 32, 1);
+    assert_eq!(
+        s.auto_camera,
+        Some((glam::Vec3::ZERO, glam::Vec3::new(1.0, 1.0, 0.0)))
+    );
+    assert!(s.auto_light);
+    match &s.objects[0].shape {
+        obscura_scene::Shape::Mesh(m) => assert_eq!(m.triangles, [[0, 1, 3], [0, 3, 2]]),
+        other => panic!("{other:?}"),
+    }
+    assert_eq!(s.objects[0].identity.object, "/Tri");
+}
