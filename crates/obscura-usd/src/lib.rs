@@ -22,6 +22,7 @@ pub mod inspect;
 pub mod lens;
 pub mod ri;
 pub mod scene;
+mod shading;
 mod values;
 pub mod xform;
 

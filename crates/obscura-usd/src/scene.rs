@@ -54,6 +54,11 @@ pub fn build(
         set_camera(stage, &mut scene, &cam, up, t)?;
     }
     let prims = stage.prims()?;
+    let stage_dir = std::path::Path::new(&stage.file)
+        .parent()
+        .map(std::path::Path::to_path_buf)
+        .unwrap_or_default();
+    let mut materials = Vec::new();
     let mut bounds: Option<(Vec3, Vec3)> = None;
     for (path, ty) in &prims {
         if !matches!(
@@ -72,8 +77,18 @@ pub fn build(
             continue;
         }
         let motion = motion(&values, path, up, t, shutter)?;
+        let bound = if ty.ends_with("Light") {
+            None
+        } else {
+            crate::shading::bound_material(&values, &stage_dir, path, time, &mut scene, &mut materials)?
+        };
         let shape = match ty.as_str() {
-            "Mesh" => mesh(&values, path, time)?,
+            "Mesh" => mesh(
+                &values,
+                path,
+                time,
+                bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
+            )?,
             "Sphere" => {
                 let r = values.real(path, "radius", time, 1.0)? as f32;
                 Some(Shape::Sphere {
@@ -99,7 +114,10 @@ pub fn build(
                 grow(&mut bounds, w);
             }
         }
-        let material = material(&values, path, time, &mut scene)?;
+        let material = match &bound {
+            Some(b) => b.material,
+            None => display_color(&values, path, time, &mut scene),
+        };
         scene.objects.push(Object {
             shape,
             transform: motion,
@@ -279,7 +297,7 @@ fn visible(values: &Values<'_>, path: &str, time: Time) -> Result<bool, UsdError
     Ok(true)
 }
 
-fn mesh(values: &Values<'_>, path: &str, time: Time) -> Result<Option<Shape>, UsdError> {
+fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result<Option<Shape>, UsdError> {
     let Some(points) = values.tuples_opt(path, "points", time, 3)? else {
         return Ok(None);
     };
@@ -326,7 +344,24 @@ fn mesh(values: &Values<'_>, path: &str, time: Time) -> Result<Option<Shape>, Us
         }
         start += c as usize;
     }
-    if scheme == "catmullClark" && counts.iter().all(|&c| c >= 3) && !counts.is_empty() {
+    let uvs = match uv {
+        Some(name) => primvar2(
+            values,
+            path,
+            name,
+            time,
+            positions.len(),
+            indices.len(),
+            counts.len(),
+        )?,
+        None => None,
+    };
+    if uvs.is_none()
+        && scheme == "catmullClark"
+        && counts.iter().all(|&c| c >= 3)
+        && !counts.is_empty()
+        && manifold(&counts, &face_indices)
+    {
         return Ok(Some(Shape::Subdiv(SubdivMesh {
             positions,
             face_counts: counts.iter().map(|&c| c as u32).collect(),
@@ -354,13 +389,134 @@ fn mesh(values: &Values<'_>, path: &str, time: Time) -> Result<Option<Shape>, Us
         .flatten()
         .filter(|n| n.len() == positions.len())
         .map(|n| n.iter().map(|v| DVec3::new(v[0], v[1], v[2]).as_vec3()).collect());
-    Ok(Some(Shape::Mesh(Mesh {
-        positions,
-        normals,
-        triangles,
-        uvs: Vec::new(),
-        colors: None,
-    })))
+    match uvs {
+        Some(Primvar::Vertex(uv)) => Ok(Some(Shape::Mesh(Mesh {
+            positions,
+            normals,
+            triangles,
+            uvs: vec![uv],
+            colors: None,
+        }))),
+        Some(Primvar::Corner(uv)) => {
+            // Face-varying coordinates: one vertex per face corner (in the file's corner order,
+            // which `face_indices` kept unless left-handed reversed it).
+            let mut corner_of = Vec::with_capacity(face_indices.len());
+            let mut start = 0usize;
+            for &c in &counts {
+                let c = c as usize;
+                let order: Vec<usize> = if left {
+                    (0..c).rev().collect()
+                } else {
+                    (0..c).collect()
+                };
+                corner_of.extend(order.into_iter().map(|k| start + k));
+                start += c;
+            }
+            let p: Vec<Vec3> = face_indices.iter().map(|&i| positions[i as usize]).collect();
+            let n = normals.map(|n: Vec<Vec3>| face_indices.iter().map(|&i| n[i as usize]).collect());
+            let uv = corner_of.iter().map(|&k| uv[k]).collect();
+            let mut tris = Vec::new();
+            let mut start = 0u32;
+            for &c in &counts {
+                let c = c as u32;
+                for k in 1..c.saturating_sub(1) {
+                    tris.push([start, start + k, start + k + 1]);
+                }
+                start += c;
+            }
+            Ok(Some(Shape::Mesh(Mesh {
+                positions: p,
+                normals: n,
+                triangles: tris,
+                uvs: vec![uv],
+                colors: None,
+            })))
+        }
+        None => Ok(Some(Shape::Mesh(Mesh {
+            positions,
+            normals,
+            triangles,
+            uvs: Vec::new(),
+            colors: None,
+        }))),
+    }
+}
+
+/// True when no edge is shared by more than two faces: Catmull–Clark is defined there; a mesh
+/// with a non-manifold edge is rendered as its polygons (hdPrman's subdivision refuses it too).
+fn manifold(counts: &[i64], face_indices: &[u32]) -> bool {
+    let mut uses = std::collections::HashMap::new();
+    let mut start = 0usize;
+    for &c in counts {
+        let face = &face_indices[start..start + c as usize];
+        for k in 0..face.len() {
+            let (a, b) = (face[k], face[(k + 1) % face.len()]);
+            let n = uses.entry((a.min(b), a.max(b))).or_insert(0u32);
+            *n += 1;
+            if *n > 2 {
+                return false;
+            }
+        }
+        start += c as usize;
+    }
+    true
+}
+
+/// A 2-vector primvar, by vertex or by face corner (glTF's texture convention: `t` flipped).
+enum Primvar {
+    Vertex(Vec<glam::Vec2>),
+    Corner(Vec<glam::Vec2>),
+}
+
+/// `primvars:<name>` (with `:indices`) as texture coordinates, by its `interpolation`.
+fn primvar2(
+    values: &Values<'_>,
+    path: &str,
+    name: &str,
+    time: Time,
+    points: usize,
+    corners: usize,
+    faces: usize,
+) -> Result<Option<Primvar>, UsdError> {
+    let attr = format!("primvars:{name}");
+    let Some(raw) = values.tuples_opt(path, &attr, time, 2)? else {
+        return Ok(None);
+    };
+    let flat: Vec<glam::Vec2> = raw
+        .iter()
+        .map(|v| glam::Vec2::new(v[0] as f32, 1.0 - v[1] as f32))
+        .collect();
+    let data = match values.ints_opt(path, &format!("{attr}:indices"), time)? {
+        Some(ix) => ix
+            .iter()
+            .map(|&i| {
+                flat.get(i as usize).copied().ok_or_else(|| {
+                    values.error(
+                        path,
+                        &format!("{attr}:indices"),
+                        format!("index {i} outside the {} values", flat.len()),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+        None => flat,
+    };
+    let interpolation = values.interpolation(path, &attr);
+    Ok(match interpolation.as_str() {
+        "faceVarying" if data.len() == corners => Some(Primvar::Corner(data)),
+        "vertex" | "varying" if data.len() == points => Some(Primvar::Vertex(data)),
+        "uniform" if data.len() == faces => None,
+        "constant" => None,
+        _ if data.len() == corners => Some(Primvar::Corner(data)),
+        _ if data.len() == points => Some(Primvar::Vertex(data)),
+        other => {
+            return Err(values.error(
+                path,
+                &attr,
+                format!("{} values with interpolation {other:?} fit neither the {points} points nor the {corners} face corners", data.len()),
+            ));
+        }
+    })
 }
 
 /// A cube of edge `size` centred on the origin.
@@ -437,60 +593,20 @@ fn round(values: &Values<'_>, path: &str, ty: &str, time: Time) -> Result<Mesh, 
     })
 }
 
-/// The material of `path`: its bound PreviewSurface's constants, else its constant displayColor.
-fn material(values: &Values<'_>, path: &str, time: Time, scene: &mut Scene) -> Result<u32, UsdError> {
-    let rgb = |v: Vec<f64>| Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32);
-    let mut bound = None;
-    let mut p = path.to_string();
-    while p.len() > 1 && bound.is_none() {
-        bound = values.targets(&p, "material:binding").into_iter().next();
-        p = match p.rfind('/') {
-            Some(0) | None => break,
-            Some(i) => p[..i].to_string(),
-        };
-    }
-    let surface = bound.and_then(|m| {
-        values
-            .connections(&m, "outputs:surface")
-            .into_iter()
-            .next()
-            .map(|c| c.split('.').next().unwrap_or_default().to_string())
-    });
-    let m = if let Some(shader) = surface {
-        let diffuse = values
-            .reals_opt(&shader, "inputs:diffuseColor", time, 3)?
-            .map_or(Rgb::new(0.18, 0.18, 0.18), rgb);
-        let roughness = values.real(&shader, "inputs:roughness", time, 0.5)? as f32;
-        let metallic = values.real(&shader, "inputs:metallic", time, 0.0)? as f32;
-        let specular = if metallic > 0.0 {
-            Rgb::new(
-                diffuse.r * metallic + 0.04 * (1.0 - metallic),
-                diffuse.g * metallic + 0.04 * (1.0 - metallic),
-                diffuse.b * metallic + 0.04 * (1.0 - metallic),
-            )
-        } else {
-            Rgb::new(0.04, 0.04, 0.04)
-        };
-        let d = 1.0 - metallic;
-        Material::Surface {
-            diffuse: Rgb::new(diffuse.r * d, diffuse.g * d, diffuse.b * d),
-            specular,
-            roughness,
-        }
-    } else if let Some(c) = values
+/// A constant `primvars:displayColor` as a PxrDiffuse material (0, the default, without one).
+fn display_color(values: &Values<'_>, path: &str, time: Time, scene: &mut Scene) -> u32 {
+    let Some(c) = values
         .tuples_opt(path, "primvars:displayColor", time, 3)
         .ok()
         .flatten()
         .filter(|c| c.len() == 1)
-    {
-        Material::Diffuse {
-            color: rgb(c[0].clone()),
-        }
-    } else {
-        return Ok(0);
+    else {
+        return 0;
     };
-    scene.materials.push(m);
-    Ok((scene.materials.len() - 1) as u32)
+    scene.materials.push(Material::Diffuse {
+        color: Rgb::new(c[0][0] as f32, c[0][1] as f32, c[0][2] as f32),
+    });
+    (scene.materials.len() - 1) as u32
 }
 
 fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4) -> Result<Light, UsdError> {

@@ -155,6 +155,17 @@ impl Values<'_> {
         }
     }
 
+    /// A primvar's `interpolation` metadata (`constant` unless authored).
+    pub fn interpolation(&self, prim: &str, name: &str) -> String {
+        self.stage
+            .attribute(format!("{prim}.{name}").as_str())
+            .get_metadata::<sdf::Value>("interpolation")
+            .ok()
+            .flatten()
+            .and_then(|v| text(&v))
+            .unwrap_or_else(|| "constant".into())
+    }
+
     /// The time codes at which `prim.name` has samples (empty when none).
     pub fn sample_times(&self, prim: &str, name: &str) -> Vec<f64> {
         self.stage
