@@ -60,7 +60,22 @@ pub fn build(
         .unwrap_or_default();
     let mut materials = Vec::new();
     let mut bounds: Option<(Vec3, Vec3)> = None;
+    // Prototypes of point instancers render only as their instances.
+    let instancers: Vec<&String> = prims
+        .iter()
+        .filter(|(_, ty)| ty == "PointInstancer")
+        .map(|(p, _)| p)
+        .collect();
+    let prototypes: Vec<Vec<String>> = instancers
+        .iter()
+        .map(|i| values.targets(i, "prototypes"))
+        .collect();
+    let under = |path: &str, root: &str| path == root || path.starts_with(&format!("{root}/"));
+    let in_prototype = |path: &str| prototypes.iter().flatten().any(|r| under(path, r));
     for (path, ty) in &prims {
+        if in_prototype(path) {
+            continue;
+        }
         if !matches!(
             ty.as_str(),
             "Mesh"
@@ -108,11 +123,8 @@ pub fn build(
             }
         };
         let Some(shape) = shape else { continue };
-        if let Shape::Mesh(m) = &shape {
-            for p in &m.positions {
-                let w = motion.samples[0].1.transform_point3(*p);
-                grow(&mut bounds, w);
-            }
+        for p in shape_points(&shape) {
+            grow(&mut bounds, motion.samples[0].1.transform_point3(p));
         }
         let material = match &bound {
             Some(b) => b.material,
@@ -132,11 +144,169 @@ pub fn build(
             visibility: Visibility::default(),
         });
     }
+    for (instancer, roots) in instancers.iter().zip(&prototypes) {
+        if !visible(&values, instancer, time)? {
+            continue;
+        }
+        instance(
+            stage,
+            &values,
+            &stage_dir,
+            &prims,
+            (instancer, roots),
+            up,
+            time,
+            &mut scene,
+            &mut materials,
+            &mut bounds,
+        )?;
+    }
     if camera.is_none() {
         scene.auto_camera = Some(bounds.unwrap_or((Vec3::splat(-1.0), Vec3::splat(1.0))));
     }
     scene.auto_light = scene.lights.is_empty();
     Ok(scene)
+}
+
+/// Points whose box holds `shape`.
+fn shape_points(shape: &Shape) -> Vec<Vec3> {
+    match shape {
+        Shape::Mesh(m) => m.positions.clone(),
+        Shape::Subdiv(m) => m.positions.clone(),
+        Shape::Sphere { radius, .. } => vec![Vec3::splat(-radius), Vec3::splat(*radius)],
+        _ => Vec::new(),
+    }
+}
+
+/// A `PointInstancer`'s instances: each prototype's geometry placed by
+/// `instancer · T(position) · R(orientation) · S(scale) · instancer⁻¹ · geometry` (the prototypes sit
+/// under the instancer), skipping `invisibleIds`; IDs name the instancer and the instance index.
+#[allow(clippy::too_many_arguments)]
+fn instance(
+    stage: &Stage,
+    values: &Values<'_>,
+    stage_dir: &std::path::Path,
+    prims: &[(String, String)],
+    (instancer, roots): (&str, &[String]),
+    up: DMat4,
+    time: Time,
+    scene: &mut Scene,
+    materials: &mut Vec<(String, crate::shading::Bound)>,
+    bounds: &mut Option<(Vec3, Vec3)>,
+) -> Result<(), UsdError> {
+    let indices = values
+        .ints_opt(instancer, "protoIndices", time)?
+        .unwrap_or_default();
+    let positions = values
+        .tuples_opt(instancer, "positions", time, 3)?
+        .unwrap_or_default();
+    let n = indices.len();
+    if positions.len() != n {
+        return Err(values.error(
+            instancer,
+            "positions",
+            format!("{} positions for {n} protoIndices", positions.len()),
+        ));
+    }
+    let orientations = values.tuples_opt(instancer, "orientations", time, 4)?;
+    let scales = values.tuples_opt(instancer, "scales", time, 3)?;
+    let ids = values.ints_opt(instancer, "ids", time)?;
+    let invisible = values
+        .ints_opt(instancer, "invisibleIds", time)?
+        .unwrap_or_default();
+    let world = xform::world(values, instancer, time)?;
+    let inverse = world.inverse();
+    // Each prototype's renderable prims with their shapes, built once.
+    let mut protos: Vec<Vec<(String, Shape, u32, DMat4)>> = Vec::new();
+    for root in roots {
+        let mut parts = Vec::new();
+        for (path, ty) in prims {
+            let inside = path == root || path.starts_with(&format!("{root}/"));
+            if !inside || !matches!(ty.as_str(), "Mesh" | "Sphere" | "Cube" | "Cylinder" | "Cone") {
+                continue;
+            }
+            let bound = crate::shading::bound_material(values, stage_dir, path, time, scene, materials)?;
+            let shape = match ty.as_str() {
+                "Mesh" => mesh(
+                    values,
+                    path,
+                    time,
+                    bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
+                )?,
+                "Sphere" => {
+                    let r = values.real(path, "radius", time, 1.0)? as f32;
+                    Some(Shape::Sphere {
+                        radius: r,
+                        z_min: -r,
+                        z_max: r,
+                        theta_max: 360.0,
+                    })
+                }
+                "Cube" => Some(Shape::Mesh(cube(values.real(path, "size", time, 2.0)? as f32))),
+                _ => Some(Shape::Mesh(round(values, path, ty, time)?)),
+            };
+            let Some(shape) = shape else { continue };
+            let material = match &bound {
+                Some(b) => b.material,
+                None => display_color(values, path, time, scene),
+            };
+            parts.push((
+                path.clone(),
+                shape,
+                material,
+                inverse * xform::world(values, path, time)?,
+            ));
+        }
+        protos.push(parts);
+    }
+    for i in 0..n {
+        let id = ids.as_ref().and_then(|v| v.get(i).copied()).unwrap_or(i as i64);
+        if invisible.contains(&id) {
+            continue;
+        }
+        let k = indices[i];
+        let Some(parts) = usize::try_from(k).ok().and_then(|k| protos.get(k)) else {
+            return Err(values.error(
+                instancer,
+                "protoIndices",
+                format!(
+                    "index {k} at instance {i}: the instancer has {} prototypes",
+                    protos.len()
+                ),
+            ));
+        };
+        let p = &positions[i];
+        let mut m = DMat4::from_translation(DVec3::new(p[0], p[1], p[2]));
+        if let Some(q) = orientations.as_ref().and_then(|o| o.get(i)) {
+            let q = glam::DQuat::from_xyzw(q[1], q[2], q[3], q[0]);
+            if q.length() > 0.0 {
+                m *= DMat4::from_quat(q.normalize());
+            }
+        }
+        if let Some(s) = scales.as_ref().and_then(|o| o.get(i)) {
+            m *= DMat4::from_scale(DVec3::new(s[0], s[1], s[2]));
+        }
+        for (path, shape, material, local) in parts {
+            let to_world = (up * world * m * *local).as_mat4();
+            for q in shape_points(shape) {
+                grow(bounds, to_world.transform_point3(q));
+            }
+            scene.objects.push(Object {
+                shape: shape.clone(),
+                transform: MotionTransform::fixed(to_world),
+                material: *material,
+                micropolygon_length: 1.0,
+                source: format!("{}: <{instancer}> instance {i} of <{path}>", stage.file),
+                identity: Identity {
+                    object: path.clone(),
+                    instance: format!("{instancer}[{i}]"),
+                },
+                sides: Sides::Both,
+                visibility: Visibility::default(),
+            });
+        }
+    }
+    Ok(())
 }
 
 fn grow(bounds: &mut Option<(Vec3, Vec3)>, p: Vec3) {

@@ -53,7 +53,7 @@ fn input_value(values: &Values<'_>, prim: &str, input: &str, time: Time) -> Opti
 }
 
 /// What a texture needs from the mesh: the primvar holding its coordinates.
-pub(crate) struct Bound {
+pub struct Bound {
     /// The material's index in [`Scene::materials`].
     pub material: u32,
     /// The `st` primvar the textures read (`None`: untextured).

@@ -447,3 +447,25 @@ fn a_stage_without_camera_or_light_is_staged_like_gltf() {
     }
     assert_eq!(s.objects[0].identity.object, "/Tri");
 }
+
+#[test]
+fn a_point_instancer_places_its_prototypes_and_hides_invisible_ids() {
+    let s = scene(&data("instancer.usda"), None, 32, 32, 1);
+    // Four instances, id 3 invisible; the prototypes themselves are not rendered.
+    assert_eq!(s.objects.len(), 3);
+    let names: Vec<&str> = s.objects.iter().map(|o| o.identity.instance.as_str()).collect();
+    assert_eq!(names, ["/World/Crowd[0]", "/World/Crowd[1]", "/World/Crowd[2]"]);
+    // Instance 2: the box (its own translate (0, 0.5, 0)) scaled by 2 at (6, 0, 0) under the
+    // instancer's parent at (0, 1, 0): T(0,1,0)·T(6,0,0)·S(2)·T(0,0.5,0).
+    let m = s.objects[2].transform.samples[0].1;
+    let origin = m.transform_point3(glam::Vec3::ZERO);
+    assert!(
+        (origin - glam::Vec3::new(6.0, 2.0, 0.0)).length() < 1e-6,
+        "{origin}"
+    );
+    assert!((m.transform_vector3(glam::Vec3::X).length() - 2.0).abs() < 1e-6);
+    // Instance 1: the ball turned 90° about Z at (3, 0, 0).
+    let m = s.objects[1].transform.samples[0].1;
+    assert!((m.transform_vector3(glam::Vec3::X) - glam::Vec3::Y).length() < 1e-3);
+    assert!(matches!(s.objects[1].shape, obscura_scene::Shape::Sphere { radius, .. } if radius == 0.5));
+}
