@@ -183,11 +183,19 @@ impl Stage {
     /// # Errors
     /// The traversal's error, located at the file.
     pub fn prims(&self) -> Result<Vec<(String, String)>, UsdError> {
+        self.prims_with(usd::PrimPredicate::DEFAULT_PROXIES)
+    }
+
+    /// Every composed prim, `over`s included (a point instancer's prototypes may sit under `over`
+    /// prims and still render as its instances).
+    pub(crate) fn all_prims(&self) -> Result<Vec<(String, String)>, UsdError> {
+        self.prims_with(usd::PrimPredicate::ALL.with_instance_proxies(true))
+    }
+
+    fn prims_with(&self, predicate: usd::PrimPredicate) -> Result<Vec<(String, String)>, UsdError> {
         let mut paths = Vec::new();
         self.stage
-            .traverse(usd::PrimPredicate::DEFAULT_PROXIES, |p| {
-                paths.push(p.as_str().to_string())
-            })
+            .traverse(predicate, |p| paths.push(p.as_str().to_string()))
             .map_err(|e| UsdError::file(&self.file, format!("cannot traverse the stage: {e:#}")))?;
         Ok(paths
             .into_iter()

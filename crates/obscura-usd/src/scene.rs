@@ -144,6 +144,11 @@ pub fn build(
             visibility: Visibility::default(),
         });
     }
+    let all_prims = if instancers.is_empty() {
+        Vec::new()
+    } else {
+        stage.all_prims()?
+    };
     for (instancer, roots) in instancers.iter().zip(&prototypes) {
         if !visible(&values, instancer, time)? {
             continue;
@@ -152,7 +157,7 @@ pub fn build(
             stage,
             &values,
             &stage_dir,
-            &prims,
+            &all_prims,
             (instancer, roots),
             up,
             time,
