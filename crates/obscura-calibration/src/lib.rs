@@ -9,6 +9,7 @@
 pub mod files;
 
 mod distortion;
+pub mod lens3de;
 mod lift;
 pub mod models;
 pub mod projection;
