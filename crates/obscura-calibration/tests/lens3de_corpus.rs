@@ -250,3 +250,82 @@ fn bad_nuke_scripts_get_located_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn a_3de_lens_export_is_the_same_lens_as_its_nuke_export() {
+    let Some(dir) = corpus() else { return };
+    let text = load_frame(
+        &dir.join("mmsolver-testdata/trackboy_slim_3de_lens.txt"),
+        None,
+        None,
+    )
+    .unwrap();
+    let nuke = load_frame(
+        &dir.join("mmsolver-testdata/trackboy_slim_nuke_ldpk.nk"),
+        None,
+        None,
+    )
+    .unwrap();
+    assert_eq!(text.format, FileFormat::Tde4Lens);
+    assert_eq!(text.model, "3DE4 Radial - Standard, Degree 4");
+    assert_eq!(text.model, nuke.model);
+    // 15 decimals against the Nuke export's 7.
+    for (a, b) in text.params.iter().zip(&nuke.params) {
+        assert!((a.value - b.value).abs() < 1e-7, "{a:?} vs {b:?}");
+    }
+    let classic = load_frame(&dir.join("mmsolver-testdata/test_out_v001.txt"), None, None).unwrap();
+    assert_eq!(classic.model, "3DE Classic LD Model");
+    assert_eq!(classic.params[5].value, 1.5, "pixel aspect");
+    assert_eq!(classic.params[11].value, 0.25, "Anamorphic Squeeze");
+    assert!(
+        classic.notes.iter().any(|n| n.contains("Anamorphic Squeeze")),
+        "{:?}",
+        classic.notes
+    );
+    classic.param_list().unwrap();
+}
+
+#[test]
+fn bad_lens_exports_get_located_errors() {
+    use obscura_calibration::files::parse;
+    let lens = |model: &str, mode: &str, param: &str| {
+        format!("l\n2.4 1.8 3.5 1.333 0 0 1\n{mode}\n{model}\n{param}\n0.01\n0\n<end_of_file>\n")
+    };
+    for (text, line, word) in [
+        (
+            lens("3DE4 Radial - Blah", "DISTORTION_STATIC", "Distortion"),
+            4,
+            "unknown 3DE lens model",
+        ),
+        (
+            lens("3DE Classic LD Model", "DYNAMIC_FOCAL_LENGTH", "Distortion"),
+            3,
+            "dynamic distortion",
+        ),
+        (
+            lens(
+                "3DE Classic LD Model",
+                "DISTORTION_STATIC",
+                "Distortion - Degree 2",
+            ),
+            5,
+            "is not a parameter",
+        ),
+        (
+            lens("3DE Classic LD Model", "DISTORTION_STATIC", "Anamorphic Squeeze").replace("0.01", "0"),
+            6,
+            "Anamorphic Squeeze must be > 0",
+        ),
+        (
+            "l\n0 1.8 3.5 1.333 0 0 1\n0\n3DE Classic LD Model\n<end_of_file>\n".to_string(),
+            2,
+            "tde4_filmback_width_cm must be > 0",
+        ),
+    ] {
+        let e = parse(&text, "lens.txt", None)
+            .and_then(|c| c.param_list().map(|_| c))
+            .expect_err(&text);
+        assert_eq!(e.line, Some(line), "{e}");
+        assert!(e.to_string().contains(word), "{e}");
+    }
+}

@@ -96,11 +96,11 @@ struct RenderArgs {
     #[arg(long = "frames", visible_alias = "frame", value_name = "SPEC")]
     frames: Option<FrameSpec>,
     /// Render through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
-    /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. The image size defaults to
+    /// camchain.yaml, OCamCalib calib_results.txt, a Nuke script with 3DE LD nodes, a 3DE lens export) with CalibratedCamera. The image size defaults to
     /// the calibration's; --format resamples the same camera. --param adds to or replaces its parameters.
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
-    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD node's name, …).
     #[arg(long, value_name = "ID", requires = "calibration")]
     camera: Option<String>,
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
@@ -151,11 +151,11 @@ struct RaysArgs {
     #[arg(long = "param", value_name = "PARAM")]
     params: Vec<String>,
     /// Trace through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
-    /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. --param adds to or replaces
+    /// camchain.yaml, OCamCalib calib_results.txt, a Nuke script with 3DE LD nodes, a 3DE lens export) with CalibratedCamera. --param adds to or replaces
     /// its parameters.
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
-    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD node's name, …).
     #[arg(long, value_name = "ID", requires = "calibration")]
     camera: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (default: the calibration's resolution, else 640x480).

@@ -9,6 +9,7 @@
 //! | OpenCV YAML / JSON | a mapping with `camera_matrix` | `OPENCV_PINHOLE` (0, 4, 5, 8, 12 or 14 coefficients); `OPENCV_FISHEYE` when `fisheye_model` is set | `opencv` (pixel centres at integers) |
 //! | Kalibr `camchain.yaml` | a mapping of cameras with `camera_model` | see [`kalibr`] | `opencv` |
 //! | OCamCalib `calib_results.txt` | text lines of numbers | `OCAMCALIB` | `opencv` |
+//! | 3DEqualizer lens export text | the fourth line names a 3DE model, `<end_of_file>` follows | that model, see [`tde4`] | `colmap` |
 //! | Nuke script (`.nk`) with 3DE lens nodes | a node `LD_3DE4_…`, `LD_3DE_Classic_LD_Model` or `tde4_ldp_…` | the node's 3DE model, see [`nuke`] | `colmap` (3DE's unit coordinates are corner-based) |
 //!
 //! Values keep the file's text: each number reaches the projection as written (it is held there as
@@ -26,6 +27,7 @@ pub mod kalibr;
 pub mod nuke;
 pub mod ocamcalib;
 pub mod opencv;
+pub mod tde4;
 mod tree;
 
 /// The projection a [`Calibration`]'s parameters are for.
@@ -57,6 +59,8 @@ pub enum FileFormat {
     OCamCalib,
     /// A Nuke script with 3DEqualizer's lens-distortion nodes (`LD_3DE4_*`, see [`nuke`]).
     Nuke,
+    /// 3DEqualizer's lens export text (see [`tde4`]).
+    Tde4Lens,
 }
 
 impl fmt::Display for FileFormat {
@@ -67,6 +71,7 @@ impl fmt::Display for FileFormat {
             FileFormat::Kalibr => "Kalibr camchain",
             FileFormat::OCamCalib => "OCamCalib calib_results",
             FileFormat::Nuke => "Nuke script with 3DE lens nodes",
+            FileFormat::Tde4Lens => "3DEqualizer lens export",
         })
     }
 }
@@ -118,6 +123,9 @@ pub struct Calibration {
     /// What was ignored or assumed while reading (extrinsics, a converted parameter order), one
     /// sentence each.
     pub notes: Vec<String>,
+    /// True when some parameter follows a curve over frames (a Nuke script's animated knob): the
+    /// values are those of the frame asked for, and other frames differ.
+    pub animated: bool,
 }
 
 impl Calibration {
@@ -313,11 +321,12 @@ impl Src<'_> {
             polynomial: Vec::new(),
             inverse_polynomial: Vec::new(),
             pixel_convention: match format {
-                FileFormat::Colmap | FileFormat::Nuke => PixelConvention::Colmap,
+                FileFormat::Colmap | FileFormat::Nuke | FileFormat::Tde4Lens => PixelConvention::Colmap,
                 FileFormat::OpenCv | FileFormat::Kalibr | FileFormat::OCamCalib => PixelConvention::OpenCv,
             },
             source: format!("{}:{line}", self.file),
             notes: Vec::new(),
+            animated: false,
         }
     }
 
@@ -424,6 +433,9 @@ pub fn parse_frame(
     if nuke::looks_like(text) || file.to_ascii_lowercase().ends_with(".nk") {
         return nuke::read(&src, text, camera, frame);
     }
+    if tde4::looks_like(text) {
+        return tde4::read(&src, text, camera);
+    }
     let ext = Path::new(file)
         .extension()
         .and_then(|e| e.to_str())
@@ -476,6 +488,7 @@ pub fn parse_as(
         FileFormat::OpenCv => opencv::read(&src, &tree::parse(&src, text)?, camera),
         FileFormat::Kalibr => kalibr::read(&src, &tree::parse(&src, text)?, camera),
         FileFormat::Nuke => nuke::read(&src, text, camera, None),
+        FileFormat::Tde4Lens => tde4::read(&src, text, camera),
     }
 }
 

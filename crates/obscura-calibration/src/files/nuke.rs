@@ -436,16 +436,8 @@ pub(crate) fn read(
             _ => return Err(src.err(root.map_or(1, |r| r.line), "Root format: expected \"W H …\"")),
         },
         None => {
-            let (wfb, hfb, pa) = (params[1].value, params[2].value, params[5].value);
-            let w = 2048u32;
-            let h = if wfb > 0.0 && hfb > 0.0 && pa > 0.0 {
-                ((f64::from(w) * hfb * pa / wfb).round() as u32).max(1)
-            } else {
-                w
-            };
-            notes.push(format!(
-                "the script names no Root format: a {w}x{h} plate in the film back's aspect (3DE's model is in unit coordinates, so any size of that aspect is the same lens)"
-            ));
+            let (w, h, note) = plate_of_back(&params, "the script names no Root format");
+            notes.push(note);
             (w, h)
         }
     };
@@ -454,8 +446,25 @@ pub(crate) fn read(
     c.camera = Some(names[index].clone());
     c.cameras = names;
     c.first_by_default = by_default;
+    c.animated = !animated.is_empty();
     c.notes = notes;
     Ok(c)
+}
+
+/// A plate for a lens file that names none: 2048 pixels wide in the aspect of the film back
+/// (`params` in [`Kind::all_params`] order, `w_fb/(h_fb·pa)`), with the note saying so after `why`.
+pub(crate) fn plate_of_back(params: &[Number], why: &str) -> (u32, u32, String) {
+    let (wfb, hfb, pa) = (params[1].value, params[2].value, params[5].value);
+    let w = 2048u32;
+    let h = if wfb > 0.0 && hfb > 0.0 && pa > 0.0 {
+        ((f64::from(w) * hfb * pa / wfb).round() as u32).max(1)
+    } else {
+        w
+    };
+    let note = format!(
+        "{why}: a {w}x{h} plate in the film back's aspect (3DE's model is in unit coordinates, so any size of that aspect is the same lens; choose another with --format)"
+    );
+    (w, h, note)
 }
 
 /// True when `text` looks like a Nuke script holding a 3DE lens node.
@@ -501,5 +510,70 @@ mod tests {
             e.message.contains("Distortion_Degree_2") && e.message.contains("zz"),
             "{e}"
         );
+    }
+}
+
+/// An LDPK Nuke node for a 3DE model: the node class of `kind`, `direction` (`distort` or
+/// `undistort`), then the built-in knobs, the field-of-view knobs and the model's knobs with 7
+/// decimals (as 3DE's "Export Nuke Distortion Nodes" writes them), and `name`. `params` are in
+/// [`Kind::all_params`] order (as `CalibratedCamera`'s `params`).
+///
+/// # Errors
+/// A message when `params` does not have the model's count.
+pub fn write_node(kind: Kind, params: &[f64], name: &str, direction: &str) -> Result<String, String> {
+    let all = kind.all_params();
+    if params.len() != all.len() {
+        return Err(format!(
+            "model {}: takes {} params, got {}",
+            kind.name(),
+            all.len(),
+            params.len()
+        ));
+    }
+    let mut out = format!("{} {{\n direction {direction}\n", kind.nuke_class());
+    for ((knob, _), v) in all.iter().zip(params) {
+        let knob = if knob.starts_with("tde4_") || knob.starts_with("field_of_view") {
+            (*knob).to_string()
+        } else {
+            knob_name(knob)
+        };
+        out.push_str(&format!(" {knob} {v:.7}\n"));
+    }
+    let quoted = name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
+    if quoted {
+        out.push_str(&format!(" name {name}\n}}\n"));
+    } else {
+        out.push_str(&format!(" name \"{}\"\n}}\n", name.replace('"', "\\\"")));
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod write_tests {
+    use super::*;
+
+    #[test]
+    fn a_written_node_reads_back_as_the_same_lens() {
+        for kind in crate::lens3de::KINDS {
+            let params: Vec<f64> = kind
+                .all_params()
+                .iter()
+                .enumerate()
+                .map(|(i, &(n, d))| match n {
+                    "tde4_focal_length_cm" => 3.5,
+                    "tde4_filmback_width_cm" => 2.4,
+                    "tde4_filmback_height_cm" => 1.35,
+                    _ if i >= 10 && d == 0.0 => 0.001 * i as f64,
+                    _ => d,
+                })
+                .collect();
+            let text = write_node(kind, &params, "lens_1", "distort").unwrap();
+            let src = Src { file: "w.nk" };
+            let c = read(&src, &text, Some("lens_1"), None).unwrap();
+            assert_eq!(c.model, kind.name());
+            for (a, b) in c.params.iter().zip(&params) {
+                assert!((a.value - b).abs() < 1e-12, "{kind:?}: {a:?} vs {b}");
+            }
+        }
     }
 }
