@@ -26,6 +26,10 @@ fi
 export OBSCURA_REQUIRE_INDEPENDENT_EXR=1
 export OBSCURA_REQUIRE_OPENCV=1
 export OBSCURA_REQUIRE_PYCOLMAP=1
+# --- issue 26 (3DEqualizer lenses): the shared corpus of real 3DE/Nuke lens files must be there
+# (crates/obscura-calibration/tests/lens3de_corpus.rs; its path: OBSCURA_LENS3DE_CORPUS).
+export OBSCURA_REQUIRE_CORPORA=1
+# --- end issue 26
 
 echo "== cargo test --workspace"
 cargo test --workspace

@@ -372,8 +372,9 @@ impl Camera {
     /// Kalibr `camchain.yaml`, OCamCalib `calib_results.txt`, a Nuke script with 3DEqualizer's
     /// `LD_3DE*` nodes, a 3DE lens export): `camera` picks one of several (a COLMAP CAMERA_ID,
     /// Kalibr's `cam0`, an LD node's name; default the first); `frame` evaluates a Nuke script's
-    /// animated knobs at that frame (default: the script's current frame). The format defaults to the calibration's size;
-    /// keyword arguments are camera options or `CalibratedCamera` parameters replacing the file's.
+    /// animated knobs at that frame (default: the script's current frame). The format defaults to
+    /// the calibration's size; keyword arguments are camera options or `CalibratedCamera`
+    /// parameters replacing the file's.
     #[classmethod]
     #[pyo3(signature = (path, camera = None, frame = None, **kwargs))]
     fn from_calibration(
