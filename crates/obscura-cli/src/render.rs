@@ -176,7 +176,11 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     {
         for (job, list) in jobs.iter().zip(&lists) {
             if !a.quiet {
-                outln!("frame {}: the lens of {path:?} at frame {}", job.0, job.0);
+                outln!(
+                    "frame {}: through the lens of {} at that frame",
+                    job.0,
+                    path.display()
+                );
             }
             let lens = Calibrated::load_frame(path, a.camera.as_deref(), Some(f64::from(job.0)))
                 .map_err(|e| e.to_string())?;
