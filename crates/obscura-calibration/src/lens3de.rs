@@ -1076,6 +1076,9 @@ mod tests {
             nuke_box(&|p| l.undistort(p), input),
             [-872.0, -109.0, 2872.0, 1609.0],
         );
+        // The lens's own undistorted box of the frame (raster, y down) is the same figure.
+        let b = l.undistorted_box(w, h).unwrap();
+        padded([b[0], h - b[3], b[2], h - b[1]], [-503.0, -377.0, 2502.0, 1877.0]);
     }
 
     /// The anamorphic polynomial in its polar form `1 + Σ C_{i,d}·r^d·cos(iφ)`, written

@@ -166,7 +166,10 @@ fn every_ld_node_of_the_corpus_renders_its_models_rays() {
             assert!(valid > 0, "{} {name}: no pixel has a ray", path.display());
         }
     }
-    assert!(nodes >= 25, "only {nodes} LD nodes in the corpus");
+    assert!(
+        nodes >= 37,
+        "only {nodes} LD nodes in the corpus (its 24 Nuke scripts hold 37)"
+    );
 }
 
 #[test]
