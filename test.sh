@@ -26,9 +26,10 @@ fi
 export OBSCURA_REQUIRE_INDEPENDENT_EXR=1
 export OBSCURA_REQUIRE_OPENCV=1
 export OBSCURA_REQUIRE_PYCOLMAP=1
-# USD (issue 25): Pixar's usd-core (PyPI) is the reference reader the USD tests compare with; the shared
-# corpus of public USD files must be there (CI runs on this machine kind).
+# USD (issue 25): Pixar's usd-core (PyPI) is the reference reader the USD tests compare with.
 export OBSCURA_REQUIRE_USD=1
+# The shared corpora of public files (CI runs on this machine kind) must be there: the USD files
+# (OBSCURA_USD_CORPUS) and the real 3DE/Nuke lens files (OBSCURA_LENS3DE_CORPUS).
 export OBSCURA_REQUIRE_CORPORA=1
 
 echo "== cargo test --workspace"

@@ -1,14 +1,16 @@
 //! # obscura-calibration
 //!
-//! Render through a real camera's calibration: the camera models of COLMAP, OpenCV, Kalibr, OCamCalib
-//! and NVIDIA's f-theta as one Obscura projection, `CalibratedCamera`, exact in both directions, and
-//! readers for the calibration files those tools write.
+//! Render through a real camera's calibration: the camera models of COLMAP, OpenCV, Kalibr, OCamCalib,
+//! NVIDIA's f-theta and 3DEqualizer's lens-distortion models ([`lens3de`]) as one Obscura projection,
+//! `CalibratedCamera`, exact in both directions, and readers for the calibration files those tools
+//! write (with Nuke scripts' `LD_3DE*` nodes and 3DE's lens export).
 
 #![forbid(unsafe_code)]
 
 pub mod files;
 
 mod distortion;
+pub mod lens3de;
 mod lift;
 pub mod models;
 pub mod projection;

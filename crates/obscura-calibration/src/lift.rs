@@ -81,6 +81,9 @@ pub(crate) enum Lift {
         /// Largest angle in the valid set.
         theta_max: f64,
     },
+    /// A 3DEqualizer lens on its plate: `m` is the plate's raster position, the ray the pinhole
+    /// ray of 3DE's undistorted point (see [`crate::lens3de`]).
+    Lens3de(Box<crate::lens3de::Lens>),
 }
 
 /// A lifted ray and its derivative by the lift's input.
@@ -155,6 +158,7 @@ impl Lift {
             Lift::Equirect { .. } => true,
             Lift::OCam { pol, rho_max, .. } => solve::poly(pol, *rho_max).0 >= 0.0,
             Lift::FTheta { theta_max, .. } => *theta_max > FRAC_PI_2,
+            Lift::Lens3de(_) => false,
         }
     }
 
@@ -177,6 +181,7 @@ impl Lift {
                 rho_max,
                 theta_max,
             } => ftheta(bw.as_deref(), fw.as_ref(), *rho_max, *theta_max, m),
+            Lift::Lens3de(lens) => lens.ray(m),
         }
     }
 
@@ -284,6 +289,7 @@ impl Lift {
                 }
                 along(r)
             }
+            Lift::Lens3de(lens) => lens.pixel(d),
         }
     }
 }

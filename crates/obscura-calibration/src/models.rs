@@ -22,6 +22,7 @@
 //! converts from raster space.
 
 use crate::distortion::{Distortion, SEEDED_ITERATIONS, Tilt};
+use crate::lens3de::{self, Kind};
 use crate::lift::{self, Forward, Lift, Lifted};
 use crate::solve::{self, Mat2, Mat32, apply2, inv2, mul2, mul32};
 
@@ -113,7 +114,7 @@ const fn info(
 use PixelConvention::{Colmap as C, OpenCv as O};
 
 /// Every model, COLMAP's ids 0–17 first in id order.
-pub const MODELS: [ModelInfo; 25] = [
+pub const MODELS: [ModelInfo; 33] = [
     info("SIMPLE_PINHOLE", "f, cx, cy", &[3], C, false, |s| s.focal()),
     info("PINHOLE", "fx, fy, cx, cy", &[4], C, false, |s| s.focals()),
     info(
@@ -282,13 +283,79 @@ pub const MODELS: [ModelInfo; 25] = [
         true,
         ftheta,
     ),
+    // 3DEqualizer's models (`lens3de`): the 10 built-in knobs, then the model's parameters, named
+    // as 3DE names them; pixels are 3DE's corner-based unit coordinates times the plate size.
+    info(
+        "3DE Classic LD Model",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Distortion, Anamorphic Squeeze, Curvature X, Curvature Y, Quartic Distortion",
+        &[15],
+        C,
+        false,
+        |s| tde(Kind::Classic, s),
+    ),
+    info(
+        "3DE4 Radial - Standard, Degree 4",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Distortion - Degree 2, U - Degree 2, V - Degree 2, Quartic Distortion - Degree 4, U - Degree 4, V - Degree 4, Phi - Cylindric Direction, B - Cylindric Bending",
+        &[18],
+        C,
+        false,
+        |s| tde(Kind::RadialStandard4, s),
+    ),
+    info(
+        "3DE4 Anamorphic - Standard, Degree 4",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Cx02 - Degree 2, Cy02 - Degree 2, Cx22 - Degree 2, Cy22 - Degree 2, Cx04 - Degree 4, Cy04 - Degree 4, Cx24 - Degree 4, Cy24 - Degree 4, Cx44 - Degree 4, Cy44 - Degree 4, Lens Rotation, Squeeze-X, Squeeze-Y",
+        &[23],
+        C,
+        false,
+        |s| tde(Kind::AnamorphicStandard4, s),
+    ),
+    info(
+        "3DE4 Anamorphic - Standard, Degree 6",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Cx02 - Degree 2, Cy02 - Degree 2, Cx22 - Degree 2, Cy22 - Degree 2, Cx04 - Degree 4, Cy04 - Degree 4, Cx24 - Degree 4, Cy24 - Degree 4, Cx44 - Degree 4, Cy44 - Degree 4, Cx06 - Degree 6, Cy06 - Degree 6, Cx26 - Degree 6, Cy26 - Degree 6, Cx46 - Degree 6, Cy46 - Degree 6, Cx66 - Degree 6, Cy66 - Degree 6, Lens Rotation, Squeeze-X, Squeeze-Y",
+        &[31],
+        C,
+        false,
+        |s| tde(Kind::AnamorphicStandard6, s),
+    ),
+    info(
+        "3DE4 Anamorphic - Rescaled, Degree 4",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Cx02 - Degree 2, Cy02 - Degree 2, Cx22 - Degree 2, Cy22 - Degree 2, Cx04 - Degree 4, Cy04 - Degree 4, Cx24 - Degree 4, Cy24 - Degree 4, Cx44 - Degree 4, Cy44 - Degree 4, Lens Rotation, Squeeze-X, Squeeze-Y, Rescale",
+        &[24],
+        C,
+        false,
+        |s| tde(Kind::AnamorphicRescaled4, s),
+    ),
+    info(
+        "3DE4 Anamorphic - Rescaled, Degree 6",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Cx02 - Degree 2, Cy02 - Degree 2, Cx22 - Degree 2, Cy22 - Degree 2, Cx04 - Degree 4, Cy04 - Degree 4, Cx24 - Degree 4, Cy24 - Degree 4, Cx44 - Degree 4, Cy44 - Degree 4, Cx06 - Degree 6, Cy06 - Degree 6, Cx26 - Degree 6, Cy26 - Degree 6, Cx46 - Degree 6, Cy46 - Degree 6, Cx66 - Degree 6, Cy66 - Degree 6, Lens Rotation, Squeeze-X, Squeeze-Y, Rescale",
+        &[32],
+        C,
+        false,
+        |s| tde(Kind::AnamorphicRescaled6, s),
+    ),
+    info(
+        "3DE4 Anamorphic, Degree 6",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Cx02 - Degree 2, Cy02 - Degree 2, Cx22 - Degree 2, Cy22 - Degree 2, Cx04 - Degree 4, Cy04 - Degree 4, Cx24 - Degree 4, Cy24 - Degree 4, Cx44 - Degree 4, Cy44 - Degree 4, Cx06 - Degree 6, Cy06 - Degree 6, Cx26 - Degree 6, Cy26 - Degree 6, Cx46 - Degree 6, Cy46 - Degree 6, Cx66 - Degree 6, Cy66 - Degree 6",
+        &[28],
+        C,
+        false,
+        |s| tde(Kind::Anamorphic6, s),
+    ),
+    info(
+        "3DE4 Radial - Fisheye, Degree 8",
+        "tde4_focal_length_cm, tde4_filmback_width_cm, tde4_filmback_height_cm, tde4_lens_center_offset_x_cm, tde4_lens_center_offset_y_cm, tde4_pixel_aspect, field_of_view_xa_unit, field_of_view_xb_unit, field_of_view_ya_unit, field_of_view_yb_unit, Distortion - Degree 2, Quartic Distortion - Degree 4, Degree 6, Degree 8",
+        &[14],
+        C,
+        false,
+        |s| tde(Kind::RadialFisheye8, s),
+    ),
 ];
 
 /// The names of [`MODELS`], in order.
-pub const MODEL_NAMES: [&str; 25] = {
-    let mut names = [""; 25];
+pub const MODEL_NAMES: [&str; MODELS.len()] = {
+    let mut names = [""; MODELS.len()];
     let mut i = 0;
-    while i < 25 {
+    while i < MODELS.len() {
         names[i] = MODELS[i].name;
         i += 1;
     }
@@ -561,6 +628,14 @@ fn ftheta(s: &Args<'_>) -> Result<Stages, String> {
     Ok(Stages::new(a, [p[0], p[1]]).lift(lift))
 }
 
+/// A 3DEqualizer model on the plate the calibration's size gives: the lens is the lift of the
+/// plate's raster position (model pixels are raster positions, 3DE's unit coordinates being
+/// corner-based).
+fn tde(kind: Kind, s: &Args<'_>) -> Result<Stages, String> {
+    let lens = lens3de::Lens::new(kind, s.p, s.width, s.height)?;
+    Ok(Stages::new(solve::I2, [0.0, 0.0]).lift(Lift::Lens3de(Box::new(lens))))
+}
+
 /// A calibrated camera model, ready to map pixels to rays and back, exactly.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraModel {
@@ -726,7 +801,16 @@ impl CameraModel {
     /// True for the models whose rays are all pinhole rays through an image plane (`V = (x, y, 1)`).
     #[must_use]
     pub fn is_planar(&self) -> bool {
-        self.lift == Lift::Perspective
+        self.lift == Lift::Perspective || matches!(self.lift, Lift::Lens3de(_))
+    }
+
+    /// The 3DEqualizer lens, for the 3DE models.
+    #[must_use]
+    pub fn lens3de(&self) -> Option<&lens3de::Lens> {
+        match &self.lift {
+            Lift::Lens3de(lens) => Some(lens),
+            _ => None,
+        }
     }
 
     /// True when some valid ray may point at or behind the camera plane (z ≤ 0).
@@ -961,7 +1045,9 @@ impl CameraModel {
                 |px, out| forward_ftheta_chunk(fw, rho_max, theta_max, ai, c, px, out),
                 scalar,
             ),
-            Lift::FTheta { .. } => visitor.visit(closed_form(ai, c, |m| self.lift.lift(m))),
+            Lift::FTheta { .. } | Lift::Lens3de(_) => {
+                visitor.visit(closed_form(ai, c, |m| self.lift.lift(m)))
+            }
         }
     }
 

@@ -4,7 +4,7 @@
 //!
 //! | parameter | meaning |
 //! |---|---|
-//! | `string model` | one of [`MODEL_NAMES`]: COLMAP's names for its ids 0–17, then `OPENCV_PINHOLE`, `OPENCV_OMNIDIR`, `UCM`, `DOUBLE_SPHERE`, `KANNALA_BRANDT`, `OCAMCALIB`, `FTHETA` |
+//! | `string model` | one of [`MODEL_NAMES`]: COLMAP's names for its ids 0–17, then `OPENCV_PINHOLE`, `OPENCV_OMNIDIR`, `UCM`, `DOUBLE_SPHERE`, `KANNALA_BRANDT`, `OCAMCALIB`, `FTHETA`, and 3DEqualizer's eight models |
 //! | `float[] params` | the model's scalars in the source library's order and units ([`MODELS`] lists each model's names) |
 //! | `float[] polynomial` | OCAMCALIB's `pol` (a0 … aN, ascending, as `calib_results.txt`'s first polynomial line without its count); FTHETA's backward polynomial (pixel distance → angle, radians) |
 //! | `float[] inversePolynomial` | OCAMCALIB's `invpol`; FTHETA's forward polynomial (angle → pixel distance) |
@@ -35,6 +35,14 @@
 //!   point (x, y) is seen at row `c·x + d·y + xc`, column `e·x + y + yc`; the ray of a pixel is
 //!   `(x, y, pol(ρ))` in OCamCalib's frame (x along rows, y along columns, looking down −z), i.e.
 //!   `(y, x, −pol(ρ))` in OpenCV's.
+//! - 3DEqualizer's models, by 3DE's names (`3DE Classic LD Model`, `3DE4 Radial - Standard, Degree 4`,
+//!   `3DE4 Anamorphic - Standard, Degree 4`/`6`, `3DE4 Anamorphic - Rescaled, Degree 4`/`6`,
+//!   `3DE4 Anamorphic, Degree 6`, `3DE4 Radial - Fisheye, Degree 8`): the built-in knobs
+//!   `tde4_focal_length_cm tde4_filmback_width_cm tde4_filmback_height_cm
+//!   tde4_lens_center_offset_x_cm tde4_lens_center_offset_y_cm tde4_pixel_aspect
+//!   field_of_view_xa_unit field_of_view_xb_unit field_of_view_ya_unit field_of_view_yb_unit`, then
+//!   the model's parameters in 3DE's order ([`crate::lens3de`] gives the mapping); `resolution` is the
+//!   plate's size, and model pixels are raster positions (3DE's unit coordinates are corner-based).
 //! - `FTHETA` (NVIDIA) cx cy [maxAngle [c d e]]: principal point, largest ray angle (radians,
 //!   default π) and the linear term `[c d; e 1]` (default identity): a sensor offset `m` is seen at
 //!   `(u, v) = [c d; e 1]·m + (cx, cy)`, at angle θ from the axis with `θ = polynomial(|m|)`. When
@@ -118,7 +126,7 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
     vec![
         ParamDecl::string("model", "PINHOLE")
             .choices(&MODEL_NAMES)
-            .doc("camera model: COLMAP's names (ids 0-17), OPENCV_PINHOLE, OPENCV_OMNIDIR, UCM, DOUBLE_SPHERE, KANNALA_BRANDT, OCAMCALIB, FTHETA"),
+            .doc("camera model: COLMAP's names (ids 0-17), OPENCV_PINHOLE, OPENCV_OMNIDIR, UCM, DOUBLE_SPHERE, KANNALA_BRANDT, OCAMCALIB, FTHETA, 3DEqualizer's models by their 3DE names"),
         ParamDecl::float_list("params", &DEFAULT_PARAMS)
             .doc("the model's parameters in the source library's order and units (e.g. PINHOLE: fx fy cx cy)"),
         ParamDecl::float_list("polynomial", &[])
@@ -151,7 +159,7 @@ impl ProjectionFactory for CalibratedCameraFactory {
     }
 
     fn summary(&self) -> &str {
-        "a real camera's calibration (COLMAP, OpenCV, Kalibr, OCamCalib, f-theta models), exact both ways"
+        "a real camera's calibration (COLMAP, OpenCV, Kalibr, OCamCalib, f-theta, 3DEqualizer models), exact both ways"
     }
 
     fn param_table(&self) -> &[ParamDecl] {

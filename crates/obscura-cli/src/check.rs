@@ -20,11 +20,11 @@ pub struct CheckArgs {
     #[arg(required_unless_present = "calibration", conflicts_with = "calibration")]
     pub projection: Option<String>,
     /// Check the camera of a calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
-    /// camchain.yaml, OCamCalib calib_results.txt) as CalibratedCamera; --param adds to or replaces
+    /// camchain.yaml, OCamCalib calib_results.txt, a Nuke script with 3DE LD nodes, a 3DE lens export) as CalibratedCamera; --param adds to or replaces
     /// its parameters.
     #[arg(long, value_name = "FILE")]
     pub calibration: Option<std::path::PathBuf>,
-    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD node's name, …).
     #[arg(long, value_name = "ID", requires = "calibration")]
     pub camera: Option<String>,
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.

@@ -100,12 +100,13 @@ struct RenderArgs {
     #[arg(long = "frames", visible_alias = "frame", value_name = "SPEC")]
     frames: Option<FrameSpec>,
     /// Render through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
-    /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. The image size defaults to
+    /// camchain.yaml, OCamCalib calib_results.txt, a Nuke script with 3DE LD nodes, a 3DE lens export) with CalibratedCamera. The image size defaults to
     /// the calibration's; --format resamples the same camera. --param adds to or replaces its parameters.
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
-    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …), or
-    /// of a USD stage (a Camera prim's path or name; default: the RenderSettings' camera).
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD
+    /// node's name, …), or of a USD stage (a Camera prim's path or name; default: the RenderSettings'
+    /// camera).
     #[arg(long, value_name = "ID")]
     camera: Option<String>,
     /// Also write the camera rendered with (transform over the frames, gate, lens-distortion schema)
@@ -160,11 +161,11 @@ struct RaysArgs {
     #[arg(long = "param", value_name = "PARAM")]
     params: Vec<String>,
     /// Trace through a real camera's calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
-    /// camchain.yaml, OCamCalib calib_results.txt) with CalibratedCamera. --param adds to or replaces
+    /// camchain.yaml, OCamCalib calib_results.txt, a Nuke script with 3DE LD nodes, a 3DE lens export) with CalibratedCamera. --param adds to or replaces
     /// its parameters.
     #[arg(long, value_name = "FILE")]
     calibration: Option<PathBuf>,
-    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    /// The camera of a calibration file holding several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD node's name, …).
     #[arg(long, value_name = "ID", requires = "calibration")]
     camera: Option<String>,
     /// Image size in pixels, WIDTHxHEIGHT (default: the calibration's resolution, else 640x480).

@@ -178,6 +178,30 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             .map(|&(n, i)| (n, displays_of[i].clone().unwrap_or_default()))
             .collect::<Vec<_>>(),
     );
+    // An animated lens (a Nuke script's curves): every selected frame renders through the lens
+    // of that frame.
+    if let (Some(path), Some(c)) = (a.calibration.as_deref(), calibration.as_ref())
+        && c.calibration.animated
+    {
+        for (job, list) in jobs.iter().zip(&lists) {
+            if !a.quiet {
+                outln!(
+                    "frame {}: through the lens of {} at that frame",
+                    job.0,
+                    path.display()
+                );
+            }
+            let lens = Calibrated::load_frame(path, a.camera.as_deref(), Some(f64::from(job.0)))
+                .map_err(|e| e.to_string())?;
+            let writes = [FrameWrite {
+                number: a.frames.is_some().then_some(job.0),
+                displays: list.as_slice(),
+            }];
+            let scene = source.image(job.1).map_err(|e| e.to_string())?;
+            render_image(a, search, scene, source.base_dir(), Some(lens), &writes)?;
+        }
+        return Ok(());
+    }
     // Each image renders once; a still selected as several frames is written as each of them.
     let mut order: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
     order.dedup();

@@ -21,11 +21,11 @@ pub struct StmapArgs {
     #[arg(long, value_name = "NAME", required_unless_present = "from_calibration")]
     from: Option<String>,
     /// A is the real camera of this calibration file (COLMAP cameras.txt, OpenCV YAML/JSON, Kalibr
-    /// camchain.yaml, OCamCalib calib_results.txt): map B = a pinhole to undistort its plates, or
+    /// camchain.yaml, OCamCalib calib_results.txt, a Nuke script with 3DE LD nodes, a 3DE lens export): map B = a pinhole to undistort its plates, or
     /// A = a pinhole and --to-calibration to distort renders to match them.
     #[arg(long, value_name = "FILE", conflicts_with = "from")]
     from_calibration: Option<PathBuf>,
-    /// The camera of --from-calibration's file when it holds several (a COLMAP CAMERA_ID, Kalibr's cam0, …).
+    /// The camera of --from-calibration's file when it holds several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD node's name, …).
     #[arg(long, value_name = "ID", requires = "from_calibration")]
     from_camera: Option<String>,
     /// A parameter of A: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable; with

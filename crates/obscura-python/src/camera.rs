@@ -369,20 +369,24 @@ impl Camera {
     }
 
     /// A camera from a calibration file the CLI reads (COLMAP `cameras.txt`, OpenCV YAML/JSON,
-    /// Kalibr `camchain.yaml`, OCamCalib `calib_results.txt`): `camera` picks one of several (a COLMAP
-    /// CAMERA_ID, Kalibr's `cam0`; default the first). The format defaults to the calibration's size;
-    /// keyword arguments are camera options or `CalibratedCamera` parameters replacing the file's.
+    /// Kalibr `camchain.yaml`, OCamCalib `calib_results.txt`, a Nuke script with 3DEqualizer's
+    /// `LD_3DE*` nodes, a 3DE lens export): `camera` picks one of several (a COLMAP CAMERA_ID,
+    /// Kalibr's `cam0`, an LD node's name; default the first); `frame` evaluates a Nuke script's
+    /// animated knobs at that frame (default: the script's current frame). The format defaults to
+    /// the calibration's size; keyword arguments are camera options or `CalibratedCamera`
+    /// parameters replacing the file's.
     #[classmethod]
-    #[pyo3(signature = (path, camera = None, **kwargs))]
+    #[pyo3(signature = (path, camera = None, frame = None, **kwargs))]
     fn from_calibration(
         _cls: &Bound<'_, PyType>,
         path: PathBuf,
         camera: Option<&Bound<'_, PyAny>>,
+        frame: Option<f64>,
         kwargs: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let camera = camera.map(|c| c.str().map(|s| s.to_string())).transpose()?;
-        let c =
-            Calibrated::load(&path, camera.as_deref()).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let c = Calibrated::load_frame(&path, camera.as_deref(), frame)
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
         let cal = &c.calibration;
         let nums =
             |v: &[obscura_calibration::files::Number]| Raw::Numbers(v.iter().map(|n| n.value).collect());

@@ -114,7 +114,20 @@ impl Calibrated {
     /// # Errors
     /// A [`CalibrationFileError`] naming the file (and the line, when one is to blame).
     pub fn load(path: &Path, camera: Option<&str>) -> Result<Self, CalibrationFileError> {
-        let calibration = obscura_calibration::files::load(path, camera)?;
+        Self::load_frame(path, camera, None)
+    }
+
+    /// [`Calibrated::load`] with animated parameters (a Nuke script's curves) at `frame` (`None`:
+    /// the file's own current frame).
+    ///
+    /// # Errors
+    /// As [`Calibrated::load`].
+    pub fn load_frame(
+        path: &Path,
+        camera: Option<&str>,
+        frame: Option<f64>,
+    ) -> Result<Self, CalibrationFileError> {
+        let calibration = obscura_calibration::files::load_frame(path, camera, frame)?;
         let params = calibration.param_list()?;
         Ok(Calibrated { calibration, params })
     }

@@ -9,6 +9,8 @@
 //! | OpenCV YAML / JSON | a mapping with `camera_matrix` | `OPENCV_PINHOLE` (0, 4, 5, 8, 12 or 14 coefficients); `OPENCV_FISHEYE` when `fisheye_model` is set | `opencv` (pixel centres at integers) |
 //! | Kalibr `camchain.yaml` | a mapping of cameras with `camera_model` | see [`kalibr`] | `opencv` |
 //! | OCamCalib `calib_results.txt` | text lines of numbers | `OCAMCALIB` | `opencv` |
+//! | 3DEqualizer lens export text | the fourth line names a 3DE model, `<end_of_file>` follows | that model, see [`tde4`] | `colmap` |
+//! | Nuke script (`.nk`) with 3DE lens nodes | a node `LD_3DE4_…`, `LD_3DE_Classic_LD_Model` or `tde4_ldp_…` | the node's 3DE model, see [`nuke`] | `colmap` (3DE's unit coordinates are corner-based) |
 //!
 //! Values keep the file's text: each number reaches the projection as written (it is held there as
 //! `f32`). Every error names the file, the line and the field, and what was expected.
@@ -22,8 +24,10 @@ use tree::{Node, Value};
 
 pub mod colmap;
 pub mod kalibr;
+pub mod nuke;
 pub mod ocamcalib;
 pub mod opencv;
+pub mod tde4;
 mod tree;
 
 /// The projection a [`Calibration`]'s parameters are for.
@@ -53,6 +57,10 @@ pub enum FileFormat {
     Kalibr,
     /// OCamCalib's `calib_results.txt`.
     OCamCalib,
+    /// A Nuke script with 3DEqualizer's lens-distortion nodes (`LD_3DE4_*`, see [`nuke`]).
+    Nuke,
+    /// 3DEqualizer's lens export text (see [`tde4`]).
+    Tde4Lens,
 }
 
 impl fmt::Display for FileFormat {
@@ -62,6 +70,8 @@ impl fmt::Display for FileFormat {
             FileFormat::OpenCv => "OpenCV calibration",
             FileFormat::Kalibr => "Kalibr camchain",
             FileFormat::OCamCalib => "OCamCalib calib_results",
+            FileFormat::Nuke => "Nuke script with 3DE lens nodes",
+            FileFormat::Tde4Lens => "3DEqualizer lens export",
         })
     }
 }
@@ -113,6 +123,9 @@ pub struct Calibration {
     /// What was ignored or assumed while reading (extrinsics, a converted parameter order), one
     /// sentence each.
     pub notes: Vec<String>,
+    /// True when some parameter follows a curve over frames (a Nuke script's animated knob): the
+    /// values are those of the frame asked for, and other frames differ.
+    pub animated: bool,
 }
 
 impl Calibration {
@@ -176,9 +189,17 @@ impl Calibration {
         .map_err(|message| {
             // A complaint about the direct polynomial is about its line (OCamCalib's `pol` line),
             // not the camera's first parameter.
+            // A complaint naming one parameter (`… Squeeze-X must be > 0`) is about its line.
+            let named = crate::models::model_info(&self.model).and_then(|info| {
+                info.params
+                    .split(", ")
+                    .position(|name| message.contains(&format!(": {name} must")))
+                    .and_then(|i| self.params.get(i))
+                    .map(|n| n.line)
+            });
             let line = match self.polynomial.first() {
                 Some(first) if message.contains("pol's") => first.line,
-                _ => entry_line,
+                _ => named.unwrap_or(entry_line),
             };
             CalibrationFileError {
                 file: self.file.clone(),
@@ -300,11 +321,12 @@ impl Src<'_> {
             polynomial: Vec::new(),
             inverse_polynomial: Vec::new(),
             pixel_convention: match format {
-                FileFormat::Colmap => PixelConvention::Colmap,
+                FileFormat::Colmap | FileFormat::Nuke | FileFormat::Tde4Lens => PixelConvention::Colmap,
                 FileFormat::OpenCv | FileFormat::Kalibr | FileFormat::OCamCalib => PixelConvention::OpenCv,
             },
             source: format!("{}:{line}", self.file),
             notes: Vec::new(),
+            animated: false,
         }
     }
 
@@ -366,13 +388,26 @@ pub(crate) fn choose_camera(
 /// cannot be read, is of no known kind, is malformed, or holds no camera `camera` (the error lists the
 /// ids it holds).
 pub fn load(path: &Path, camera: Option<&str>) -> Result<Calibration, CalibrationFileError> {
+    load_frame(path, camera, None)
+}
+
+/// [`load`] with animated parameters (a Nuke script's curves) evaluated at `frame` (`None`: the
+/// file's own current frame).
+///
+/// # Errors
+/// As [`load`].
+pub fn load_frame(
+    path: &Path,
+    camera: Option<&str>,
+    frame: Option<f64>,
+) -> Result<Calibration, CalibrationFileError> {
     let name = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| CalibrationFileError {
         file: name.clone(),
         line: None,
         message: format!("cannot read the calibration file: {e}"),
     })?;
-    parse(&text, &name, camera)
+    parse_frame(&text, &name, camera, frame)
 }
 
 /// Reads calibration `text` from the file named `file` (the name's extension and the content tell the
@@ -381,7 +416,26 @@ pub fn load(path: &Path, camera: Option<&str>) -> Result<Calibration, Calibratio
 /// # Errors
 /// As [`load`].
 pub fn parse(text: &str, file: &str, camera: Option<&str>) -> Result<Calibration, CalibrationFileError> {
+    parse_frame(text, file, camera, None)
+}
+
+/// [`parse`] with animated parameters evaluated at `frame`, as [`load_frame`].
+///
+/// # Errors
+/// As [`load`].
+pub fn parse_frame(
+    text: &str,
+    file: &str,
+    camera: Option<&str>,
+    frame: Option<f64>,
+) -> Result<Calibration, CalibrationFileError> {
     let src = Src { file };
+    if nuke::looks_like(text) || file.to_ascii_lowercase().ends_with(".nk") {
+        return nuke::read(&src, text, camera, frame);
+    }
+    if tde4::looks_like(text) {
+        return tde4::read(&src, text, camera);
+    }
     let ext = Path::new(file)
         .extension()
         .and_then(|e| e.to_str())
@@ -433,6 +487,8 @@ pub fn parse_as(
         FileFormat::OCamCalib => ocamcalib::read(&src, text, camera),
         FileFormat::OpenCv => opencv::read(&src, &tree::parse(&src, text)?, camera),
         FileFormat::Kalibr => kalibr::read(&src, &tree::parse(&src, text)?, camera),
+        FileFormat::Nuke => nuke::read(&src, text, camera, None),
+        FileFormat::Tde4Lens => tde4::read(&src, text, camera),
     }
 }
 

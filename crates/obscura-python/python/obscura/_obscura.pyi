@@ -56,11 +56,17 @@ class Camera:
     def __init__(self, projection: str = "PxrPerspective", **kwargs: Any) -> None: ...
     @classmethod
     def from_calibration(
-        cls, path: Union[str, PathLike[str]], camera: Optional[Union[str, int]] = None, **kwargs: Any
+        cls,
+        path: Union[str, PathLike[str]],
+        camera: Optional[Union[str, int]] = None,
+        frame: Optional[float] = None,
+        **kwargs: Any,
     ) -> "Camera":
         """A camera from a calibration file the CLI reads: COLMAP ``cameras.txt``, OpenCV YAML/JSON,
-        Kalibr ``camchain.yaml``, OCamCalib ``calib_results.txt``. ``camera`` picks one of several
-        (a COLMAP CAMERA_ID, Kalibr's ``cam0``; default the first). The format defaults to the
+        Kalibr ``camchain.yaml``, OCamCalib ``calib_results.txt``, a Nuke script with 3DEqualizer's
+        ``LD_3DE*`` nodes, a 3DE lens export. ``camera`` picks one of several (a COLMAP CAMERA_ID,
+        Kalibr's ``cam0``, an LD node's name; default the first); ``frame`` evaluates a Nuke
+        script's animated knobs at that frame (default: the script's current frame). The format defaults to the
         calibration's size; keyword arguments are camera options or ``CalibratedCamera`` parameters
         replacing the file's. Errors name the file, the line and the field."""
     @property
