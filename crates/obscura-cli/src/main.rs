@@ -90,7 +90,8 @@ struct RenderArgs {
     /// Use this projection instead of the scene's.
     #[arg(short, long, conflicts_with = "calibration")]
     projection: Option<String>,
-    /// The frames to render: N, A-B, or a list such as 1-10,20. A run of # in an output's file name
+    /// The frames to render: N, A-B, A-B:S or A-BxS (every S-th frame), or a comma list of them such as
+    /// 1-3,5,7-20:2 (the forms Slurm, OpenJD and OpenCue write). A run of # in an output's file name
     /// becomes the zero-padded frame number (out.####.exr); without one, several frames write
     /// out.0001.exr, out.0002.exr, … by frame number.
     #[arg(long = "frames", visible_alias = "frame", value_name = "SPEC")]

@@ -233,7 +233,7 @@ fn frame_jobs(spec: Option<&FrameSpec>, source: &dyn SceneSource) -> Result<Vec<
             ));
         }
         return Ok(match spec {
-            Some(s) => s.frames().map(|n| (n, 0)).collect(),
+            Some(s) => s.non_negative()?.map(|n| (n, 0)).collect(),
             None => vec![(still.number, 0)],
         });
     }
@@ -381,7 +381,10 @@ fn render_animation(
     let displays = image_displays(a, &first);
     let opts = render_options(a);
     let size = scene_size_source(a);
-    let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+    let frames: Vec<u32> = match &a.frames {
+        Some(f) => f.non_negative()?.collect(),
+        None => vec![1],
+    };
     let scene = |n: u32| -> Result<Scene, String> {
         let mut s = source.frame(n).map_err(|e| e.to_string())?;
         overrides.apply(&mut s).map_err(|e| e.to_string())?;
