@@ -56,7 +56,7 @@ fn a_bad_frame_selection_is_named() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("'9-2': the range 9-2 ends before it starts") && err.contains("--frames"),
+        err.contains("'9-2': the range ends (2) before it starts (9)") && err.contains("--frames"),
         "{err}"
     );
     assert!(files(dir.path()).is_empty());
