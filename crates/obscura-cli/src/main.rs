@@ -25,6 +25,7 @@ use obscura_sdk::{Format, ScreenWindow};
 
 mod args;
 mod check;
+mod farm;
 mod lens;
 mod params;
 mod render;
@@ -77,6 +78,11 @@ enum Command {
     /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
     /// drawing with traced ray fans (--diagram out.svg|png).
     Lens(Box<lens::LensArgs>),
+    /// The collect step of a farm job: check that every frame of a shot is complete (its camera JSON
+    /// says "complete": true) and, with --tiles, stitch each frame's tiles into the image a
+    /// one-process render writes (EXR, PNG, sidecars), atomically. Lists what is missing; exit 1 if
+    /// anything is.
+    Merge(Box<farm::MergeArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -141,6 +147,23 @@ struct RenderArgs {
     /// Frames per second of an animated scene (glTF): frame N is posed at (N − 1)/fps seconds.
     #[arg(long, default_value_t = 24.0, value_parser = render::parse_fps)]
     fps: f32,
+    // Farm options (issue 27): tiles and progress lines.
+    /// Render only tile I (from 0) of N horizontal bands of each frame; its files are named
+    /// NAME.tileI-1xN.EXT. `obscura merge --tiles 1xN` stitches them.
+    #[arg(long, value_name = "I/N", value_parser = farm::parse_tile, conflicts_with_all = ["tiles", "crop"])]
+    tile: Option<(u32, obscura_image::tiles::TileGrid)>,
+    /// Split each frame in a grid of COLSxROWS tiles and render only --tile-index I (row-major from
+    /// the top left, from 0); files are named NAME.tileI-CxR.EXT.
+    #[arg(long, value_name = "CxR", value_parser = farm::parse_grid, conflicts_with = "crop")]
+    tiles: Option<obscura_image::tiles::TileGrid>,
+    /// The tile of --tiles this task renders, from 0.
+    #[arg(long, value_name = "I")]
+    tile_index: Option<u32>,
+    /// Progress lines for a farm: plain (a line every few seconds on stderr, the default when stderr
+    /// is not a terminal), openjd (openjd_progress / openjd_status on stdout), tractor (TR_PROGRESS
+    /// on stdout), or none.
+    #[arg(long, value_enum, value_name = "MODE")]
+    progress: Option<render::ProgressMode>,
 }
 
 #[derive(Args, Debug)]
@@ -399,6 +422,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
+        Command::Merge(a) => farm::merge(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

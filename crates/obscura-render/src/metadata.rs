@@ -55,6 +55,17 @@ pub fn sidecar_path(image: &Path, suffix: &str) -> PathBuf {
     image.with_extension(suffix)
 }
 
+/// The camera JSON `text` (as the EXR header's `obscura:camera` holds it, compact) with its
+/// `image.data_window` set to `rect`, in the same form; `None` when `text` is not a camera JSON.
+/// What `obscura merge` writes into the header of tiles stitched back into one image.
+#[must_use]
+pub fn with_data_window(text: &str, rect: obscura_host::PixelRect) -> Option<String> {
+    let mut v: Value = serde_json::from_str(text).ok()?;
+    let window = v.get_mut("image")?.get_mut("data_window")?;
+    *window = json!([rect.x0, rect.y0, rect.x1, rect.y1]);
+    Some(v.to_string())
+}
+
 /// Writes `value` (pretty-printed, with a final newline) to `path` atomically.
 ///
 /// # Errors
