@@ -266,3 +266,35 @@ fn progress_lines_for_openjd_tractor_and_logs() {
         text(&out.stderr)
     );
 }
+
+#[test]
+fn deep_and_flat_displays_of_a_rib_merge_to_the_one_process_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rib = "Format 20 14 1\nPixelSamples 1 1\nProjection \"perspective\" \"fov\" [50]\nTranslate 0 0 4\n\
+               Display \"beauty.exr\" \"openexr\" \"rgba\"\nDisplay \"+deep.exr\" \"deepexr\" \"rgba\"\n\
+               WorldBegin\nSphere 1 -1 1 360\nTranslate 1 0.5 1\nSphere 0.6 -0.6 0.6 360\nWorldEnd\n";
+    for sub in ["full", "tiles"] {
+        std::fs::create_dir_all(d.join(sub)).unwrap();
+        std::fs::write(d.join(sub).join("scene.rib"), rib).unwrap();
+    }
+    run(&["render", "scene.rib", "-q"], &d.join("full"));
+    for i in ["0", "1", "2", "3", "4", "5"] {
+        run(
+            &["render", "scene.rib", "-q", "--tiles", "3x2", "--tile-index", i],
+            &d.join("tiles"),
+        );
+    }
+    run(
+        &["merge", "beauty.exr", "deep.exr", "--tiles", "3x2", "-q"],
+        &d.join("tiles"),
+    );
+    assert_eq!(
+        files(&d.join("full"))
+            .iter()
+            .map(|f| f.file_name().unwrap().to_owned())
+            .collect::<Vec<_>>(),
+        ["beauty.exr", "beauty.png", "deep.exr", "scene.rib"]
+    );
+    assert_same_files(&d.join("full"), &d.join("tiles"));
+}

@@ -1,6 +1,6 @@
 //! Tiles of a frame rendered apart and stitched back: which pixels tile `i` of a `C×R` grid holds,
 //! what its files are called, and [`merge_exr`] / [`merge_png`], which put the tiles' files back
-//! together into the bytes a one-process render writes.
+//! together into the bytes a one-process render writes (flat EXR with every channel, deep EXR, PNG).
 //!
 //! This is the one place that reasons about data windows of a split frame: a tile's data window is
 //! its rectangle of the region being split (the full render's data window), and the merged file's
@@ -27,6 +27,7 @@ use exr::prelude::{
 };
 use obscura_host::PixelRect;
 
+use crate::deep::{DeepImage, read_deep_exr, write_deep_exr};
 use crate::output::{FloatExrImage, write_exr_image, write_png_rgb};
 
 /// The header attribute that marks an interrupted render's EXR (written by the frame pipeline).
@@ -317,6 +318,9 @@ pub fn merge_exr(
     rewrite: &dyn Fn(&str, &str, PixelRect) -> Option<String>,
 ) -> Result<(), MergeError> {
     assert_eq!(tiles.len(), grid.count() as usize, "one file per tile");
+    if crate::deep::is_deep_exr(&tiles[0]) {
+        return merge_deep(tiles, grid, output);
+    }
     let images: Vec<FloatExrImage> = tiles.iter().map(|p| read_tile(p)).collect::<Result<_, _>>()?;
     for (path, image) in tiles.iter().zip(&images) {
         if image
@@ -467,6 +471,64 @@ pub fn merge_exr(
         layer_data: layer,
     };
     Ok(write_exr_image(image, output)?)
+}
+
+/// The deep case of [`merge_exr`]: the tiles' samples put together and written by
+/// [`write_deep_exr`] as the one-process render writes them.
+fn merge_deep(tiles: &[PathBuf], grid: TileGrid, output: &Path) -> Result<(), MergeError> {
+    let mut images = Vec::with_capacity(tiles.len());
+    for path in tiles {
+        let (image, compression) = read_deep_exr(path).map_err(|reason| MergeError::Unreadable {
+            path: path.clone(),
+            reason,
+        })?;
+        images.push((image, compression));
+    }
+    let (size, compression) = ((images[0].0.width, images[0].0.height), images[0].1);
+    for (path, (image, c)) in tiles.iter().zip(&images).skip(1) {
+        let what = if (image.width, image.height) != size {
+            format!(
+                "its frame is {}×{} pixels, the first tile's {}×{}",
+                image.width, image.height, size.0, size.1
+            )
+        } else if *c != compression {
+            "another compression".into()
+        } else {
+            continue;
+        };
+        return Err(MergeError::OddOneOut {
+            path: path.clone(),
+            first: tiles[0].clone(),
+            what,
+        });
+    }
+    let bounds: Vec<IntegerBounds> = images.iter().map(|(im, _)| bounds_of(im.data_window)).collect();
+    let region = check_regions(tiles, &bounds, grid)?;
+    let w = region.width() as usize;
+    let mut pixels = vec![Vec::new(); region.len()];
+    for (image, _) in images {
+        let r = image.data_window;
+        for (k, samples) in image.pixels.into_iter().enumerate() {
+            let (x, y) = (
+                r.x0 as usize + k % r.width() as usize,
+                r.y0 as usize + k / r.width() as usize,
+            );
+            pixels[(y - region.y0 as usize) * w + x - region.x0 as usize] = samples;
+        }
+    }
+    let merged = DeepImage {
+        width: size.0,
+        height: size.1,
+        data_window: region,
+        pixels,
+    };
+    write_deep_exr(output, &merged, compression).map_err(|e| match e {
+        crate::output::OutputError::Write(e) => MergeError::Write(e),
+        other => MergeError::Unreadable {
+            path: output.to_path_buf(),
+            reason: other.to_string(),
+        },
+    })
 }
 
 /// One decoded PNG tile: size and RGB bytes.

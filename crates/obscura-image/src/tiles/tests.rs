@@ -209,3 +209,60 @@ proptest! {
         prop_assert_eq!(area, region.len());
     }
 }
+
+/// A deep image of `w×h` over `window`: pixel (x, y) holds `(x + y) % 3` samples.
+fn deep(w: u32, h: u32, window: PixelRect) -> crate::deep::DeepImage {
+    let pixels = (window.y0..window.y1)
+        .flat_map(|y| (window.x0..window.x1).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            (0..(x + y) % 3)
+                .map(|k| crate::deep::DeepSample {
+                    z: (x * 10 + y + k) as f32,
+                    z_back: (x * 10 + y + k) as f32 + 0.5,
+                    r: 0.1 * x as f32,
+                    g: 0.2 * y as f32,
+                    b: 0.3,
+                    a: 0.5,
+                })
+                .collect()
+        })
+        .collect();
+    crate::deep::DeepImage {
+        width: w,
+        height: h,
+        data_window: window,
+        pixels,
+    }
+}
+
+#[test]
+fn deep_tiles_merge_to_the_bytes_of_the_full_deep_image() {
+    use crate::deep::{DeepCompression, read_deep_exr, write_deep_exr};
+    for compression in [DeepCompression::Zips, DeepCompression::None] {
+        let dir = tempfile::tempdir().unwrap();
+        let grid = TileGrid::parse("2x2").unwrap();
+        let whole = rect(0, 11, 0, 7);
+        let full = dir.path().join("full.exr");
+        write_deep_exr(&full, &deep(11, 7, whole), compression).unwrap();
+        let (back, c) = read_deep_exr(&full).unwrap();
+        assert_eq!((back, c), (deep(11, 7, whole), compression));
+        let out = dir.path().join("deep.exr");
+        let tiles: Vec<PathBuf> = (0..4)
+            .map(|i| {
+                let p = grid.tile_path(&out, i);
+                write_deep_exr(&p, &deep(11, 7, grid.rect(whole, i)), compression).unwrap();
+                p
+            })
+            .collect();
+        merge_exr(&tiles, grid, &out, &keep).unwrap();
+        assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&full).unwrap());
+        // A truncated deep tile is named.
+        let bytes = std::fs::read(&tiles[3]).unwrap();
+        std::fs::write(&tiles[3], &bytes[..bytes.len() - 5]).unwrap();
+        let e = merge_exr(&tiles, grid, &out, &keep).unwrap_err().to_string();
+        assert!(
+            e.contains("deep.tile3-2x2.exr: cannot read this tile: truncated"),
+            "{e}"
+        );
+    }
+}
