@@ -119,7 +119,8 @@ struct RenderArgs {
     /// Samples per pixel (default: the scene's Hider maxsamples).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     spp: Option<u32>,
-    /// Worker threads, 1 to 1024 (default: all cores).
+    /// Worker threads, 1 to 1024 (default: one per CPU this process may run on: its affinity mask, as
+    /// Slurm, a cgroup cpuset or taskset set it).
     #[arg(long)]
     threads: Option<usize>,
     /// CropWindow xmin xmax ymin ymax, in NDC (y down).

@@ -298,3 +298,51 @@ fn deep_and_flat_displays_of_a_rib_merge_to_the_one_process_render() {
     );
     assert_same_files(&d.join("full"), &d.join("tiles"));
 }
+
+/// The most threads the process `child` had at once, polled until it exits.
+fn peak_threads(mut child: std::process::Child) -> usize {
+    let tasks = PathBuf::from(format!("/proc/{}/task", child.id()));
+    let mut peak = 0;
+    while child.try_wait().unwrap().is_none() {
+        if let Ok(list) = std::fs::read_dir(&tasks) {
+            peak = peak.max(list.count());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    peak
+}
+
+#[test]
+fn without_threads_the_render_uses_the_cpus_of_its_affinity_mask() {
+    let available = std::thread::available_parallelism().unwrap().get();
+    if available < 2 {
+        eprintln!("one CPU: nothing to restrict");
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = classic();
+    let args = [
+        "render", &scene, "--format", "96x72", "--spp", "4", "-q", "-o", "a.exr",
+    ];
+    let spawn = |taskset: bool| {
+        let mut c = if taskset {
+            let mut c = std::process::Command::new("taskset");
+            c.args(["-c", "0", env!("CARGO_BIN_EXE_obscura")]);
+            c
+        } else {
+            std::process::Command::new(env!("CARGO_BIN_EXE_obscura"))
+        };
+        c.args(args)
+            .current_dir(dir.path())
+            .stderr(std::process::Stdio::null())
+            .spawn()
+            .expect("taskset (util-linux) and obscura run")
+    };
+    let all = peak_threads(spawn(false));
+    let one = peak_threads(spawn(true));
+    // The worker pool shrinks from one thread per CPU to one (and any other per-CPU pool with it).
+    assert!(
+        all - one >= available - 1,
+        "threads: {all} unrestricted, {one} on one CPU"
+    );
+}
