@@ -324,3 +324,223 @@ fn merge_camera(cameras: &[PathBuf], image: &Path, grid: TileGrid) -> Result<Pat
     obscura_render::metadata::write_json(&out, &v).map_err(|e| e.to_string())?;
     Ok(out)
 }
+
+/// The shipped job files: the Slurm array task, the Slurm collect job, the OpenJD template.
+const RENDER_SBATCH: &str = include_str!("../../../scripts/farm/render.sbatch");
+const COLLECT_SBATCH: &str = include_str!("../../../scripts/farm/collect.sbatch");
+const OPENJD_TEMPLATE: &str = include_str!("../../../scripts/farm/job.yaml");
+
+/// The farm engine `obscura submit` writes for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Engine {
+    /// A Slurm job array over chunks × tiles (`sbatch`), then a collect job `--dependency=afterany`.
+    Slurm,
+    /// The Open Job Description template, run with `openjd run` (or given to a farm that runs OpenJD).
+    Openjd,
+}
+
+/// `obscura submit`.
+#[derive(Args, Debug)]
+pub struct SubmitArgs {
+    /// The engine: slurm or openjd.
+    #[arg(long, value_enum)]
+    engine: Engine,
+    /// The scene (RIB, glTF, OBJ).
+    scene: PathBuf,
+    /// The images, with a run of # for the frame number (out/beauty.####.exr).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// The frames of the shot, as `obscura render --frames` reads them.
+    #[arg(long, value_name = "SPEC")]
+    frames: FrameSpec,
+    /// Frames per task: the scene is read once per task, so larger chunks amortise its load.
+    #[arg(long, value_name = "N", default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    chunk: u32,
+    /// Split each frame in COLSxROWS tiles, one task each; the collect step merges them.
+    #[arg(long, value_name = "CxR", value_parser = parse_grid)]
+    tiles: Option<TileGrid>,
+    /// Where the job files go (default: obscura-job beside the images).
+    #[arg(long, value_name = "DIR")]
+    job_dir: Option<PathBuf>,
+    /// The obscura the tasks run (default: this one).
+    #[arg(long, value_name = "PATH")]
+    obscura: Option<PathBuf>,
+    /// An argument for both sbatch calls (--partition=render, --time=2:00:00). Repeatable.
+    #[arg(long = "sbatch-arg", value_name = "ARG", allow_hyphen_values = true)]
+    sbatch_args: Vec<String>,
+    /// The openjd command (default: openjd on PATH).
+    #[arg(long, value_name = "PATH", default_value = "openjd")]
+    openjd: PathBuf,
+    /// Only write the job files and print the commands that would submit them.
+    #[arg(long)]
+    dry_run: bool,
+    /// More `obscura render` arguments for every task, after `--` (-- --format 1920x1080 --spp 64).
+    #[arg(last = true, value_name = "RENDER_ARGS")]
+    render_args: Vec<String>,
+}
+
+/// `path` made absolute (tasks run in other directories), as text.
+fn absolute(path: &Path) -> Result<String, String> {
+    let p = std::path::absolute(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    p.to_str()
+        .map(str::to_string)
+        .ok_or_else(|| format!("{}: not valid UTF-8, which job files cannot carry", p.display()))
+}
+
+/// Writes `text` to `dir/name` atomically (mode 0755 for scripts is set by the caller's `sbatch`/
+/// `bash` invocation, which does not need it).
+fn write_file(dir: &Path, name: &str, text: &str) -> Result<PathBuf, String> {
+    let path = dir.join(name);
+    obscura_image::atomic::write_atomically(&path, |out| std::io::Write::write_all(out, text.as_bytes()))
+        .map_err(|e| e.to_string())?;
+    Ok(path)
+}
+
+/// Runs `cmd`, returning its standard output, or an error naming the command and its stderr.
+fn run_capture(cmd: &mut std::process::Command) -> Result<String, String> {
+    let shown = format!("{cmd:?}");
+    let out = cmd.output().map_err(|e| format!("{shown}: {e}"))?;
+    if !out.status.success() {
+        return Err(format!(
+            "{shown} failed ({}): {}",
+            out.status,
+            String::from_utf8_lossy(&out.stderr).trim()
+        ));
+    }
+    Ok(String::from_utf8_lossy(&out.stdout).trim().to_string())
+}
+
+/// `obscura submit`: the job directory written, then submitted (unless `--dry-run`).
+pub fn submit(a: &SubmitArgs) -> Result<(), String> {
+    let output = absolute(&a.output)?;
+    let scene = absolute(&a.scene)?;
+    if !a.scene.is_file() {
+        return Err(format!("{scene}: no such scene file"));
+    }
+    let out_dir = Path::new(&output)
+        .parent()
+        .unwrap_or(Path::new("/"))
+        .to_path_buf();
+    let job = match &a.job_dir {
+        Some(d) => PathBuf::from(absolute(d)?),
+        None => out_dir.join("obscura-job"),
+    };
+    for dir in [&out_dir, &job, &job.join("logs")] {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    let obscura = match &a.obscura {
+        Some(p) => p.display().to_string(),
+        None => std::env::current_exe()
+            .map_err(|e| format!("the path of this obscura: {e}"))?
+            .display()
+            .to_string(),
+    };
+    let grid = a.tiles.unwrap_or(TileGrid { cols: 1, rows: 1 });
+    let chunks = a.frames.chunks(a.chunk);
+    let tasks = chunks.len() as u64 * u64::from(grid.count());
+    let quote = |s: &str| format!("'{}'", s.replace('\'', "'\\''"));
+    write_file(
+        &job,
+        "job.env",
+        &format!(
+            "OBSCURA={}\nTILES={grid}\nTILE_COUNT={}\nCHUNKS={}\n",
+            quote(&obscura),
+            grid.count(),
+            chunks.len()
+        ),
+    )?;
+    let lines = |v: &[String]| v.iter().map(|s| format!("{s}\n")).collect::<String>();
+    write_file(
+        &job,
+        "chunks.txt",
+        &lines(&chunks.iter().map(ToString::to_string).collect::<Vec<_>>()),
+    )?;
+    let mut render_args = vec![scene.clone(), "-o".into(), output.clone()];
+    render_args.extend(a.render_args.iter().cloned());
+    if render_args.iter().any(|s| s.contains('\n')) {
+        return Err("render arguments cannot hold a line break".into());
+    }
+    write_file(&job, "render.args", &lines(&render_args))?;
+    let mut collect_args = vec![output.clone(), "--frames".into(), a.frames.to_string()];
+    if a.tiles.is_some() {
+        collect_args.extend(["--tiles".into(), grid.to_string()]);
+    }
+    write_file(&job, "collect.args", &lines(&collect_args))?;
+    let render_script = write_file(&job, "render.sbatch", RENDER_SBATCH)?;
+    let collect_script = write_file(&job, "collect.sbatch", COLLECT_SBATCH)?;
+    let template = write_file(&job, "job.yaml", OPENJD_TEMPLATE)?;
+    outln!(
+        "job files in {} ({tasks} render tasks: {} chunk(s) × {} tile(s))",
+        job.display(),
+        chunks.len(),
+        grid.count()
+    );
+
+    match a.engine {
+        Engine::Slurm => {
+            let export = format!("--export=ALL,OBSCURA_JOB_DIR={}", job.display());
+            let logs = job.join("logs");
+            let mut render = std::process::Command::new("sbatch");
+            render
+                .arg("--parsable")
+                .arg(format!("--array=0-{}", tasks - 1))
+                .arg(format!("--output={}/render_%A_%a.log", logs.display()))
+                .arg(&export)
+                .args(&a.sbatch_args)
+                .arg(&render_script);
+            let collect_base = |dependency: &str| {
+                let mut c = std::process::Command::new("sbatch");
+                c.arg("--parsable")
+                    .arg(format!("--dependency=afterany:{dependency}"))
+                    .arg(format!("--output={}/collect_%j.log", logs.display()))
+                    .arg(&export)
+                    .args(&a.sbatch_args)
+                    .arg(&collect_script);
+                c
+            };
+            if a.dry_run {
+                outln!("would run: {render:?}");
+                outln!("then: {:?}", collect_base("<render job>"));
+                return Ok(());
+            }
+            let id = run_capture(&mut render)?;
+            let id = id.split(';').next().unwrap_or_default().to_string();
+            outln!("render job {id}: array 0-{}", tasks - 1);
+            let collect = run_capture(&mut collect_base(&id))?;
+            outln!(
+                "collect job {} (after any end of {id})",
+                collect.split(';').next().unwrap_or_default()
+            );
+        }
+        Engine::Openjd => {
+            let mut params = vec![
+                format!("Obscura={obscura}"),
+                format!("Scene={scene}"),
+                format!("Output={output}"),
+                format!("Frames={}", a.frames),
+                format!("FramesPerTask={}", a.chunk),
+                format!("Tiles={grid}"),
+                format!("TileIndices=0-{}", grid.count() - 1),
+            ];
+            if !a.render_args.is_empty() {
+                params.push(format!("RenderArgs={}", a.render_args.join(" ")));
+            }
+            let mut run = std::process::Command::new(&a.openjd);
+            run.arg("run")
+                .arg(&template)
+                .args(["--step", "Collect", "--run-dependencies"]);
+            for p in &params {
+                run.arg("-p").arg(p);
+            }
+            if a.dry_run {
+                outln!("would run: {run:?}");
+                return Ok(());
+            }
+            let status = run.status().map_err(|e| format!("{}: {e}", a.openjd.display()))?;
+            if !status.success() {
+                return Err(format!("openjd run failed ({status})"));
+            }
+        }
+    }
+    Ok(())
+}

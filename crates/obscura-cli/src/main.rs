@@ -83,6 +83,9 @@ enum Command {
     /// one-process render writes (EXR, PNG, sidecars), atomically. Lists what is missing; exit 1 if
     /// anything is.
     Merge(Box<farm::MergeArgs>),
+    /// Write a farm job for a shot (a Slurm job array over frame chunks × tiles and a collect job, or
+    /// an Open Job Description template) and submit it (sbatch / openjd run), printing the job ids.
+    Submit(Box<farm::SubmitArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -165,6 +168,11 @@ struct RenderArgs {
     /// on stdout), or none.
     #[arg(long, value_enum, value_name = "MODE")]
     progress: Option<render::ProgressMode>,
+    /// Always write <image>.camera.json beside each frame's first image, with "complete": true once
+    /// every file of the frame is written (false when interrupted): what `obscura merge` checks, and
+    /// how a rerun knows which frames to skip. Written anyway with ground-truth AOVs and for animations.
+    #[arg(long)]
+    camera_json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -424,6 +432,7 @@ fn main() -> ExitCode {
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
         Command::Merge(a) => farm::merge(a),
+        Command::Submit(a) => farm::submit(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

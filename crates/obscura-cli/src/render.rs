@@ -324,6 +324,13 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 displays: l.as_slice(),
             })
             .collect();
+        // A rerun skips what an earlier run completed (its camera JSON says so).
+        if writes.iter().all(|w| is_complete(w.displays)) {
+            if !a.quiet {
+                outln!("frame {} complete: skipped", images[image].number);
+            }
+            continue;
+        }
         let scene = source.image(image).map_err(|e| e.to_string())?;
         let number = images[image].numbered.then_some(images[image].number);
         let at = Position {
@@ -468,7 +475,11 @@ fn render_image(
         neighbours: Neighbours::default(),
         options: &opts,
         header_frame: None,
-        sidecars: Sidecars::WithGroundTruth,
+        sidecars: if a.camera_json {
+            Sidecars::Always
+        } else {
+            Sidecars::WithGroundTruth
+        },
         size_source: &source,
     };
     let reporter = Terminal::new(a, true);
