@@ -11,6 +11,13 @@ dir=$(realpath -m "${2:?a directory for the cluster state}")
 
 stop() {
   [ -f "$dir/pids" ] || return 0
+  # The cluster's jobs first (it is this directory's own cluster), so no job step outlives slurmd.
+  if SLURM_CONF="$dir/slurm.conf" scancel --quiet --user=root 2>/dev/null; then
+    for _ in $(seq 50); do
+      [ -z "$(SLURM_CONF="$dir/slurm.conf" squeue -h 2>/dev/null)" ] && break
+      sleep 0.1
+    done
+  fi
   # shellcheck disable=SC2046
   for pid in $(cat "$dir/pids"); do
     kill "$pid" 2>/dev/null || true
