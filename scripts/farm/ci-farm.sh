@@ -115,5 +115,19 @@ grep -q '24 frame(s) complete' "$work/openjd.log" || fail "the Collect step did 
 echo "   chunks: $chunks; $(grep -c 'openjd_progress:' "$work/openjd.log") openjd_progress lines"
 rm -rf "$oj/obscura-job"
 same_as_reference "$work/ref/anim" "$oj"
+
+echo "-- OpenJD: the RIB frame in 2x2 tiles, the scene and output given as /farm/... paths mapped by path-mapping rules"
+ojr="$work/openjd/rib"
+mkdir -p "$ojr"
+rules='{"version": "pathmapping-1.0", "path_mapping_rules": [
+  {"source_path_format": "POSIX", "source_path": "/farm/examples", "destination_path": "'"$root/examples"'"},
+  {"source_path_format": "POSIX", "source_path": "/farm/out", "destination_path": "'"$ojr"'"}]}'
+"$openjd" run "$here/job.yaml" --step Collect --run-dependencies --path-mapping-rules "$rules" \
+  -p "Obscura=$obscura" -p Scene=/farm/examples/scenes/classic.rib -p Output=/farm/out/c.####.exr \
+  -p Frames=1 -p FramesPerTask=1 -p Tiles=2x2 -p TileIndices=0-3 -p "RenderArgs=${rib_args[*]}" \
+  > "$work/openjd-rib.log" 2>&1 || { cat "$work/openjd-rib.log"; fail "openjd run of the tiles failed"; }
+[ "$(grep -c 'Tile(INT) = ' "$work/openjd-rib.log")" = 4 ] || fail "OpenJD did not run 4 tile tasks"
+rm -f "$ojr"/*.tile*
+same_as_reference "$work/ref/rib" "$ojr"
 t1=$(date +%s.%N)
 echo "ci-farm: passed in $(echo "$t1 - $t0" | bc) s"

@@ -171,7 +171,8 @@ struct RenderArgs {
     /// Always write <image>.camera.json beside each frame's first image, with "complete": true once
     /// every file of the frame is written (false when interrupted): what `obscura merge` checks, and
     /// how a rerun knows which frames to skip. Written anyway with ground-truth AOVs and for animations.
-    #[arg(long)]
+    /// May be repeated (a farm job adds it to the user's arguments).
+    #[arg(long, overrides_with = "camera_json")]
     camera_json: bool,
 }
 
