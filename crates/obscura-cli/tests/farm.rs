@@ -22,6 +22,11 @@ fn boxes() -> String {
         .into_owned()
 }
 
+/// Asserts that `haystack` holds `needle`, showing it when not.
+fn assert_has(haystack: &str, needle: &str) {
+    assert!(haystack.contains(needle), "expected {needle:?} in:\n{haystack}");
+}
+
 fn run(args: &[&str], dir: &Path) -> std::process::Output {
     let out = obscura(args, dir);
     assert!(out.status.success(), "{args:?}: {}", text(&out.stderr));
@@ -70,11 +75,7 @@ fn a_rib_frame_in_2x2_tiles_merges_to_the_one_process_render() {
         );
     }
     let out = run(&["merge", "tiles/c.exr", "--tiles", "2x2"], d);
-    assert!(
-        text(&out.stdout).contains("1 frame(s) complete"),
-        "{}",
-        text(&out.stdout)
-    );
+    assert_has(&text(&out.stdout), "1 frame(s) complete");
     for f in files(&d.join("full")) {
         let name = f.file_name().unwrap().to_string_lossy().into_owned();
         let same = std::fs::read(&f).unwrap() == std::fs::read(d.join("tiles").join(&name)).unwrap();
@@ -167,19 +168,14 @@ fn merge_names_missing_incomplete_and_odd_tiles_and_keeps_a_good_image() {
     std::fs::write(d.join("c.tile1-2x1.exr"), &bytes[..bytes.len() / 3]).unwrap();
     let out = obscura(&["merge", "c.exr", "--tiles", "2x1"], d);
     assert_eq!(out.status.code(), Some(1));
-    assert!(
-        text(&out.stderr).contains("c.tile1-2x1.exr: cannot read this tile"),
-        "{}",
-        text(&out.stderr)
-    );
+    assert_has(&text(&out.stderr), "c.tile1-2x1.exr: cannot read this tile");
     assert_eq!(std::fs::read(d.join("c.exr")).unwrap(), good);
     // A missing tile is named with its index.
     std::fs::remove_file(d.join("c.tile1-2x1.exr")).unwrap();
     let out = obscura(&["merge", "c.exr", "--tiles", "2x1"], d);
-    assert!(
-        text(&out.stderr).contains("missing tile(s) of 2x1: tile 1 (c.tile1-2x1.exr)"),
-        "{}",
-        text(&out.stderr)
+    assert_has(
+        &text(&out.stderr),
+        "missing tile(s) of 2x1: tile 1 (c.tile1-2x1.exr)",
     );
 }
 
@@ -260,10 +256,9 @@ fn progress_lines_for_openjd_tractor_and_logs() {
     // stderr is a pipe here: plain lines by default.
     std::fs::remove_file(d.join("b.0002.camera.json")).unwrap();
     let out = run(&common, d);
-    assert!(
-        text(&out.stderr).contains("progress: frame 2 (2 of 2) 100%, overall 100.0%"),
-        "{}",
-        text(&out.stderr)
+    assert_has(
+        &text(&out.stderr),
+        "progress: frame 2 (2 of 2) 100%, overall 100.0%",
     );
 }
 
