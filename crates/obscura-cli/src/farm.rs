@@ -7,7 +7,6 @@ use std::path::{Path, PathBuf};
 use clap::Args;
 use obscura_host::{CropWindow, PixelRect};
 use obscura_image::tiles::{MergeError, TileGrid, merge_exr, merge_png, tile_files};
-use obscura_render::frame::relative_to_sidecar;
 use obscura_render::metadata::{sidecar_path, with_data_window};
 use obscura_render::sequence::{FrameSpec, frame_path};
 use obscura_scene::{Display, Scene};
@@ -291,9 +290,8 @@ fn read_camera(path: &Path) -> Result<serde_json::Value, String> {
 }
 
 /// The merged image's camera JSON: tile 0's with the data window of the whole (the union of the
-/// tiles') and the untiled image names.
+/// tiles') and the untiled image names, edited as text so that every other byte stays.
 fn merge_camera(cameras: &[PathBuf], image: &Path, grid: TileGrid) -> Result<PathBuf, String> {
-    let mut v = read_camera(&cameras[0])?;
     let mut window: Option<[u64; 4]> = None;
     for c in cameras {
         let tile = read_camera(c)?;
@@ -307,21 +305,37 @@ fn merge_camera(cameras: &[PathBuf], image: &Path, grid: TileGrid) -> Result<Pat
             Some(u) => [u[0].min(x0), u[1].min(y0), u[2].max(x1), u[3].max(y1)],
         });
     }
-    if let (Some(u), Some(w)) = (window, v.pointer_mut("/image/data_window")) {
-        *w = serde_json::json!(u);
-    }
-    let out = sidecar_path(image, "camera.json");
-    let dir = cameras[0].parent().unwrap_or(Path::new("."));
+    let first = &cameras[0];
+    let text = std::fs::read_to_string(first).map_err(|e| format!("{}: {e}", first.display()))?;
+    let u = window.unwrap_or_default();
+    let as_u32 =
+        |v: u64| u32::try_from(v).map_err(|_| format!("{}: a data window beyond 2^32", first.display()));
+    let rect = PixelRect {
+        x0: as_u32(u[0])?,
+        y0: as_u32(u[1])?,
+        x1: as_u32(u[2])?,
+        y1: as_u32(u[3])?,
+    };
+    let text =
+        with_data_window(&text, rect).ok_or_else(|| format!("{}: no image.data_window", first.display()))?;
+    // The image names: relative to the sidecar, which sits beside the tile's first image as the
+    // merged one sits beside the merged image, so only the tile tag goes.
     let tag = format!(".tile0-{}x{}", grid.cols, grid.rows);
-    if let Some(list) = v.get_mut("images").and_then(|i| i.as_array_mut()) {
-        for item in list.iter_mut() {
-            if let Some(name) = item.as_str() {
-                let untiled = dir.join(name.replacen(&tag, "", 1));
-                *item = serde_json::Value::String(relative_to_sidecar(&untiled, &out));
-            }
+    let text = match text.find("\"images\"") {
+        Some(at) => {
+            let end = at + text[at..].find(']').unwrap_or(text.len() - at);
+            format!(
+                "{}{}{}",
+                &text[..at],
+                text[at..end].replace(&tag, ""),
+                &text[end..]
+            )
         }
-    }
-    obscura_render::metadata::write_json(&out, &v).map_err(|e| e.to_string())?;
+        None => text,
+    };
+    let out = sidecar_path(image, "camera.json");
+    obscura_image::atomic::write_atomically(&out, |o| std::io::Write::write_all(o, text.as_bytes()))
+        .map_err(|e| e.to_string())?;
     Ok(out)
 }
 
