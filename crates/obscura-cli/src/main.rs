@@ -25,6 +25,7 @@ use obscura_sdk::{Format, ScreenWindow};
 
 mod args;
 mod check;
+mod farm;
 mod lens;
 mod params;
 mod render;
@@ -81,6 +82,14 @@ enum Command {
     /// A USD stage's cameras as JSON: every UsdGeomCamera attribute (authored or its schema fallback),
     /// the world transform and the lens-distortion model, at Default and at time codes.
     UsdCameras(Box<usd::UsdCamerasArgs>),
+    /// The collect step of a farm job: check that every frame of a shot is complete (its camera JSON
+    /// says "complete": true) and, with --tiles, stitch each frame's tiles into the image a
+    /// one-process render writes (EXR, PNG, sidecars), atomically. Lists what is missing; exit 1 if
+    /// anything is.
+    Merge(Box<farm::MergeArgs>),
+    /// Write a farm job for a shot (a Slurm job array over frame chunks × tiles and a collect job, or
+    /// an Open Job Description template) and submit it (sbatch / openjd run), printing the job ids.
+    Submit(Box<farm::SubmitArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -94,7 +103,8 @@ struct RenderArgs {
     /// Use this projection instead of the scene's.
     #[arg(short, long, conflicts_with = "calibration")]
     projection: Option<String>,
-    /// The frames to render: N, A-B, or a list such as 1-10,20. A run of # in an output's file name
+    /// The frames to render: N, A-B, A-B:S or A-BxS (every S-th frame), or a comma list of them such as
+    /// 1-3,5,7-20:2 (the forms Slurm, OpenJD and OpenCue write). A run of # in an output's file name
     /// becomes the zero-padded frame number (out.####.exr); without one, several frames write
     /// out.0001.exr, out.0002.exr, … by frame number.
     #[arg(long = "frames", visible_alias = "frame", value_name = "SPEC")]
@@ -122,7 +132,8 @@ struct RenderArgs {
     /// Samples per pixel (default: the scene's Hider maxsamples).
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     spp: Option<u32>,
-    /// Worker threads, 1 to 1024 (default: all cores).
+    /// Worker threads, 1 to 1024 (default: one per CPU this process may run on: its affinity mask, as
+    /// Slurm, a cgroup cpuset or taskset set it).
     #[arg(long)]
     threads: Option<usize>,
     /// CropWindow xmin xmax ymin ymax, in NDC (y down).
@@ -150,6 +161,29 @@ struct RenderArgs {
     /// Frames per second of an animated scene (glTF): frame N is posed at (N − 1)/fps seconds.
     #[arg(long, default_value_t = 24.0, value_parser = render::parse_fps)]
     fps: f32,
+    // Farm options (issue 27): tiles and progress lines.
+    /// Render only tile I (from 0) of N horizontal bands of each frame; its files are named
+    /// NAME.tileI-1xN.EXT. `obscura merge --tiles 1xN` stitches them.
+    #[arg(long, value_name = "I/N", value_parser = farm::parse_tile, conflicts_with_all = ["tiles", "crop"])]
+    tile: Option<(u32, obscura_image::tiles::TileGrid)>,
+    /// Split each frame in a grid of COLSxROWS tiles and render only --tile-index I (row-major from
+    /// the top left, from 0); files are named NAME.tileI-CxR.EXT.
+    #[arg(long, value_name = "CxR", value_parser = farm::parse_grid, conflicts_with = "crop")]
+    tiles: Option<obscura_image::tiles::TileGrid>,
+    /// The tile of --tiles this task renders, from 0.
+    #[arg(long, value_name = "I")]
+    tile_index: Option<u32>,
+    /// Progress lines for a farm: plain (a line every few seconds on stderr, the default when stderr
+    /// is not a terminal), openjd (openjd_progress / openjd_status on stdout), tractor (TR_PROGRESS
+    /// on stdout), or none.
+    #[arg(long, value_enum, value_name = "MODE")]
+    progress: Option<render::ProgressMode>,
+    /// Always write <image>.camera.json beside each frame's first image, with "complete": true once
+    /// every file of the frame is written (false when interrupted): what `obscura merge` checks, and
+    /// how a rerun knows which frames to skip. Written anyway with ground-truth AOVs and for animations.
+    /// May be repeated (a farm job adds it to the user's arguments).
+    #[arg(long, overrides_with = "camera_json")]
+    camera_json: bool,
 }
 
 #[derive(Args, Debug)]
@@ -409,6 +443,8 @@ fn main() -> ExitCode {
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
         Command::UsdCameras(a) => usd::run(a),
+        Command::Merge(a) => farm::merge(a),
+        Command::Submit(a) => farm::submit(a),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

@@ -28,6 +28,7 @@ use obscura_sdk::{Format, ParamList};
 use obscura_shading::integrator::PathOptions;
 
 use crate::args::{crop_window, load_calibration};
+use crate::farm::Tile;
 use crate::params::param_list;
 use crate::stdout::outln;
 use crate::{RenderArgs, signals, size_source};
@@ -55,11 +56,82 @@ pub fn parse_fps(text: &str) -> Result<f32, String> {
     }
 }
 
+/// How progress is shown besides the terminal's bar (`--progress`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ProgressMode {
+    /// `progress: frame 7 (2 of 4) 50%, overall 37.5%` on stderr, every few seconds and at the end of
+    /// each frame.
+    Plain,
+    /// Open Job Description's lines on stdout: `openjd_status: frame 7 (2 of 4)` as a frame
+    /// starts, `openjd_progress: 37.5` (the task's percentage) as it renders.
+    Openjd,
+    /// Tractor's `TR_PROGRESS 37%` on stdout.
+    Tractor,
+    /// No progress lines.
+    None,
+}
+
+/// Seconds between two progress lines within a frame.
+const LINE_INTERVAL: f64 = 2.0;
+
+/// Where the progress lines are.
+struct Lines {
+    mode: ProgressMode,
+    state: Mutex<LineState>,
+}
+
+/// The frame being rendered and the last line printed.
+struct LineState {
+    /// The frame's number, its position (from 0) and how many the task renders.
+    frame: Option<u32>,
+    index: usize,
+    count: usize,
+    last: Option<std::time::Instant>,
+    /// The last overall percentage printed, so that the end of a frame is printed once.
+    printed: f64,
+}
+
+impl Lines {
+    /// The line for `done` of `total` tiles of the current frame, if one is due.
+    fn line(&self, done: usize, total: usize) -> Option<String> {
+        let mut s = self
+            .state
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let frame_part = if total == 0 {
+            0.0
+        } else {
+            done as f64 / total as f64
+        };
+        let overall = 100.0 * (s.index as f64 + frame_part) / s.count.max(1) as f64;
+        let due = s.last.is_none_or(|t| t.elapsed().as_secs_f64() >= LINE_INTERVAL);
+        if !(due || done == total) || overall <= s.printed {
+            return None;
+        }
+        s.last = Some(std::time::Instant::now());
+        s.printed = overall;
+        let frame = s.frame.map_or(String::new(), |n| {
+            format!("frame {n} ({} of {}) ", s.index + 1, s.count)
+        });
+        Some(match self.mode {
+            ProgressMode::Plain => format!(
+                "progress: {frame}{:.0}%, overall {overall:.1}%",
+                100.0 * frame_part
+            ),
+            ProgressMode::Openjd => format!("openjd_progress: {overall:.1}"),
+            ProgressMode::Tractor => format!("TR_PROGRESS {:.0}%", overall.floor()),
+            ProgressMode::None => return None,
+        })
+    }
+}
+
 /// The terminal's reporter: messages on stderr (warnings even with `--quiet`, which silences progress
-/// and summaries only), a progress bar when stderr is a terminal, the signal handler's cancel flag.
+/// and summaries only), a progress bar when stderr is a terminal, otherwise (or as `--progress` asks)
+/// progress lines a farm reads, the signal handler's cancel flag.
 /// Texture warnings and notes are told once per run: they are the same at every frame.
 struct Terminal {
     bar: Option<indicatif::ProgressBar>,
+    lines: Option<Lines>,
     told: Mutex<HashSet<String>>,
     /// While set, a signal cancels the render instead of ending the process: from the first frame's
     /// tiles until the reporter is dropped, after the last file is written.
@@ -67,8 +139,17 @@ struct Terminal {
 }
 
 impl Terminal {
-    fn new(bar: bool) -> Self {
-        let bar = (bar && std::io::stderr().is_terminal()).then(|| {
+    /// The reporter of `a`: a bar when `bar` and stderr is a terminal and no `--progress` mode is
+    /// asked for; progress lines as `--progress` says, by default plain lines when stderr is not a
+    /// terminal (none with `--quiet`).
+    fn new(a: &RenderArgs, bar: bool) -> Self {
+        let terminal = std::io::stderr().is_terminal();
+        let mode = match a.progress {
+            Some(m) => m,
+            None if a.quiet || terminal => ProgressMode::None,
+            None => ProgressMode::Plain,
+        };
+        let bar = (bar && !a.quiet && terminal && a.progress.is_none()).then(|| {
             let b = indicatif::ProgressBar::new(0);
             b.set_style(
                 indicatif::ProgressStyle::with_template(
@@ -80,8 +161,37 @@ impl Terminal {
         });
         Terminal {
             bar,
+            lines: (mode != ProgressMode::None).then(|| Lines {
+                mode,
+                state: Mutex::new(LineState {
+                    frame: None,
+                    index: 0,
+                    count: 1,
+                    last: None,
+                    printed: -1.0,
+                }),
+            }),
             told: Mutex::new(HashSet::new()),
             cancellable: Mutex::new(None),
+        }
+    }
+
+    /// A frame starts: frame `number`, the `index`-th (from 0) of `count` this task renders.
+    fn start_frame(&self, number: Option<u32>, index: usize, count: usize) {
+        let Some(lines) = &self.lines else { return };
+        {
+            let mut s = lines
+                .state
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            s.frame = number;
+            s.index = index;
+            s.count = count;
+            s.last = None;
+        }
+        if lines.mode == ProgressMode::Openjd {
+            let what = number.map_or("image".to_string(), |n| format!("frame {n}"));
+            outln!("openjd_status: rendering {what} ({} of {count})", index + 1);
         }
     }
 }
@@ -105,6 +215,15 @@ impl Reporter for Terminal {
             b.set_length(total as u64);
             b.set_position(done as u64);
         }
+        if let Some(lines) = &self.lines
+            && let Some(line) = lines.line(done, total)
+        {
+            if lines.mode == ProgressMode::Plain {
+                eprintln!("{line}");
+            } else {
+                outln!("{line}");
+            }
+        }
     }
 
     fn cancel(&self) -> &AtomicBool {
@@ -124,6 +243,22 @@ impl Reporter for Terminal {
             b.finish_and_clear();
         }
     }
+}
+
+/// Where an image is in the task's list, for progress lines.
+#[derive(Debug, Clone, Copy)]
+struct Position {
+    /// Its frame number, if the scene numbers it.
+    number: Option<u32>,
+    /// Its position in the task's list, from 0.
+    index: usize,
+    /// How many images the task renders.
+    count: usize,
+}
+
+/// The tile of `--tile` or `--tiles`/`--tile-index`, if any.
+fn tile_of(a: &RenderArgs) -> Result<Option<Tile>, String> {
+    Tile::of_args(a.tile, a.tiles, a.tile_index)
 }
 
 /// `obscura render`.
@@ -178,12 +313,17 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
             .map(|&(n, i)| (n, displays_of[i].clone().unwrap_or_default()))
             .collect::<Vec<_>>(),
     );
+    let tile = tile_of(a)?;
+    let lists: Vec<Vec<Display>> = match tile {
+        Some(t) => lists.iter().map(|l| t.displays(l)).collect(),
+        None => lists,
+    };
     // An animated lens (a Nuke script's curves): every selected frame renders through the lens
     // of that frame.
     if let (Some(path), Some(c)) = (a.calibration.as_deref(), calibration.as_ref())
         && c.calibration.animated
     {
-        for (job, list) in jobs.iter().zip(&lists) {
+        for (index, (job, list)) in jobs.iter().zip(&lists).enumerate() {
             if !a.quiet {
                 outln!(
                     "frame {}: through the lens of {} at that frame",
@@ -198,7 +338,12 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 displays: list.as_slice(),
             }];
             let scene = source.image(job.1).map_err(|e| e.to_string())?;
-            render_image(a, search, scene, source.base_dir(), Some(lens), &writes)?;
+            let at = Position {
+                number: Some(job.0),
+                index,
+                count: jobs.len(),
+            };
+            render_image(a, search, scene, source.base_dir(), Some(lens), &writes, at)?;
         }
         return Ok(());
     }
@@ -206,7 +351,8 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     let mut order: Vec<usize> = jobs.iter().map(|&(_, i)| i).collect();
     order.dedup();
     let mut exported: Vec<(u32, Scene)> = Vec::new();
-    for image in order {
+    let count = order.len();
+    for (position, image) in order.into_iter().enumerate() {
         if !a.quiet && images.len() > 1 {
             outln!("frame {} ({})", images[image].number, images[image].label);
         }
@@ -217,8 +363,29 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
                 displays: l.as_slice(),
             })
             .collect();
+        // A rerun skips what an earlier run completed (its camera JSON says so).
+        if writes.iter().all(|w| is_complete(w.displays)) {
+            if !a.quiet {
+                outln!("frame {} complete: skipped", images[image].number);
+            }
+            continue;
+        }
         let scene = source.image(image).map_err(|e| e.to_string())?;
-        let rendered = render_image(a, search, scene, source.base_dir(), calibration.clone(), &writes)?;
+        let number = images[image].numbered.then_some(images[image].number);
+        let at = Position {
+            number,
+            index: position,
+            count,
+        };
+        let rendered = render_image(
+            a,
+            search,
+            scene,
+            source.base_dir(),
+            calibration.clone(),
+            &writes,
+            at,
+        )?;
         if a.export_usd.is_some() {
             exported.push((images[image].number, rendered));
         }
@@ -289,7 +456,7 @@ fn frame_jobs(spec: Option<&FrameSpec>, source: &dyn SceneSource) -> Result<Vec<
             ));
         }
         return Ok(match spec {
-            Some(s) => s.frames().map(|n| (n, 0)).collect(),
+            Some(s) => s.non_negative()?.map(|n| (n, 0)).collect(),
             None => vec![(still.number, 0)],
         });
     }
@@ -325,6 +492,9 @@ fn configure(
     overrides.params =
         param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;
     overrides.apply(scene).map_err(|e| e.to_string())?;
+    if let Some(t) = tile_of(a)? {
+        t.apply(scene)?;
+    }
     scene.projection = projection;
     if let Some(w) = (overrides.calibration.as_ref()).and_then(|c| c.aspect_warning(scene.camera.format)) {
         eprintln!("warning: {w}");
@@ -353,6 +523,7 @@ fn render_image(
     base_dir: &std::path::Path,
     calibration: Option<Calibrated>,
     writes: &[FrameWrite<'_>],
+    at: Position,
 ) -> Result<Scene, String> {
     let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
     let source = scene_size_source(a);
@@ -365,10 +536,15 @@ fn render_image(
         neighbours: Neighbours::default(),
         options: &opts,
         header_frame: None,
-        sidecars: Sidecars::WithGroundTruth,
+        sidecars: if a.camera_json {
+            Sidecars::Always
+        } else {
+            Sidecars::WithGroundTruth
+        },
         size_source: &source,
     };
-    let reporter = Terminal::new(!a.quiet);
+    let reporter = Terminal::new(a, true);
+    reporter.start_frame(at.number, at.index, at.count);
     let result = render_frame(&job, &mut registry, &reporter).map_err(|e| e.to_string())?;
     drop(reporter);
     let s = &result.output.stats;
@@ -437,22 +613,34 @@ fn render_animation(
     let displays = image_displays(a, &first);
     let opts = render_options(a);
     let size = scene_size_source(a);
-    let frames: Vec<u32> = a.frames.as_ref().map_or(vec![1], |f| f.frames().collect());
+    let frames: Vec<u32> = match &a.frames {
+        Some(f) => f.non_negative()?.collect(),
+        None => vec![1],
+    };
     let scene = |n: u32| -> Result<Scene, String> {
         let mut s = source.frame(n).map_err(|e| e.to_string())?;
         overrides.apply(&mut s).map_err(|e| e.to_string())?;
+        if let Some(t) = tile_of(a)? {
+            t.apply(&mut s)?;
+        }
         s.projection.clone_from(&projection);
         Ok(s)
     };
-    let reporter = Terminal::new(false);
+    let reporter = Terminal::new(a, false);
+    let tile = tile_of(a)?;
     let several = frames.len() > 1;
     let mut skipped = 0;
-    for &n in &frames {
+    for (index, &n) in frames.iter().enumerate() {
         let displays = without_backward_flow(&frame_displays(&displays, n, several), n > 1);
+        let displays = match tile {
+            Some(t) => t.displays(&displays),
+            None => displays,
+        };
         if is_complete(&displays) {
             skipped += 1;
             continue;
         }
+        reporter.start_frame(Some(n), index, frames.len());
         let this = scene(n)?;
         let previous = (n > 1).then(|| scene(n - 1)).transpose()?;
         let next = n.checked_add(1).map(scene).transpose()?;

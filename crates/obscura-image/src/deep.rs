@@ -262,5 +262,171 @@ fn zips(raw: Vec<u8>) -> Vec<u8> {
     if packed.len() < n { packed } else { raw }
 }
 
+/// True when the file at `path` starts as an OpenEXR whose version field has the non-image (deep)
+/// bit; false when it cannot be read or is not one.
+#[must_use]
+pub fn is_deep_exr(path: &Path) -> bool {
+    let mut head = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok()
+        && head[..4] == MAGIC.to_le_bytes()
+        && i32::from_le_bytes([head[4], head[5], head[6], head[7]]) & 0x800 != 0
+}
+
+/// Reads a deep-scanline OpenEXR in the layout [`write_deep_exr`] writes (single part; the channels
+/// A, B, G, R, Z, ZBack as FLOAT; no or ZIPS compression; increasing lines), with its compression.
+///
+/// # Errors
+/// A message saying what is wrong (truncated, another layout, a corrupt chunk); the caller names
+/// the file.
+pub fn read_deep_exr(path: &Path) -> Result<(DeepImage, DeepCompression), String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let mut at = 0usize;
+    let take = |at: &mut usize, n: usize| -> Result<&[u8], String> {
+        let s = bytes
+            .get(*at..*at + n)
+            .ok_or_else(|| format!("truncated at byte {} (the file has {})", *at + n, bytes.len()))?;
+        *at += n;
+        Ok(s)
+    };
+    let int = |b: &[u8]| i32::from_le_bytes([b[0], b[1], b[2], b[3]]);
+    if int(take(&mut at, 4)?) != MAGIC {
+        return Err("not an OpenEXR file".into());
+    }
+    if int(take(&mut at, 4)?) & 0x1800 != 0x800 {
+        return Err("not a single-part deep OpenEXR".into());
+    }
+    let cstr = |at: &mut usize| -> Result<String, String> {
+        let end = (bytes[*at..].iter().position(|&b| b == 0))
+            .ok_or_else(|| "truncated in the header".to_string())?;
+        let s = String::from_utf8_lossy(&bytes[*at..*at + end]).into_owned();
+        *at += end + 1;
+        Ok(s)
+    };
+    let mut attrs = std::collections::HashMap::new();
+    loop {
+        let name = cstr(&mut at)?;
+        if name.is_empty() {
+            break;
+        }
+        let _kind = cstr(&mut at)?;
+        let size = usize::try_from(int(take(&mut at, 4)?)).map_err(|_| "a negative attribute size")?;
+        attrs.insert(name, take(&mut at, size)?.to_vec());
+    }
+    let get = |name: &str| attrs.get(name).ok_or_else(|| format!("no {name} attribute"));
+    let box2i = |name: &str| -> Result<[i32; 4], String> {
+        let v = get(name)?;
+        if v.len() != 16 {
+            return Err(format!("{name}: not a box2i"));
+        }
+        Ok([int(&v[0..]), int(&v[4..]), int(&v[8..]), int(&v[12..])])
+    };
+    let mut expected = Vec::new();
+    for (name, _) in CHANNELS {
+        expected.extend_from_slice(name.as_bytes());
+        expected.push(0);
+        expected.extend_from_slice(&FLOAT.to_le_bytes());
+        expected.extend_from_slice(&[0, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0]);
+    }
+    expected.push(0);
+    if *get("channels")? != expected {
+        return Err("channels other than A, B, G, R, Z, ZBack (float)".into());
+    }
+    let compression = match get("compression")?.first() {
+        Some(0) => DeepCompression::None,
+        Some(2) => DeepCompression::Zips,
+        _ => return Err("a compression other than none or ZIPS".into()),
+    };
+    let [x0, y0, x1, y1] = box2i("dataWindow")?;
+    let [dx0, dy0, dx1, dy1] = box2i("displayWindow")?;
+    let non_negative = |v: i32| u32::try_from(v).map_err(|_| "negative pixel coordinates".to_string());
+    if dx0 != 0 || dy0 != 0 || x1 < x0 || y1 < y0 {
+        return Err("a display window not at the origin, or an empty data window".into());
+    }
+    let data_window = PixelRect {
+        x0: non_negative(x0)?,
+        x1: non_negative(x1)? + 1,
+        y0: non_negative(y0)?,
+        y1: non_negative(y1)? + 1,
+    };
+    let (width, lines) = (data_window.width() as usize, data_window.height() as usize);
+    take(&mut at, 8 * lines)?; // the offset table: chunks follow in order
+    let mut pixels: Vec<Vec<DeepSample>> = Vec::with_capacity(width * lines);
+    for line in 0..lines {
+        let y = int(take(&mut at, 4)?);
+        if i64::from(y) != i64::from(data_window.y0) + line as i64 {
+            return Err(format!("chunk {line} holds line {y}: lines out of order"));
+        }
+        let u64_at = |at: &mut usize| -> Result<usize, String> {
+            let b = take(at, 8)?;
+            usize::try_from(u64::from_le_bytes(b.try_into().unwrap_or([0; 8])))
+                .map_err(|_| "a size beyond memory".into())
+        };
+        let (table_size, data_size, unpacked) = (u64_at(&mut at)?, u64_at(&mut at)?, u64_at(&mut at)?);
+        let table = unzips(take(&mut at, table_size)?, 4 * width)?;
+        let data = unzips(take(&mut at, data_size)?, unpacked)?;
+        let counts: Vec<usize> = table.chunks_exact(4).map(|b| int(b).max(0) as usize).collect();
+        let total = counts.last().copied().unwrap_or(0);
+        if data.len() != 4 * CHANNELS.len() * total {
+            return Err(format!(
+                "line {y}: {} bytes of samples for {total} samples",
+                data.len()
+            ));
+        }
+        let value = |channel: usize, k: usize| {
+            let i = 4 * (channel * total + k);
+            f32::from_le_bytes([data[i], data[i + 1], data[i + 2], data[i + 3]])
+        };
+        let mut start = 0;
+        for &end in &counts {
+            if end < start || end > total {
+                return Err(format!("line {y}: the sample-count table decreases"));
+            }
+            pixels.push(
+                (start..end)
+                    .map(|k| DeepSample {
+                        a: value(0, k),
+                        b: value(1, k),
+                        g: value(2, k),
+                        r: value(3, k),
+                        z: value(4, k),
+                        z_back: value(5, k),
+                    })
+                    .collect(),
+            );
+            start = end;
+        }
+    }
+    Ok((
+        DeepImage {
+            width: non_negative(dx1)? + 1,
+            height: non_negative(dy1)? + 1,
+            data_window,
+            pixels,
+        },
+        compression,
+    ))
+}
+
+/// The inverse of [`zips`]: `packed` as stored, `unpacked` bytes long.
+fn unzips(packed: &[u8], unpacked: usize) -> Result<Vec<u8>, String> {
+    if packed.len() == unpacked {
+        return Ok(packed.to_vec());
+    }
+    let mut t = miniz_oxide::inflate::decompress_to_vec_zlib(packed)
+        .map_err(|e| format!("a corrupt ZIPS chunk: {e:?}"))?;
+    if t.len() != unpacked {
+        return Err(format!("a ZIPS chunk of {} bytes, expected {unpacked}", t.len()));
+    }
+    for i in 1..t.len() {
+        t[i] = t[i].wrapping_add(t[i - 1]).wrapping_sub(128);
+    }
+    let half = unpacked.div_ceil(2);
+    Ok((0..unpacked)
+        .map(|i| t[if i % 2 == 0 { i / 2 } else { half + i / 2 }])
+        .collect())
+}
+
 #[cfg(test)]
 mod tests;

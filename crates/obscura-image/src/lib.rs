@@ -8,6 +8,7 @@
 //! | [`samples`] | what a camera sample carries besides colour: ground truth, and each pixel's flow |
 //! | [`filter`], [`film`] | RenderMan's pixel filters; AOV accumulation into pixels |
 //! | [`output`], [`deep`] | EXR, PNG and TIFF from a film; our own deep-scanline EXR writer |
+//! | [`tiles`] | a frame split in a grid of tiles; stitching their EXRs and PNGs back (`obscura merge`) |
 //! | [`atomic`] | the one way every output file is written: temporary file, sync, rename |
 //! | [`raymap`], [`stmap`] | the per-pixel ray map of `obscura rays`; the ST-map of `obscura stmap` |
 //!
@@ -22,6 +23,7 @@ pub mod output;
 pub mod raymap;
 pub mod samples;
 pub mod stmap;
+pub mod tiles;
 
 #[cfg(test)]
 pub(crate) mod testing;

@@ -365,20 +365,36 @@ pub fn write_png(path: &Path, film: &Film) -> Result<(), OutputError> {
             quantize(srgb_encode(v.ci.b)),
         ]);
     }
+    Ok(write_png_rgb(path, crop.width(), crop.height(), &data)?)
+}
+
+/// Writes 8-bit RGB pixels (`width × height × 3` bytes, row by row) as the PNG [`write_png`]
+/// writes — same chunks, same encoder settings —, atomically.
+///
+/// # Errors
+/// An [`AtomicWriteError`] naming `path`.
+///
+/// # Panics
+/// When `data` does not hold `width × height × 3` bytes (a bug of the caller).
+pub fn write_png_rgb(path: &Path, width: u32, height: u32, data: &[u8]) -> Result<(), AtomicWriteError> {
+    assert_eq!(
+        data.len(),
+        width as usize * height as usize * 3,
+        "RGB bytes of the whole image"
+    );
     let png_err = |e| match e {
         png::EncodingError::IoError(e) => e,
         other => std::io::Error::other(other),
     };
     write_atomically(path, |out| {
-        let mut encoder = png::Encoder::new(out, crop.width(), crop.height());
+        let mut encoder = png::Encoder::new(out, width, height);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
         encoder.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
         let mut writer = encoder.write_header().map_err(png_err)?;
-        writer.write_image_data(&data).map_err(png_err)?;
+        writer.write_image_data(data).map_err(png_err)?;
         writer.finish().map_err(png_err)
-    })?;
-    Ok(())
+    })
 }
 
 /// Runs the Python script `tests/<script>` on `path` with the reference OpenEXR library (PyPI
@@ -411,4 +427,4 @@ pub(crate) fn run_independent_reader(script: &str, path: &Path) -> Option<String
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

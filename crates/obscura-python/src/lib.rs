@@ -13,6 +13,7 @@
 //! | `rays.rs` | `project`, `rays`, `pixel_to_ray`, `ray_to_pixel`, `world_to_pixel` |
 //! | `registry.rs` | the process's projection registry, plugins, `projections()` |
 //! | `tools.rs` | `stmap`, `check`, `render` |
+//! | `farm.rs` | `parse_frames`, `frame_chunks`: the CLI's frame-list parser |
 //! | `pool.rs` | the worker threads (`set_num_threads`) |
 //!
 //! The work of every batched call runs with the GIL released, on the module's thread pool.
@@ -21,6 +22,7 @@ use pyo3::prelude::*;
 
 mod arrays;
 mod camera;
+mod farm;
 mod params;
 mod pool;
 mod rays;
@@ -40,6 +42,8 @@ fn _obscura(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tools::stmap, m)?)?;
     m.add_function(wrap_pyfunction!(tools::check, m)?)?;
     m.add_function(wrap_pyfunction!(tools::render, m)?)?;
+    m.add_function(wrap_pyfunction!(farm::parse_frames, m)?)?;
+    m.add_function(wrap_pyfunction!(farm::frame_chunks, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -117,17 +117,57 @@ pub fn write_sidecars(
     if let Some(first) = displays.first() {
         let mut camera = camera_json(scene, prepared, frame.map(i64::from)).map_err(|e| e.to_string())?;
         camera["complete"] = serde_json::Value::Bool(!cancelled);
+        let path = camera_path(displays).unwrap_or_else(|| sidecar_path(&first.path, "camera.json"));
         camera["images"] = serde_json::json!(
             displays
                 .iter()
-                .map(|d| d.path.display().to_string())
+                .map(|d| relative_to_sidecar(&d.path, &path))
                 .collect::<Vec<_>>()
         );
-        let path = camera_path(displays).unwrap_or_else(|| sidecar_path(&first.path, "camera.json"));
         write_json(&path, &camera).map_err(|e| OutputError::from(e).to_string())?;
         written.push(path);
     }
     Ok(written)
+}
+
+/// `image` named from the directory of `sidecar` (`beauty.0001.exr`, `../png/beauty.0001.png`), with
+/// `/` between components whatever the platform, so that a sidecar moved or path-mapped with its
+/// images (a farm's output directory mounted elsewhere) still names them. Falls back to the absolute
+/// path when the two share no root (another drive), and to the path as given when the working
+/// directory cannot be read.
+#[must_use]
+pub fn relative_to_sidecar(image: &Path, sidecar: &Path) -> String {
+    use std::path::Component;
+    let (Ok(image), Ok(sidecar)) = (std::path::absolute(image), std::path::absolute(sidecar)) else {
+        return image.display().to_string();
+    };
+    // Lexically normal: `.` dropped, `..` applied.
+    fn normal(p: &Path) -> Vec<Component<'_>> {
+        let mut out: Vec<Component<'_>> = Vec::new();
+        for c in p.components() {
+            match c {
+                Component::CurDir => {}
+                Component::ParentDir if matches!(out.last(), Some(Component::Normal(_))) => {
+                    out.pop();
+                }
+                other => out.push(other),
+            }
+        }
+        out
+    }
+    let to = normal(&image);
+    let from = normal(sidecar.parent().unwrap_or(Path::new("/")));
+    if to.first() != from.first() {
+        return image.display().to_string();
+    }
+    let common = to.iter().zip(&from).take_while(|(a, b)| a == b).count();
+    let mut parts: Vec<String> = vec!["..".to_string(); from.len() - common];
+    parts.extend(
+        to[common..]
+            .iter()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned()),
+    );
+    parts.join("/")
 }
 
 /// The camera JSON of a frame's displays: beside the first one.

@@ -55,6 +55,31 @@ pub fn sidecar_path(image: &Path, suffix: &str) -> PathBuf {
     image.with_extension(suffix)
 }
 
+/// The camera JSON `text` (compact as the EXR header's `obscura:camera` holds it, or pretty as in
+/// `<image>.camera.json`) with its `image.data_window` set to `rect`, every other byte kept; `None`
+/// when `text` has no data window of four numbers. What `obscura merge` writes for tiles stitched
+/// back into one image. Edited as text, not parsed and printed again: a number read into an `f64`
+/// and printed back need not keep its digits.
+#[must_use]
+pub fn with_data_window(text: &str, rect: obscura_host::PixelRect) -> Option<String> {
+    let key = text.find("\"data_window\"")?;
+    let open = key + text[key..].find('[')?;
+    let close = open + text[open..].find(']')?;
+    let parts: Vec<&str> = text[open + 1..close].split(',').collect();
+    if parts.len() != 4 || parts.iter().any(|p| p.trim().parse::<u64>().is_err()) {
+        return None;
+    }
+    let values = [rect.x0, rect.y0, rect.x1, rect.y1];
+    let inner: Vec<String> = (parts.iter().zip(values))
+        .map(|(p, v)| {
+            let lead = p.len() - p.trim_start().len();
+            let end = p.trim_end().len();
+            format!("{}{v}{}", &p[..lead], &p[end..])
+        })
+        .collect();
+    Some(format!("{}{}{}", &text[..=open], inner.join(","), &text[close..]))
+}
+
 /// Writes `value` (pretty-printed, with a final newline) to `path` atomically.
 ///
 /// # Errors

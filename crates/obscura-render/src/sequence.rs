@@ -1,5 +1,5 @@
-//! Frame sequences: which frames to render (`--frames 12`, `--frames 1-24`, `--frames 1-10,20`) and
-//! the file each frame writes.
+//! Frame sequences: which frames to render (`--frames 12`, `--frames 1-24`, `--frames 1-10,20`, and
+//! the forms farms emit: `1-24:6`, `1-24x3`, `1-3,5,7-20:2`, `-5--1`) and the file each frame writes.
 //!
 //! Shared by every source of frames: RIB's `FrameBegin n` blocks and animated glTF.
 //!
@@ -24,28 +24,94 @@ use obscura_scene::Display;
 /// The digits a frame number gets before the extension when the path has no `#` run.
 const DEFAULT_PADDING: usize = 4;
 
-/// A selection of frames: one number, an inclusive range `A-B`, or a comma-separated list of them
-/// (`1-10,20,30-32`). Kept sorted, with overlapping and adjacent ranges merged.
+/// A selection of frames as farms write it: one number `N`, an inclusive range `A-B`, a stepped
+/// range `A-B:S` (Slurm, Open Job Description) or `A-BxS` (OpenCue, Qube) — `A`, `A+S`, … up to
+/// `B` —, or a comma-separated list of any of these (`1-3,5,7-20:2`). Numbers may be negative
+/// (`-10--1`). Kept sorted, with overlapping and adjacent ranges merged.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
 pub struct FrameSpec {
     /// Disjoint inclusive ranges in increasing order, none adjacent to the next.
-    ranges: Vec<(u32, u32)>,
+    ranges: Vec<(i32, i32)>,
 }
 
-/// Why a frame selection could not be read: the text as given and what was expected.
+/// The most frames the stepped items of one selection may name (each is kept as a range of its own).
+pub const MAX_STEPPED_FRAMES: u64 = 1_000_000;
+
+/// Why a frame selection could not be read: the text as given, the item at fault and what was
+/// expected.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("'{text}': {reason}; expected a frame N, a range A-B, or a comma-separated list of them, e.g. 1-24")]
+#[error(
+    "'{text}': {reason}; expected a frame N, a range A-B, a stepped range A-B:S or A-BxS, or a comma-separated list of them, e.g. 1-24 or 1-3,5,7-20:2"
+)]
 pub struct FrameSpecError {
     /// The selection as written.
     pub text: String,
-    /// What is wrong with it.
+    /// The comma-separated item at fault, as written (trimmed); empty for an empty item.
+    pub token: String,
+    /// What is wrong with it (quoting the item).
     pub reason: String,
+}
+
+/// One comma-separated item, read: first, last, step.
+fn parse_item(item: &str) -> Result<(i32, i32, u32), String> {
+    let quoted = format!("'{item}'");
+    let bad = |what: &str| format!("{quoted}: {what}");
+    // The step: after ':' or 'x' (the last one; neither can appear in a number).
+    let (range, step) = match item.rfind([':', 'x']) {
+        Some(i) => {
+            let s = item[i + 1..].trim();
+            let step = match s.parse::<u32>() {
+                Ok(0) => return Err(bad("the step must be at least 1")),
+                Ok(n) => n,
+                Err(_) => return Err(bad(&format!("the step '{s}' is not a positive integer"))),
+            };
+            (&item[..i], Some(step))
+        }
+        None => (item, None),
+    };
+    let number = |s: &str| -> Result<i32, String> {
+        let s = s.trim();
+        if s.is_empty() {
+            return Err(bad("a frame number is missing"));
+        }
+        let digits = s.strip_prefix('-').unwrap_or(s);
+        if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+            return Err(bad(&format!("'{s}' is not a frame number (an integer)")));
+        }
+        s.parse::<i32>().map_err(|_| {
+            bad(&format!(
+                "'{s}' is out of range (frame numbers are from {} to {})",
+                i32::MIN,
+                i32::MAX
+            ))
+        })
+    };
+    // The dash between the two numbers: the first '-' after the first character that is not a
+    // space or the first number's own sign.
+    let body = range.trim();
+    let start = usize::from(body.starts_with('-'));
+    let (first, last) = match body[start..].find('-') {
+        Some(i) => (number(&body[..start + i])?, number(&body[start + i + 1..])?),
+        None => {
+            let n = number(body)?;
+            if step.is_some() {
+                return Err(bad("a step needs a range A-B before it"));
+            }
+            (n, n)
+        }
+    };
+    if last < first {
+        return Err(bad(&format!(
+            "the range ends ({last}) before it starts ({first})"
+        )));
+    }
+    Ok((first, last, step.unwrap_or(1)))
 }
 
 impl FrameSpec {
     /// Frame `n` alone.
     #[must_use]
-    pub fn single(n: u32) -> Self {
+    pub fn single(n: i32) -> Self {
         FrameSpec { ranges: vec![(n, n)] }
     }
 
@@ -53,11 +119,13 @@ impl FrameSpec {
     ///
     /// # Errors
     /// When `last < first`.
-    pub fn range(first: u32, last: u32) -> Result<Self, FrameSpecError> {
+    pub fn range(first: i32, last: i32) -> Result<Self, FrameSpecError> {
         if last < first {
+            let text = format!("{first}-{last}");
             return Err(FrameSpecError {
-                text: format!("{first}-{last}"),
-                reason: format!("the range ends ({last}) before it starts ({first})"),
+                reason: format!("'{text}': the range ends ({last}) before it starts ({first})"),
+                token: text.clone(),
+                text,
             });
         }
         Ok(FrameSpec {
@@ -65,52 +133,57 @@ impl FrameSpec {
         })
     }
 
-    /// Reads `N`, `A-B` or a comma-separated list of them; spaces around numbers, dashes and commas
-    /// are allowed.
+    /// Reads a selection (see [`FrameSpec`]); spaces around numbers, dashes, steps and commas are
+    /// allowed.
     ///
     /// # Errors
-    /// A message quoting `text` and saying what is wrong: an empty item, a number that is not a
-    /// non-negative integer, or a range that ends before it starts.
+    /// A [`FrameSpecError`] quoting `text` and the item at fault and saying what is wrong: an empty
+    /// item, something that is not an integer, a number beyond 32 bits, a range that ends before it
+    /// starts, a step of 0 or on a single number, or stepped items naming more than
+    /// [`MAX_STEPPED_FRAMES`] frames.
     pub fn parse(text: &str) -> Result<Self, FrameSpecError> {
-        let fail = |reason: String| FrameSpecError {
+        let fail = |token: &str, reason: String| FrameSpecError {
             text: text.to_string(),
+            token: token.to_string(),
             reason,
         };
-        let number = |s: &str| {
-            let s = s.trim();
-            if s.is_empty() {
-                return Err(fail("a frame number is missing".into()));
-            }
-            s.parse::<u32>()
-                .map_err(|_| fail(format!("'{s}' is not a frame number (a non-negative integer)")))
-        };
         let mut ranges = Vec::new();
-        for item in text.split(',') {
-            if item.trim().is_empty() {
-                return Err(fail("an empty item".into()));
+        let mut stepped: u64 = 0;
+        for (k, item) in text.split(',').enumerate() {
+            let item = item.trim();
+            if item.is_empty() {
+                return Err(fail(item, format!("'' (item {}): an empty item", k + 1)));
             }
-            let (first, last) = match item.split_once('-') {
-                Some((a, b)) => (number(a)?, number(b)?),
-                None => {
-                    let n = number(item)?;
-                    (n, n)
-                }
-            };
-            if last < first {
-                return Err(fail(format!("the range {first}-{last} ends before it starts")));
+            let (first, last, step) = parse_item(item).map_err(|reason| fail(item, reason))?;
+            if step == 1 {
+                ranges.push((first, last));
+                continue;
             }
-            ranges.push((first, last));
+            let count = (i64::from(last) - i64::from(first)) as u64 / u64::from(step) + 1;
+            stepped += count;
+            if stepped > MAX_STEPPED_FRAMES {
+                return Err(fail(
+                    item,
+                    format!("'{item}': stepped ranges may name at most {MAX_STEPPED_FRAMES} frames"),
+                ));
+            }
+            let mut n = i64::from(first);
+            while n <= i64::from(last) {
+                // In range: first <= n <= last.
+                ranges.push((n as i32, n as i32));
+                n += i64::from(step);
+            }
         }
         Ok(Self::normalized(ranges))
     }
 
     /// Sorts and merges overlapping or adjacent ranges.
-    fn normalized(mut ranges: Vec<(u32, u32)>) -> Self {
+    fn normalized(mut ranges: Vec<(i32, i32)>) -> Self {
         ranges.sort_unstable();
-        let mut merged: Vec<(u32, u32)> = Vec::with_capacity(ranges.len());
+        let mut merged: Vec<(i32, i32)> = Vec::with_capacity(ranges.len());
         for (a, b) in ranges {
             match merged.last_mut() {
-                Some(last) if u64::from(a) <= u64::from(last.1) + 1 => last.1 = last.1.max(b),
+                Some(last) if i64::from(a) <= i64::from(last.1) + 1 => last.1 = last.1.max(b),
                 _ => merged.push((a, b)),
             }
         }
@@ -119,19 +192,20 @@ impl FrameSpec {
 
     /// True when frame `n` is selected.
     #[must_use]
-    pub fn contains(&self, n: u32) -> bool {
-        self.ranges.iter().any(|&(a, b)| (a..=b).contains(&n))
+    pub fn contains(&self, n: i64) -> bool {
+        let i = self.ranges.partition_point(|&(_, b)| i64::from(b) < n);
+        self.ranges.get(i).is_some_and(|&(a, _)| i64::from(a) <= n)
     }
 
     /// The first frame selected.
     #[must_use]
-    pub fn first(&self) -> u32 {
+    pub fn first(&self) -> i32 {
         self.ranges[0].0
     }
 
     /// The last frame selected.
     #[must_use]
-    pub fn last(&self) -> u32 {
+    pub fn last(&self) -> i32 {
         self.ranges[self.ranges.len() - 1].1
     }
 
@@ -140,7 +214,7 @@ impl FrameSpec {
     pub fn len(&self) -> u64 {
         self.ranges
             .iter()
-            .map(|&(a, b)| u64::from(b) - u64::from(a) + 1)
+            .map(|&(a, b)| (i64::from(b) - i64::from(a) + 1) as u64)
             .sum()
     }
 
@@ -151,8 +225,57 @@ impl FrameSpec {
     }
 
     /// The selected frames in increasing order.
-    pub fn frames(&self) -> impl Iterator<Item = u32> + '_ {
+    pub fn frames(&self) -> impl Iterator<Item = i32> + '_ {
         self.ranges.iter().flat_map(|&(a, b)| a..=b)
+    }
+
+    /// The selected frames in increasing order, for scenes whose frames are numbered from 0.
+    ///
+    /// # Errors
+    /// When the selection holds a negative frame: a message naming the selection.
+    pub fn non_negative(&self) -> Result<impl Iterator<Item = u32> + '_, String> {
+        if self.first() < 0 {
+            return Err(format!(
+                "--frames {self} selects negative frames (from {}); this scene's frames are numbered from 0",
+                self.first()
+            ));
+        }
+        // Every frame is >= 0 here.
+        Ok(self.frames().map(|n| n as u32))
+    }
+
+    /// The selection cut into consecutive runs of at most `size` selected frames each, in order
+    /// (what one task of a farm job renders when frames are chunked `size` at a time).
+    ///
+    /// # Panics
+    /// When `size` is 0.
+    #[must_use]
+    pub fn chunks(&self, size: u32) -> Vec<FrameSpec> {
+        assert!(size > 0, "a chunk holds at least one frame");
+        let mut out = Vec::new();
+        let mut current: Vec<(i32, i32)> = Vec::new();
+        let mut held: u64 = 0;
+        for &(a, b) in &self.ranges {
+            let mut start = i64::from(a);
+            while start <= i64::from(b) {
+                let room = u64::from(size) - held;
+                let end = (start + room as i64 - 1).min(i64::from(b));
+                // Both within [a, b].
+                current.push((start as i32, end as i32));
+                held += (end - start + 1) as u64;
+                if held == u64::from(size) {
+                    out.push(FrameSpec {
+                        ranges: std::mem::take(&mut current),
+                    });
+                    held = 0;
+                }
+                start = end + 1;
+            }
+        }
+        if !current.is_empty() {
+            out.push(FrameSpec { ranges: current });
+        }
+        out
     }
 
     /// The frames of `available` (the frame numbers a file holds, in file order) that are selected,
@@ -161,7 +284,9 @@ impl FrameSpec {
     /// # Errors
     /// When none is: a message naming the selection and the frames the file has.
     pub fn select(&self, available: &[u32]) -> Result<Vec<u32>, String> {
-        let picked: Vec<u32> = available.iter().copied().filter(|&n| self.contains(n)).collect();
+        let picked: Vec<u32> = (available.iter().copied())
+            .filter(|&n| self.contains(i64::from(n)))
+            .collect();
         if picked.is_empty() {
             return Err(format!(
                 "--frames {self} selects none of the frames the scene has ({})",
@@ -190,16 +315,39 @@ impl FromStr for FrameSpec {
 }
 
 impl fmt::Display for FrameSpec {
+    /// The canonical form: ranges `A-B`, single frames `N`, and three or more equally spaced single
+    /// frames as `A-B:S`; reading it back gives the same selection.
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        for (i, &(a, b)) in self.ranges.iter().enumerate() {
-            if i > 0 {
-                f.write_str(",")?;
-            }
-            if a == b {
-                write!(f, "{a}")?;
-            } else {
+        let r = &self.ranges;
+        let mut i = 0;
+        let mut sep = "";
+        while i < r.len() {
+            f.write_str(sep)?;
+            sep = ",";
+            let (a, b) = r[i];
+            if a != b {
                 write!(f, "{a}-{b}")?;
+                i += 1;
+                continue;
             }
+            // A run of single frames with one spacing.
+            let mut j = i + 1;
+            if j < r.len() && r[j].0 == r[j].1 {
+                let step = i64::from(r[j].0) - i64::from(a);
+                while j + 1 < r.len()
+                    && r[j + 1].0 == r[j + 1].1
+                    && i64::from(r[j + 1].0) - i64::from(r[j].0) == step
+                {
+                    j += 1;
+                }
+                if j - i >= 2 {
+                    write!(f, "{a}-{}:{step}", r[j].0)?;
+                    i = j + 1;
+                    continue;
+                }
+            }
+            write!(f, "{a}")?;
+            i += 1;
         }
         Ok(())
     }
@@ -352,20 +500,28 @@ mod tests {
     }
 
     #[test]
-    fn bad_selections_are_refused_quoting_the_text_and_the_reason() {
-        for (bad, reason) in [
-            ("", "an empty item"),
-            ("1,,2", "an empty item"),
-            ("10-1", "the range 10-1 ends before it starts"),
-            ("-3", "a frame number is missing"),
-            ("3-", "a frame number is missing"),
-            ("a", "'a' is not a frame number"),
-            ("1.5", "'1.5' is not a frame number"),
-            ("1-2-3", "'2-3' is not a frame number"),
-            ("99999999999", "'99999999999' is not a frame number"),
+    fn bad_selections_are_refused_quoting_the_text_the_item_and_the_reason() {
+        for (bad, token, reason) in [
+            ("", "", "an empty item"),
+            ("1,,2", "", "an empty item"),
+            ("10-1", "10-1", "the range ends (1) before it starts (10)"),
+            ("-", "-", "'-' is not a frame number"),
+            ("3-", "3-", "a frame number is missing"),
+            ("a", "a", "'a' is not a frame number"),
+            ("1.5", "1.5", "'1.5' is not a frame number"),
+            ("1-2-3", "1-2-3", "'2-3' is not a frame number"),
+            ("99999999999", "99999999999", "'99999999999' is out of range"),
+            ("1-24:0", "1-24:0", "the step must be at least 1"),
+            ("1,5-24x", "5-24x", "the step '' is not a positive integer"),
+            ("1-24:-2", "1-24:-2", "the step '-2' is not a positive integer"),
+            ("1-24:6x2", "1-24:6x2", "'24:6' is not a frame number"),
+            ("1-3,7:2", "7:2", "a step needs a range A-B before it"),
+            ("0-2000000:1,1-2000001:2", "1-2000001:2", "at most 1000000 frames"),
         ] {
-            let e = FrameSpec::parse(bad).unwrap_err().to_string();
-            assert!(e.starts_with(&format!("'{bad}': ")), "{bad}: {e}");
+            let e = FrameSpec::parse(bad).unwrap_err();
+            assert_eq!(e.token, token, "{bad}: {e}");
+            let e = e.to_string();
+            assert!(e.starts_with(&format!("'{bad}': '{token}'")), "{bad}: {e}");
             assert!(e.contains(reason), "{bad}: {e}");
             assert!(e.contains("expected a frame N, a range A-B"), "{bad}: {e}");
         }
@@ -375,6 +531,110 @@ mod tests {
                 .to_string()
                 .contains("ends (3) before it starts (4)")
         );
+    }
+
+    #[test]
+    fn farm_forms_steps_and_negative_frames_are_read() {
+        let frames = |s: &str| FrameSpec::parse(s).unwrap().frames().collect::<Vec<_>>();
+        assert_eq!(frames("1-24:6"), [1, 7, 13, 19]);
+        assert_eq!(frames("1-24x6"), [1, 7, 13, 19]);
+        assert_eq!(frames("1-3,5,7-20:2"), [1, 2, 3, 5, 7, 9, 11, 13, 15, 17, 19]);
+        assert_eq!(frames("-3--1"), [-3, -2, -1]);
+        assert_eq!(frames("-2-1"), [-2, -1, 0, 1]);
+        assert_eq!(frames(" -4 - -2 : 2 "), [-4, -2]);
+        assert_eq!(frames("5-5:3"), [5]);
+        assert_eq!(FrameSpec::parse("1-24:6").unwrap().to_string(), "1-19:6");
+        assert_eq!(
+            FrameSpec::parse("1-3,5,7-20:2").unwrap().to_string(),
+            "1-3,5-19:2"
+        );
+        assert_eq!(FrameSpec::parse("1,3").unwrap().to_string(), "1,3");
+        let all = FrameSpec::parse("-2147483648-2147483647").unwrap();
+        assert_eq!(all.len(), 1 << 32);
+        assert!(all.contains(-2_147_483_648) && !all.contains(1 << 31));
+        let e = FrameSpec::parse("-3-2").unwrap().non_negative().err().unwrap();
+        assert!(e.contains("negative frames (from -3)"), "{e}");
+    }
+
+    #[test]
+    fn chunks_cut_the_selection_in_order() {
+        let chunks = |s: &str, n: u32| {
+            let spec = FrameSpec::parse(s).unwrap();
+            spec.chunks(n).iter().map(ToString::to_string).collect::<Vec<_>>()
+        };
+        assert_eq!(chunks("1-24", 6), ["1-6", "7-12", "13-18", "19-24"]);
+        assert_eq!(chunks("1-10", 4), ["1-4", "5-8", "9-10"]);
+        assert_eq!(chunks("1-3,5,7-20:2", 4), ["1-3,5", "7-13:2", "15-19:2"]);
+    }
+
+    /// One item of a selection as a farm would write it, from its parts.
+    fn item() -> impl Strategy<Value = String> {
+        (-50i32..50, 0i32..40, 1u32..7, 0u8..4).prop_map(|(a, len, step, form)| match form {
+            0 => format!("{a}"),
+            1 => format!("{a}-{}", a + len),
+            2 => format!("{a}-{}:{step}", a + len),
+            _ => format!("{a}-{}x{step}", a + len),
+        })
+    }
+
+    /// The frames of a list of items, computed independently of the parser.
+    fn expected(items: &[String]) -> std::collections::BTreeSet<i32> {
+        let mut set = std::collections::BTreeSet::new();
+        for it in items {
+            let (range, step) = match it.split_once([':', 'x']) {
+                Some((r, s)) => (r, s.parse::<i32>().unwrap()),
+                None => (it.as_str(), 1),
+            };
+            let sign = usize::from(range.starts_with('-'));
+            let (a, b) = match range[sign..].find('-') {
+                Some(i) => (&range[..sign + i], &range[sign + i + 1..]),
+                None => (range, range),
+            };
+            let (a, b): (i32, i32) = (a.parse().unwrap(), b.parse().unwrap());
+            set.extend((a..=b).step_by(step as usize));
+        }
+        set
+    }
+
+    proptest! {
+        #[test]
+        fn every_accepted_selection_is_its_frames_and_round_trips(items in prop::collection::vec(item(), 1..6)) {
+            let text = items.join(",");
+            let spec = FrameSpec::parse(&text).unwrap();
+            let want = expected(&items);
+            prop_assert_eq!(spec.frames().collect::<Vec<_>>(), want.iter().copied().collect::<Vec<_>>());
+            prop_assert_eq!(spec.len(), want.len() as u64);
+            let again = FrameSpec::parse(&spec.to_string()).unwrap();
+            prop_assert_eq!(&again, &spec);
+            prop_assert_eq!(again.to_string(), spec.to_string());
+            for n in -60..100 {
+                prop_assert_eq!(spec.contains(n), want.contains(&(n as i32)));
+            }
+            let chunks = spec.chunks(5);
+            let joined: Vec<i32> = chunks.iter().flat_map(|c| c.frames().collect::<Vec<_>>()).collect();
+            prop_assert_eq!(joined, want.iter().copied().collect::<Vec<_>>());
+            prop_assert!(chunks.iter().all(|c| c.len() <= 5));
+        }
+
+        #[test]
+        fn every_rejected_selection_names_its_item(
+            items in prop::collection::vec(item(), 0..4),
+            bad in prop_oneof![
+                Just("".to_string()), Just("a".to_string()), Just("1-".to_string()),
+                Just("5-1".to_string()), Just("1-9:0".to_string()), Just("3x2".to_string()),
+                Just("1--".to_string()), Just("1.0".to_string()), Just("1-9:y".to_string()),
+                Just("4294967296".to_string()), Just("2-1x3".to_string()),
+            ],
+            at in 0usize..4,
+        ) {
+            let mut all = items.clone();
+            all.insert(at.min(items.len()), bad.clone());
+            let text = all.join(",");
+            let e = FrameSpec::parse(&text).unwrap_err();
+            prop_assert_eq!(&e.token, &bad);
+            let quoted = format!("'{bad}'");
+            prop_assert!(e.to_string().contains(&quoted), "{}", e);
+        }
     }
 
     #[test]
@@ -497,9 +757,9 @@ mod tests {
             // Membership agrees with the ranges as written.
             for n in 0..560 {
                 let inside = ranges.iter().any(|&(a, k)| n >= a && n <= a + k);
-                prop_assert_eq!(spec.contains(n), inside);
+                prop_assert_eq!(spec.contains(n.into()), inside);
             }
-            let frames: Vec<u32> = spec.frames().collect();
+            let frames: Vec<i32> = spec.frames().collect();
             prop_assert!(frames.windows(2).all(|w| w[0] < w[1]));
             prop_assert_eq!(frames.len() as u64, spec.len());
         }

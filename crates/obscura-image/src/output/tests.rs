@@ -9,7 +9,7 @@ use obscura_host::PixelRect;
 use obscura_scene::{FilterKind, PixelFilter};
 use obscura_sdk::Rgb;
 
-fn pixel_value(x: u32, y: u32) -> SampleValues {
+pub(crate) fn pixel_value(x: u32, y: u32) -> SampleValues {
     let (fx, fy) = (x as f32, y as f32);
     SampleValues {
         ci: Rgb::new(0.1 * fx, 0.05 * fy, 0.333_333),
@@ -128,7 +128,7 @@ fn ground_truth_channels_are_named_and_ids_are_exact_integers() {
 
 /// A film whose every crop pixel holds exactly `pixel_value` (one sample at each centre, width-1
 /// box filter).
-fn film(w: u32, h: u32, crop: PixelRect) -> Film {
+pub(crate) fn film(w: u32, h: u32, crop: PixelRect) -> Film {
     let f = Filter::new(&PixelFilter {
         kind: FilterKind::Box,
         width_x: 1.0,

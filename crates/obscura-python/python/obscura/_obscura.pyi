@@ -236,3 +236,12 @@ def render(
     the scene's own displays (else ``render.exr``). ``stats["written"]`` lists the files and
     ``stats["warnings"]`` the messages. ``progress(done, total)`` is called with tile counts; Ctrl-C
     raises KeyboardInterrupt."""
+
+def parse_frames(frames: str) -> List[int]:
+    """The frames of a frame list as farms write it ("1-24", "1-24:6", "1-24x6", "1-3,5,7-20:2",
+    negative numbers), sorted and without repeats; the same parser as ``obscura render --frames``.
+    Raises ValueError naming the bad item."""
+
+def frame_chunks(frames: str, size: int) -> List[str]:
+    """The frame list cut into runs of at most ``size`` frames, each as a canonical frame list
+    ("1-6", "7-13:2"): what each task of a farm job chunked ``size`` frames at a time renders."""
