@@ -105,10 +105,10 @@ pub fn check<'py>(
 }
 
 /// The AOVs `render` returns without `aovs`: RenderMan's own and the textures' (rows of the AOV
-/// table, under their array names).
+/// table, under their array names); the sensor's planes only with a sensor.
 fn default_aovs() -> Vec<Aov> {
     (AOVS.iter())
-        .filter(|s| s.group != AovGroup::GroundTruth)
+        .filter(|s| s.group != AovGroup::GroundTruth && s.group != AovGroup::Sensor)
         .map(|s| s.aov)
         .collect()
 }

@@ -284,11 +284,11 @@ impl Default for SensorConfig {
             pixel_pitch_um: 3.45,
             iso: 100.0,
             base_iso: 100.0,
-            exposure_time_s: 0.01,
+            exposure_time_s: 0.005,
             f_number: None,
             responsivity: 1.0,
             response: Response::QuantumEfficiency(0.6),
-            gain_e_per_dn: 1.0,
+            gain_e_per_dn: 2.5,
             read_noise_e: 2.5,
             dark_current_e_per_s: 5.0,
             full_well_e: 10_000.0,
@@ -345,7 +345,7 @@ pub const KEYS: [KeyDoc; 20] = [
     key(
         "exposure_time_s",
         "number > 0",
-        "0.01",
+        "0.005",
         "integration time in seconds",
     ),
     key(
@@ -372,7 +372,12 @@ pub const KEYS: [KeyDoc; 20] = [
         "none",
         "channel electrons per photon for linear-sRGB R, G, B (rows R, G, B); a preset name (\"canon_eos_5d_mark_ii\") takes a published colour matrix scaled to quantum_efficiency",
     ),
-    key("gain_e_per_dn", "number > 0", "1", "electrons per DN at base_iso"),
+    key(
+        "gain_e_per_dn",
+        "number > 0",
+        "2.5",
+        "electrons per DN at base_iso",
+    ),
     key("read_noise_e", "number ≥ 0", "2.5", "read noise, electrons RMS"),
     key(
         "dark_current_e_per_s",
@@ -570,6 +575,39 @@ impl SensorConfig {
             }
         }
         Ok(())
+    }
+
+    /// Sets several keys at once, where a dotted key (`isp.demosaic`, `rolling_shutter.line_time_s`)
+    /// names a member of an object key: the members of one object are gathered and set together (a
+    /// rolling shutter needs its line time and exposure in the same call). Then [`Self::validate`].
+    ///
+    /// # Errors
+    /// The first key's message, as [`Self::set`].
+    pub fn set_all(&mut self, entries: &[(String, Value)]) -> Result<(), String> {
+        let mut nested: Vec<(String, Value)> = Vec::new();
+        for (k, v) in entries {
+            match k.split_once('.') {
+                Some((outer, inner)) => {
+                    let slot = match nested.iter().position(|(n, _)| n == outer) {
+                        Some(i) => i,
+                        None => {
+                            nested.push((outer.to_string(), Value::Object(serde_json::Map::new())));
+                            nested.len() - 1
+                        }
+                    };
+                    if let Value::Object(map) = &mut nested[slot].1 {
+                        map.insert(inner.to_string(), v.clone());
+                    } else {
+                        return Err(format!("\"{outer}\" is given both whole and as \"{k}\""));
+                    }
+                }
+                None => nested.push((k.clone(), v.clone())),
+            }
+        }
+        for (k, v) in &nested {
+            self.set(k, v)?;
+        }
+        self.validate()
     }
 
     /// Checks what single keys cannot: the black level and companding against the bit depth.
@@ -871,6 +909,30 @@ mod tests {
         assert!(e.to_string().contains("line 2"), "{e}");
         let e = SensorConfig::from_json(r#"{"cfa": "RGBG"}"#, "x").unwrap_err();
         assert!(e.to_string().contains("RGGB, BGGR, GRBG or GBRG"), "{e}");
+    }
+
+    #[test]
+    fn dotted_keys_gather_into_objects() {
+        let mut c = SensorConfig::default();
+        let entries = [
+            ("iso".to_string(), serde_json::json!(800)),
+            (
+                "rolling_shutter.order".to_string(),
+                serde_json::json!("bottom_to_top"),
+            ),
+            ("rolling_shutter.line_time_s".to_string(), serde_json::json!(2e-5)),
+            (
+                "rolling_shutter.line_exposure_s".to_string(),
+                serde_json::json!(1e-3),
+            ),
+            ("isp.demosaic".to_string(), serde_json::json!("bilinear")),
+        ];
+        c.set_all(&entries).unwrap();
+        assert_eq!(c.iso, 800.0);
+        assert_eq!(c.rolling_shutter.unwrap().order, ScanOrder::BottomToTop);
+        assert_eq!(c.isp.demosaic, Demosaic::Bilinear);
+        let e = c.set_all(&[("rolling_shutter.line_time_s".to_string(), serde_json::json!(1e-5))]);
+        assert!(e.unwrap_err().contains("line_exposure_s"));
     }
 
     #[test]
