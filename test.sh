@@ -26,6 +26,11 @@ fi
 export OBSCURA_REQUIRE_INDEPENDENT_EXR=1
 export OBSCURA_REQUIRE_OPENCV=1
 export OBSCURA_REQUIRE_PYCOLMAP=1
+# The image sensor (issue 30): LibRaw, through rawpy, reads Obscura's DNG files.
+if ! "$py" -c "import rawpy" 2>/dev/null; then
+  "$py" -m pip install --quiet --disable-pip-version-check rawpy
+fi
+export OBSCURA_REQUIRE_RAWPY=1
 
 echo "== cargo test --workspace"
 cargo test --workspace

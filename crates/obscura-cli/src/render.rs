@@ -196,7 +196,7 @@ fn image_displays(a: &RenderArgs, scene: &Scene) -> Vec<Display> {
     let mut displays = job::displays(scene, a.output.as_deref());
     let aovs: Vec<Aov> = a.aovs.iter().flatten().copied().collect();
     add_aovs(&mut displays, &aovs);
-    if scene.sensor.is_some() || a.sensor.is_some() || !a.sensor_params.is_empty() {
+    if scene.sensor.is_some() || a.sensor.is_some() || !a.sensor_params.is_empty() || a.raw.is_some() {
         job::sensor_displays(&mut displays, a.raw.as_deref());
     }
     if scene.animation_seconds.is_none() {
