@@ -150,6 +150,10 @@ pub enum FrameError {
     /// A sidecar could not be written.
     #[error("{0}")]
     Sidecar(String),
+    /// The sensor cannot be used with this scene (a rolling shutter through a projection without
+    /// time samples by line).
+    #[error("{0}")]
+    Sensor(String),
 }
 
 /// Renders one frame of `job` through the projection in `registry` and writes it (see the module
@@ -162,7 +166,8 @@ pub fn render_frame(
     registry: &mut Registry,
     reporter: &dyn Reporter,
 ) -> Result<FrameResult, FrameError> {
-    let scene = job.scene;
+    let rolling = crate::sensor::rolling_shutter_scene(job.scene).map_err(FrameError::Sensor)?;
+    let scene = rolling.as_ref().unwrap_or(job.scene);
     let first: &[Display] = job.writes.first().map_or(&[], |w| w.displays);
     for w in job.writes {
         check_render(scene, w.displays, job.options.samples_per_pixel, job.size_source)?;

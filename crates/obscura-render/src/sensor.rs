@@ -186,3 +186,57 @@ pub fn record(config: &SensorConfig, props: &Properties, lines: (u32, u32)) -> V
     }
     j
 }
+
+/// The projections whose time samples take a rolling shutter (`sweep`, `duration`).
+const ROLLING: [&str; 2] = ["PxrCamera", "PxrRollingShutter"];
+
+/// The scene a sensor with a rolling shutter renders: its readout mapped onto the projection's time
+/// samples. `PxrCamera` and `PxrRollingShutter` get `sweep` (the scan order) and `duration` (`line
+/// exposure / readout`, [`obscura_sensor::config::RollingShutter::duration`]); `PxrPerspective` becomes
+/// `PxrRollingShutter` over the same perspective camera (its `fov` and depth of field kept). The scene's
+/// shutter interval stands for the readout: line `k` (of `n` in the scan direction) opens at
+/// `(k + ½)·line_time` seconds and stays open `line_exposure` seconds. `None` without a rolling
+/// shutter.
+///
+/// # Errors
+/// A message naming the projection when it cannot take a rolling shutter.
+pub fn rolling_shutter_scene(scene: &Scene) -> Result<Option<Scene>, String> {
+    let Some(rs) = scene.sensor.as_ref().and_then(|s| s.rolling_shutter) else {
+        return Ok(None);
+    };
+    let crop = scene.camera.format;
+    let lines = match rs.order {
+        obscura_sensor::config::ScanOrder::TopToBottom | obscura_sensor::config::ScanOrder::BottomToTop => {
+            crop.height
+        }
+        _ => crop.width,
+    };
+    let mut s = scene.clone();
+    if s.projection == "PxrPerspective" {
+        s.projection = "PxrRollingShutter".into();
+    } else if !ROLLING.contains(&s.projection.as_str()) {
+        return Err(format!(
+            "the sensor's rolling_shutter needs a projection with time samples by line (PxrPerspective, {}), not {}",
+            ROLLING.join(", "),
+            scene.projection
+        ));
+    }
+    let origin = Some("the sensor's rolling_shutter".to_string());
+    let p = &mut s.projection_params;
+    p.remove("sweep");
+    p.remove("duration");
+    let error = |e: obscura_sdk::DeclarationError| e.to_string();
+    p.push(
+        "string sweep",
+        obscura_sdk::ParamValue::Strings(vec![rs.order.sweep().to_string()]),
+        origin.clone(),
+    )
+    .map_err(error)?;
+    p.push(
+        "float duration",
+        obscura_sdk::ParamValue::Floats(vec![rs.duration(lines) as f32]),
+        origin,
+    )
+    .map_err(error)?;
+    Ok(Some(s))
+}

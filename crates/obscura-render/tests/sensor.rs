@@ -287,3 +287,45 @@ fn without_a_sensor_nothing_changes() {
     let e = render_frame(&job, &mut builtin_registry(), &Quiet(AtomicBool::new(false))).unwrap_err();
     assert!(e.to_string().contains("needs a sensor"), "{e}");
 }
+
+/// A rolling shutter in sensor terms reaches the projection's time samples: `PxrPerspective` renders
+/// as `PxrRollingShutter` with the sweep of the scan order and `duration = line_exposure/readout`, and
+/// the camera JSON says so; a projection without time samples by line is refused, named.
+#[test]
+fn rolling_shutter_maps_onto_the_projection() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut scene = wall(0.2);
+    scene.camera.format.width = 16;
+    scene.camera.format.height = 10;
+    let mut config = sensor_config();
+    config
+        .set_all(&[
+            ("rolling_shutter.order".into(), serde_json::json!("bottom_to_top")),
+            ("rolling_shutter.line_time_s".into(), serde_json::json!(0.001)),
+            ("rolling_shutter.line_exposure_s".into(), serde_json::json!(0.002)),
+        ])
+        .unwrap();
+    scene.sensor = Some(config);
+    let displays = vec![Display {
+        path: dir.path().join("r.exr"),
+        driver: DisplayDriver::OpenExr,
+        aovs: vec![Aov::Ci],
+        half: false,
+    }];
+    let writes = [FrameWrite {
+        number: None,
+        displays: &displays,
+    }];
+    render(&scene, &writes);
+    let camera: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("r.camera.json")).unwrap()).unwrap();
+    assert_eq!(camera["projection"], "PxrRollingShutter");
+    assert_eq!(camera["parameters"]["sweep"], serde_json::json!(["up"]));
+    // 10 lines of 1 ms and a 2 ms exposure: a 12 ms readout, each line open 2/12 of it.
+    let duration = camera["parameters"]["duration"][0].as_f64().unwrap();
+    assert!((duration - 2.0 / 12.0).abs() < 1e-6, "{duration}");
+    assert_eq!(camera["sensor"]["rolling_shutter"]["readout_s"], 0.012);
+    scene.projection = "PxrOrthographic".into();
+    let e = obscura_render::sensor::rolling_shutter_scene(&scene).unwrap_err();
+    assert!(e.contains("not PxrOrthographic"), "{e}");
+}
