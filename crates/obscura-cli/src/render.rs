@@ -393,6 +393,14 @@ fn print_summary(scene: &Scene, result: &FrameResult) {
             String::new()
         }
     );
+    if let Some(sensor) = &result.output.sensor {
+        let megapixels = f64::from(sensor.frame.width) * f64::from(sensor.frame.height) * 1e-6;
+        outln!(
+            "sensor stage (exposure, noise, ISP) {:.3} s: {:.3} s per megapixel",
+            sensor.seconds,
+            sensor.seconds / megapixels.max(1e-12)
+        );
+    }
     for p in &result.written {
         outln!("wrote {}", p.display());
     }

@@ -374,10 +374,7 @@ impl Film {
             if let Some(flow) = &self.flow {
                 v.flow = flow[i];
             }
-            if !self.exposure.is_identity() {
-                let e = self.exposure;
-                v.ci = Rgb::new(e.apply(v.ci.r), e.apply(v.ci.g), e.apply(v.ci.b));
-            }
+            v.ci = self.exposed(v.ci);
             if let Some(s) = &self.sensor {
                 v.ci = s.ci[i];
                 v.sensor = SensorPixel {
@@ -387,6 +384,24 @@ impl Film {
             }
             v
         })
+    }
+
+    /// The film's own Ci at pixel (x, y), exposed but without the sensor stage's processed beauty (the
+    /// noiseless linear image the sensor was given); black outside the crop.
+    #[must_use]
+    pub fn resolved_ci(&self, x: u32, y: u32) -> Rgb {
+        index_in(self.crop, x as i64, y as i64)
+            .map_or(Rgb::BLACK, |i| self.exposed(self.pixels[i].resolve().ci))
+    }
+
+    /// `c` through the film's `Exposure` (unchanged when it is the identity).
+    fn exposed(&self, c: Rgb) -> Rgb {
+        let e = self.exposure;
+        if e.is_identity() {
+            c
+        } else {
+            Rgb::new(e.apply(c.r), e.apply(c.g), e.apply(c.b))
+        }
     }
 
     /// Fraction of the crop's pixels in which at least one sample landed (0 for an empty crop): how

@@ -208,9 +208,35 @@ pub fn process_mosaic(
     height: u32,
     origin: (u32, u32),
 ) -> Processed {
+    process_linear(config, response, &linearise(config, raw), width, height, origin)
+}
+
+/// The noise-free image of a frame through the same ISP: its noise-free DN (clipped by the ADC)
+/// linearised and processed as the raw mosaic is. The clean half of a training pair.
+#[must_use]
+pub fn process_clean(config: &SensorConfig, response: &Mat3, frame: &SensorFrame) -> Processed {
+    let black = config.black_level_dn;
+    let top = config.linear_max_code();
+    let x: Vec<f32> = frame
+        .clean_dn
+        .iter()
+        .map(|&dn| ((f64::from(dn).min(top) - black) / (top - black)) as f32)
+        .collect();
+    process_linear(config, response, &x, frame.width, frame.height, frame.origin)
+}
+
+/// Steps 2–5 on linearised values `x` (step 1's output).
+#[must_use]
+pub fn process_linear(
+    config: &SensorConfig,
+    response: &Mat3,
+    x: &[f32],
+    width: u32,
+    height: u32,
+    origin: (u32, u32),
+) -> Processed {
     let isp = &config.isp;
-    let x = linearise(config, raw);
-    let rgb = demosaic(&x, width, height, origin, config.cfa, isp.demosaic);
+    let rgb = demosaic(x, width, height, origin, config.cfa, isp.demosaic);
     let mono = config.cfa == Cfa::None;
     let neutral = apply(response, [1.0; 3]);
     let white_balance = if mono {
