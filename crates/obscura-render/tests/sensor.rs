@@ -8,7 +8,7 @@ use std::sync::atomic::AtomicBool;
 use obscura_plugins::builtin_registry;
 use obscura_render::frame::Neighbours;
 use obscura_render::pipeline::{
-    FrameJob, FrameResult, FrameWrite, Message, Reporter, Sidecars, render_frame,
+    FrameError, FrameJob, FrameResult, FrameWrite, Message, Reporter, Sidecars, render_frame,
 };
 use obscura_render::render::RenderOptions;
 use obscura_scene::rib::parse_str;
@@ -41,6 +41,10 @@ fn wall(level: f32) -> Scene {
 }
 
 fn render(scene: &Scene, writes: &[FrameWrite<'_>]) -> FrameResult {
+    try_render(scene, writes).expect("renders")
+}
+
+fn try_render(scene: &Scene, writes: &[FrameWrite<'_>]) -> Result<FrameResult, FrameError> {
     let job = FrameJob {
         scene,
         base_dir: Path::new("."),
@@ -55,7 +59,7 @@ fn render(scene: &Scene, writes: &[FrameWrite<'_>]) -> FrameResult {
         sidecars: Sidecars::WithGroundTruth,
         size_source: "test",
     };
-    render_frame(&job, &mut builtin_registry(), &Quiet(AtomicBool::new(false))).expect("renders")
+    render_frame(&job, &mut builtin_registry(), &Quiet(AtomicBool::new(false)))
 }
 
 /// The raw codes of `scene` read by `config` with `seed`, through the pipeline, as EMVA's pair of
@@ -267,24 +271,14 @@ fn without_a_sensor_nothing_changes() {
         aovs: vec![Aov::Raw],
         half: false,
     }];
-    let job = FrameJob {
-        scene: &scene,
-        base_dir: Path::new("."),
-        writes: &[FrameWrite {
+    let e = try_render(
+        &scene,
+        &[FrameWrite {
             number: None,
             displays: &bad,
         }],
-        also: &[],
-        neighbours: Neighbours {
-            previous: None,
-            next: None,
-        },
-        options: &RenderOptions::default(),
-        header_frame: None,
-        sidecars: Sidecars::WithGroundTruth,
-        size_source: "test",
-    };
-    let e = render_frame(&job, &mut builtin_registry(), &Quiet(AtomicBool::new(false))).unwrap_err();
+    )
+    .unwrap_err();
     assert!(e.to_string().contains("needs a sensor"), "{e}");
 }
 
