@@ -31,6 +31,11 @@ export OBSCURA_REQUIRE_USD=1
 # The shared corpora of public files (CI runs on this machine kind) must be there: the USD files
 # (OBSCURA_USD_CORPUS) and the real 3DE/Nuke lens files (OBSCURA_LENS3DE_CORPUS).
 export OBSCURA_REQUIRE_CORPORA=1
+# The image sensor (issue 30): LibRaw, through rawpy, reads Obscura's DNG files.
+if ! "$py" -c "import rawpy" 2>/dev/null; then
+  "$py" -m pip install --quiet --disable-pip-version-check rawpy
+fi
+export OBSCURA_REQUIRE_RAWPY=1
 
 echo "== cargo test --workspace"
 cargo test --workspace

@@ -184,6 +184,20 @@ struct RenderArgs {
     /// May be repeated (a farm job adds it to the user's arguments).
     #[arg(long, overrides_with = "camera_json")]
     camera_json: bool,
+    // The image sensor (issue 30): exposure, noise, CFA, raw and ISP after the film.
+    /// An image sensor after the lens, described in JSON (keys: docs/sensor.md): the beauty becomes
+    /// the ISP's processed image, every EXR gains the raw and electrons channels, and the camera JSON
+    /// records the sensor. Replaces the scene's Option "sensor".
+    #[arg(long, value_name = "FILE.json")]
+    sensor: Option<PathBuf>,
+    /// One key of the sensor description, KEY=VALUE with VALUE in JSON (a bare word is a string):
+    /// iso=800, cfa=BGGR, isp.demosaic=bilinear, rolling_shutter.line_time_s=1e-5. Repeatable; over
+    /// --sensor's file, else over the defaults.
+    #[arg(long = "sensor-param", value_name = "KEY=VALUE")]
+    sensor_params: Vec<String>,
+    /// Write the sensor's raw mosaic as a DNG file (needs a sensor).
+    #[arg(long, value_name = "OUT.dng")]
+    raw: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

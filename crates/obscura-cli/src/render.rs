@@ -25,6 +25,7 @@ use obscura_render::sequence::{FrameSpec, frame_displays, sequence_displays};
 use obscura_scene::source::SceneSource;
 use obscura_scene::{Aov, Display, Scene};
 use obscura_sdk::{Format, ParamList};
+use obscura_sensor::SensorConfig;
 use obscura_shading::integrator::PathOptions;
 
 use crate::args::{crop_window, load_calibration};
@@ -418,10 +419,41 @@ fn image_displays(a: &RenderArgs, scene: &Scene) -> Vec<Display> {
     let mut displays = job::displays(scene, a.output.as_deref());
     let aovs: Vec<Aov> = a.aovs.iter().flatten().copied().collect();
     add_aovs(&mut displays, &aovs);
+    if scene.sensor.is_some() || a.sensor.is_some() || !a.sensor_params.is_empty() || a.raw.is_some() {
+        job::sensor_displays(&mut displays, a.raw.as_deref());
+    }
     if scene.animation_seconds.is_none() {
         displays = without_backward_flow(&displays, false);
     }
     displays
+}
+
+/// The sensor of `--sensor FILE.json` and `--sensor-param KEY=VALUE`, when either is given.
+fn cli_sensor(a: &RenderArgs) -> Result<Option<SensorConfig>, String> {
+    if a.sensor.is_none() && a.sensor_params.is_empty() {
+        return Ok(None);
+    }
+    let mut config = match &a.sensor {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+            SensorConfig::from_json(&text, &path.display().to_string()).map_err(|e| e.to_string())?
+        }
+        None => SensorConfig::default(),
+    };
+    let mut entries = Vec::new();
+    for p in &a.sensor_params {
+        let Some((key, value)) = p.split_once('=') else {
+            return Err(format!("--sensor-param {p}: expected KEY=VALUE (iso=800)"));
+        };
+        let value =
+            serde_json::from_str(value.trim()).unwrap_or_else(|_| serde_json::Value::from(value.trim()));
+        entries.push((key.trim().to_string(), value));
+    }
+    config
+        .set_all(&entries)
+        .map_err(|e| format!("--sensor-param: {e}"))?;
+    Ok(Some(config))
 }
 
 /// The render options of the command line (the pipeline sets `deep` from the displays).
@@ -486,6 +518,7 @@ fn configure(
         projection: a.projection.clone(),
         calibration,
         params: ParamList::new(),
+        sensor: cli_sensor(a)?,
     };
     let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
     let factory = registry.find(&projection).map_err(|e| e.to_string())?;
@@ -592,6 +625,14 @@ fn print_summary(scene: &Scene, result: &FrameResult) {
             String::new()
         }
     );
+    if let Some(sensor) = &result.output.sensor {
+        let megapixels = f64::from(sensor.frame.width) * f64::from(sensor.frame.height) * 1e-6;
+        outln!(
+            "sensor stage (exposure, noise, ISP) {:.3} s: {:.3} s per megapixel",
+            sensor.seconds,
+            sensor.seconds / megapixels.max(1e-12)
+        );
+    }
     for p in &result.written {
         outln!("wrote {}", p.display());
     }

@@ -117,7 +117,7 @@ const CATALOGUE: &[Case] = &[
         &["render", "--format", "20000x20000", "-o", "big.exr"],
         &[],
         M,
-        "a 20000x20000 render with 14 channels needs about 152.0 GiB of memory, more than the 1.0 GiB available (OBSCURA_MEMORY_LIMIT=1G)",
+        "a 20000x20000 render with 14 channels needs about 155.0 GiB of memory, more than the 1.0 GiB available (OBSCURA_MEMORY_LIMIT=1G)",
     ),
     (
         "rays with sample layers over the memory limit",

@@ -50,6 +50,30 @@ pub struct SampleValues {
     /// The pixel's optical flow: not a per-sample value; [`Film::pixel`] fills it from the flow pass
     /// ([`Film::set_flow`]).
     pub flow: FlowPixel,
+    /// The sensor's values of the pixel: not a per-sample value; [`Film::pixel`] fills it from the
+    /// sensor stage ([`Film::set_sensor`]).
+    pub sensor: SensorPixel,
+}
+
+/// A pixel's values from the sensor stage (`obscura_sensor`): zero when no sensor is configured.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SensorPixel {
+    /// The raw code in DN.
+    pub raw: f32,
+    /// The noise-free expected photoelectrons of the pixel's channel.
+    pub electrons: f32,
+}
+
+/// The sensor stage's result over the film's crop, row by row: the processed beauty that replaces the
+/// film's, and the planes of [`SensorPixel`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SensorPlanes {
+    /// The ISP's linear output, reported as Ci.
+    pub ci: Vec<Rgb>,
+    /// Raw codes, DN.
+    pub raw: Vec<f32>,
+    /// Expected photoelectrons.
+    pub electrons: Vec<f32>,
 }
 
 impl SampleValues {
@@ -66,6 +90,10 @@ impl SampleValues {
         uv: Vec2::ZERO,
         truth: Truth::EMPTY,
         flow: FlowPixel::NONE,
+        sensor: SensorPixel {
+            raw: 0.0,
+            electrons: 0.0,
+        },
     };
 }
 
@@ -207,6 +235,8 @@ pub struct Film {
     flow: Option<Vec<FlowPixel>>,
     /// `Exposure`, applied to Ci when a pixel is resolved.
     exposure: Exposure,
+    /// The sensor stage's planes over the crop, once set.
+    sensor: Option<SensorPlanes>,
 }
 
 impl Film {
@@ -233,6 +263,7 @@ impl Film {
             pixels: vec![Accum::ZERO; crop.len()],
             flow: None,
             exposure: Exposure::default(),
+            sensor: None,
         }
     }
 
@@ -250,6 +281,20 @@ impl Film {
     pub fn set_flow(&mut self, flow: Vec<FlowPixel>) {
         assert_eq!(flow.len(), self.pixels.len(), "one flow pixel per crop pixel");
         self.flow = Some(flow);
+    }
+
+    /// Stores the sensor stage's planes (the crop's, row by row): from then on [`Film::pixel`] reports
+    /// their processed beauty as Ci (in place of the exposed film's) and their raw and electron values.
+    ///
+    /// # Panics
+    /// When a plane does not hold one entry per crop pixel (a bug of the caller).
+    pub fn set_sensor(&mut self, planes: SensorPlanes) {
+        let n = self.pixels.len();
+        assert!(
+            planes.ci.len() == n && planes.raw.len() == n && planes.electrons.len() == n,
+            "one sensor value per crop pixel"
+        );
+        self.sensor = Some(planes);
     }
 
     /// The format size `(W, H)`: the display window.
@@ -329,12 +374,34 @@ impl Film {
             if let Some(flow) = &self.flow {
                 v.flow = flow[i];
             }
-            if !self.exposure.is_identity() {
-                let e = self.exposure;
-                v.ci = Rgb::new(e.apply(v.ci.r), e.apply(v.ci.g), e.apply(v.ci.b));
+            v.ci = self.exposed(v.ci);
+            if let Some(s) = &self.sensor {
+                v.ci = s.ci[i];
+                v.sensor = SensorPixel {
+                    raw: s.raw[i],
+                    electrons: s.electrons[i],
+                };
             }
             v
         })
+    }
+
+    /// The film's own Ci at pixel (x, y), exposed but without the sensor stage's processed beauty (the
+    /// noiseless linear image the sensor was given); black outside the crop.
+    #[must_use]
+    pub fn resolved_ci(&self, x: u32, y: u32) -> Rgb {
+        index_in(self.crop, x as i64, y as i64)
+            .map_or(Rgb::BLACK, |i| self.exposed(self.pixels[i].resolve().ci))
+    }
+
+    /// `c` through the film's `Exposure` (unchanged when it is the identity).
+    fn exposed(&self, c: Rgb) -> Rgb {
+        let e = self.exposure;
+        if e.is_identity() {
+            c
+        } else {
+            Rgb::new(e.apply(c.r), e.apply(c.g), e.apply(c.b))
+        }
     }
 
     /// Fraction of the crop's pixels in which at least one sample landed (0 for an empty crop): how

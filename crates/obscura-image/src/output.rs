@@ -47,6 +47,14 @@ pub enum OutputError {
         /// Why.
         reason: &'static str,
     },
+    /// The sensor's raw file could not be encoded (too large for TIFF).
+    #[error("cannot write {path}: {reason}")]
+    Raw {
+        /// The target file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A deep image is inconsistent (see [`crate::deep::write_deep_exr`]).
     #[error("cannot write {path}: {reason}")]
     InvalidDeepImage {
@@ -196,6 +204,8 @@ pub fn component(v: &SampleValues, aov: Aov, k: usize) -> f32 {
         Aov::FlowForward => v.flow.forward[k],
         Aov::FlowBackward => v.flow.backward[k],
         Aov::FlowValid => [v.flow.forward_valid, v.flow.backward_valid][k],
+        Aov::Raw => v.sensor.raw,
+        Aov::Electrons => v.sensor.electrons,
     }
 }
 
@@ -214,7 +224,8 @@ fn resolve(film: &Film) -> Vec<SampleValues> {
 /// `uv.X`, `uv.Y`; the ground truth as `cameraZ`,
 /// `distance`, `Pcamera.{X,Y,Z}`, `Ncamera.{X,Y,Z}`, `flowForward.{X,Y}`, `flowBackward.{X,Y}`,
 /// `flowValid.{forward,backward}` and the IDs `objectId`, `instanceId`, `materialId` as 32-bit
-/// unsigned integers (whatever `half` says). ZIP compression (16 scanlines per
+/// unsigned integers (whatever `half` says); the sensor's `raw` (DN) and `electrons` as 32-bit floats
+/// (whatever `half` says: half floats hold integers exactly only up to 2048). ZIP compression (16 scanlines per
 /// block); data window = the crop, display window = the full format; `pixelAspectRatio` =
 /// `pixel_aspect`. An AOV named twice is written once; OpenEXR itself stores channels sorted by name. `half`
 /// applies to every channel (Z and P included: ask for float when depth precision matters). A pixel
@@ -282,7 +293,7 @@ pub fn write_exr(
             let values = pixels.iter().map(|v| component(v, aov, k));
             let samples = if aov.spec().kind == AovKind::Id {
                 FlatSamples::U32(pixels.iter().filter_map(|v| id_component(v, aov)).collect())
-            } else if half {
+            } else if half && !aov.is_sensor() {
                 FlatSamples::F16(values.map(f16::from_f32).collect())
             } else {
                 FlatSamples::F32(values.collect())

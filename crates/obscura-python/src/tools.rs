@@ -105,10 +105,10 @@ pub fn check<'py>(
 }
 
 /// The AOVs `render` returns without `aovs`: RenderMan's own and the textures' (rows of the AOV
-/// table, under their array names).
+/// table, under their array names); the sensor's planes only with a sensor.
 fn default_aovs() -> Vec<Aov> {
     (AOVS.iter())
-        .filter(|s| s.group != AovGroup::GroundTruth)
+        .filter(|s| s.group != AovGroup::GroundTruth && s.group != AovGroup::Sensor)
         .map(|s| s.aov)
         .collect()
 }
@@ -172,8 +172,14 @@ impl Reporter for Polled {
 /// `obscura render` does; `stats["written"]` lists the files. `progress(done_tiles, total_tiles)` is
 /// called from the calling thread about ten times a second; Ctrl-C (KeyboardInterrupt) stops the
 /// render and raises.
+/// `sensor` puts an image sensor after the lens: a dict of the sensor keys (those of
+/// `obscura render --sensor FILE.json`, docs/sensor.md) or the path of such a JSON file. Then `beauty`
+/// is the ISP's processed (noisy) image, `clean` the same ISP on the noise-free exposure (the training
+/// pair), `film` the renderer's noiseless linear image, `raw` the mosaic in DN and `electrons` the
+/// expected photoelectrons; EXR outputs gain the `raw` and `electrons` channels. `raw_output` writes the
+/// mosaic as a DNG file.
 #[pyfunction]
-#[pyo3(signature = (scene = None, camera = None, spp = None, aovs = None, seed = 0, max_depth = 6, progress = None, output = None, write = false))]
+#[pyo3(signature = (scene = None, camera = None, spp = None, aovs = None, seed = 0, max_depth = 6, progress = None, output = None, write = false, sensor = None, raw_output = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn render<'py>(
     py: Python<'py>,
@@ -186,11 +192,17 @@ pub fn render<'py>(
     progress: Option<Bound<'py, PyAny>>,
     output: Option<PathBuf>,
     write: bool,
+    sensor: Option<Bound<'py, PyAny>>,
+    raw_output: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let wanted: Vec<Aov> = match &aovs {
+    let sensor_config = sensor.map(|s| sensor_config(py, &s)).transpose()?;
+    let mut wanted: Vec<Aov> = match &aovs {
         None => default_aovs(),
         Some(list) => list.iter().map(|a| aov_named(a)).collect::<PyResult<_>>()?,
     };
+    if sensor_config.is_some() && aovs.is_none() {
+        wanted.extend([Aov::Raw, Aov::Electrons]);
+    }
     if spp == Some(0) {
         return Err(PyValueError::new_err(
             "spp=0: expected at least 1 sample per pixel",
@@ -211,15 +223,24 @@ pub fn render<'py>(
         sc.projection = c.stage.name().to_string();
         sc.projection_params = c.params.clone();
     }
-    let displays = if write || output.is_some() {
+    if sensor_config.is_some() {
+        sc.sensor = sensor_config;
+    }
+    let mut displays = if write || output.is_some() {
         let mut d = job::displays(&sc, output.as_deref());
         if aovs.is_some() {
             add_aovs(&mut d, &wanted);
+        }
+        if sc.sensor.is_some() {
+            job::sensor_displays(&mut d, None);
         }
         without_backward_flow(&d, false)
     } else {
         Vec::new()
     };
+    if let Some(path) = &raw_output {
+        job::sensor_displays(&mut displays, Some(path));
+    }
     let opts = RenderOptions {
         samples_per_pixel: spp,
         seed,
@@ -286,6 +307,20 @@ pub fn render<'py>(
         cb.call1((out.stats.tiles.0, out.stats.tiles.1))?;
     }
     let d = aov_arrays(py, &out.film, &wanted)?;
+    if let Some(s) = &out.sensor {
+        let crop = out.film.crop();
+        let dims = [crop.height() as usize, crop.width() as usize, 3];
+        let clean = obscura_sensor::isp::process_clean(s.sensor.config(), s.sensor.response(), &s.frame);
+        d.set_item("clean", rgb_array(py, &dims, clean.linear.iter().copied())?)?;
+        let film = (crop.y0..crop.y1).flat_map(|y| (crop.x0..crop.x1).map(move |x| (x, y)));
+        let film: Vec<[f32; 3]> = film
+            .map(|(x, y)| {
+                let c = out.film.resolved_ci(x, y);
+                [c.r, c.g, c.b]
+            })
+            .collect();
+        d.set_item("film", rgb_array(py, &dims, film.into_iter())?)?;
+    }
     let st = PyDict::new(py);
     st.set_item("render_seconds", out.stats.render_seconds)?;
     st.set_item("setup_seconds", out.stats.setup_seconds)?;
@@ -304,6 +339,38 @@ pub fn render<'py>(
     )?;
     d.set_item("stats", st)?;
     Ok(d)
+}
+
+/// A sensor description from Python: a dict of sensor keys, or the path of a JSON file.
+fn sensor_config(py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<obscura_sensor::SensorConfig> {
+    if let Ok(path) = value.extract::<PathBuf>()
+        && !value.is_instance_of::<PyDict>()
+    {
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| PyValueError::new_err(format!("sensor: cannot read {}: {e}", path.display())))?;
+        return obscura_sensor::SensorConfig::from_json(&text, &path.display().to_string())
+            .map_err(|e| PyValueError::new_err(e.to_string()));
+    }
+    let text: String = py.import("json")?.call_method1("dumps", (value,))?.extract()?;
+    obscura_sensor::SensorConfig::from_json(&text, "sensor").map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
+/// An H×W×3 float32 array of `values`.
+fn rgb_array<'py>(
+    py: Python<'py>,
+    dims: &[usize; 3],
+    values: impl Iterator<Item = [f32; 3]>,
+) -> PyResult<Bound<'py, numpy::PyArrayDyn<f32>>> {
+    let arr = zeros::<f32>(py, dims);
+    let mut rw = arr.readwrite();
+    let s = rw
+        .as_slice_mut()
+        .map_err(|_| PyRuntimeError::new_err("output not contiguous"))?;
+    for (o, v) in s.chunks_exact_mut(3).zip(values) {
+        o.copy_from_slice(&v);
+    }
+    drop(rw);
+    Ok(arr)
 }
 
 /// The film's `aovs` over the crop window as numpy arrays (H×W for one channel, H×W×C otherwise),

@@ -180,7 +180,7 @@ pub fn merge_params(list: &mut ParamList, extra: &ParamList) -> Result<(), Decla
 }
 
 /// What `obscura render`'s options change in the scene it loaded, applied in this order by
-/// [`Overrides::apply`]: format, crop window, projection, calibration, parameters.
+/// [`Overrides::apply`]: format, crop window, projection, calibration, sensor, parameters.
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
     /// `--format`: the image size in pixels (the pixel aspect stays the scene's).
@@ -195,6 +195,8 @@ pub struct Overrides {
     pub calibration: Option<Calibrated>,
     /// `--param`: parameters added to the projection's, each replacing those of the same name.
     pub params: ParamList,
+    /// `--sensor` / `--sensor-param`: the sensor, replacing the scene's `Option "sensor"`.
+    pub sensor: Option<obscura_sensor::SensorConfig>,
 }
 
 impl Overrides {
@@ -232,6 +234,9 @@ impl Overrides {
                 let (w, h) = c.size();
                 scene.camera.format = Format::new(w, h);
             }
+        }
+        if let Some(sensor) = &self.sensor {
+            scene.sensor = Some(sensor.clone());
         }
         merge_params(&mut scene.projection_params, &self.params)
     }
@@ -277,6 +282,29 @@ pub fn displays(scene: &Scene, output: Option<&Path>) -> Vec<Display> {
     list
 }
 
+/// What a sensor adds to `displays`: the `raw` and `electrons` channels to every EXR holding the
+/// beauty, and a `dng` display writing the raw mosaic to `raw` when given.
+pub fn sensor_displays(displays: &mut Vec<Display>, raw: Option<&Path>) {
+    for d in displays
+        .iter_mut()
+        .filter(|d| d.driver == DisplayDriver::OpenExr && d.aovs.contains(&Aov::Ci))
+    {
+        for a in [Aov::Raw, Aov::Electrons] {
+            if !d.aovs.contains(&a) {
+                d.aovs.push(a);
+            }
+        }
+    }
+    if let Some(path) = raw {
+        displays.push(Display {
+            path: path.to_path_buf(),
+            driver: DisplayDriver::Dng,
+            aovs: vec![Aov::Raw],
+            half: false,
+        });
+    }
+}
+
 /// True when any display is deep.
 #[must_use]
 pub fn wants_deep(displays: &[Display]) -> bool {
@@ -303,6 +331,18 @@ pub fn write_displays(
             DisplayDriver::Tiff => write_tiff(&d.path, &out.film, &d.aovs)?,
             DisplayDriver::DeepExr => match &out.deep {
                 Some(deep) => write_deep_exr(&d.path, deep, DeepCompression::Zips)?,
+                None => continue,
+            },
+            DisplayDriver::Dng => match &out.sensor {
+                Some(sensor) => {
+                    let bytes = crate::sensor::dng_bytes(sensor).map_err(|e| OutputError::Raw {
+                        path: d.path.clone(),
+                        reason: e.to_string(),
+                    })?;
+                    obscura_image::atomic::write_atomically(&d.path, |f| {
+                        std::io::Write::write_all(f, &bytes)
+                    })?;
+                }
                 None => continue,
             },
         }
@@ -352,6 +392,16 @@ pub fn check_render(
             DisplayDriver::Png => limits::check_output(&d.path, OutputKind::Png)?,
             // RenderMan's `file` driver writes TIFF under whatever name the scene gives.
             DisplayDriver::Tiff => limits::check_output_location(&d.path)?,
+            DisplayDriver::Dng => limits::check_output(&d.path, OutputKind::Dng)?,
+        }
+        let sensor_output = d.driver == DisplayDriver::Dng || d.aovs.iter().any(|a| a.is_sensor());
+        if sensor_output && scene.sensor.is_none() {
+            return Err(LimitError::Output {
+                path: d.path.display().to_string(),
+                reason: "the raw mosaic (a dng display, or the raw or electrons AOV) needs a sensor: \
+                         --sensor FILE.json, --sensor-param, or the scene's Option \"sensor\""
+                    .into(),
+            });
         }
     }
     let channels = displays

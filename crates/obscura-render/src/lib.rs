@@ -9,6 +9,7 @@
 //! |---|---|
 //! | [`render`] | setup and the render loop: camera stage → world rays → trace → film |
 //! | [`staging`] | what a scene file leaves out: the automatic camera, interiors, the default lights |
+//! | [`sensor`] | the image sensor after the film: exposure, noise, raw mosaic, ISP, DNG |
 //! | [`flow`] | optical flow through the projection's `unproject` |
 //! | [`truth`] | the scene's object, instance and material IDs |
 //! | [`metadata`], [`frame`] | per-frame camera JSON and ID sidecar; complete frames |
@@ -24,6 +25,7 @@ pub mod limits;
 pub mod metadata;
 pub mod pipeline;
 pub mod render;
+pub mod sensor;
 pub mod sequence;
 pub mod staging;
 pub mod truth;

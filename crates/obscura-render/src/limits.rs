@@ -275,6 +275,8 @@ pub enum OutputKind {
     Png,
     /// Baseline TIFF: `.tif`, `.tiff`.
     Tiff,
+    /// The sensor's raw mosaic: `.dng`.
+    Dng,
 }
 
 impl OutputKind {
@@ -285,6 +287,7 @@ impl OutputKind {
             OutputKind::Exr => &["exr"],
             OutputKind::Png => &["png"],
             OutputKind::Tiff => &["tif", "tiff"],
+            OutputKind::Dng => &["dng"],
         }
     }
 
@@ -292,9 +295,14 @@ impl OutputKind {
     #[must_use]
     pub fn of_path(path: &Path) -> Option<OutputKind> {
         let ext = path.extension()?.to_str()?.to_ascii_lowercase();
-        [OutputKind::Exr, OutputKind::Png, OutputKind::Tiff]
-            .into_iter()
-            .find(|k| k.extensions().contains(&ext.as_str()))
+        [
+            OutputKind::Exr,
+            OutputKind::Png,
+            OutputKind::Tiff,
+            OutputKind::Dng,
+        ]
+        .into_iter()
+        .find(|k| k.extensions().contains(&ext.as_str()))
     }
 }
 

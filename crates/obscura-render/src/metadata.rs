@@ -144,6 +144,9 @@ pub fn camera_json(scene: &Scene, prepared: &Prepared, frame: Option<i64>) -> Re
         "field_of_view": props.field_of_view.map(f64::from).map(num),
         "world_to_camera": {"open": rows(open), "close": rows(close)},
     });
+    if let Some(config) = &scene.sensor {
+        j["sensor"] = crate::sensor::record(config, props, (cam.format.width, cam.format.height));
+    }
     if let Some(intr) = intrinsics(scene, props.field_of_view) {
         let flip = Mat4::from(Affine3A::from_scale(glam::Vec3::new(1.0, -1.0, 1.0)));
         let [fx, fy, cx, cy] = intr.pinhole;

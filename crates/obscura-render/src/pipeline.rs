@@ -9,6 +9,8 @@
 //! 3. tell the setup's **warnings** (projection setup, textures, the automatic camera and lights);
 //! 4. **render** the tiles, reporting progress and stopping when the reporter cancels;
 //! 5. the **flow** pass when a display (or the caller) asks for a flow AOV ([`crate::frame::run_flow`]);
+//!    Then the **sensor**, when the scene has one ([`crate::sensor::expose`]): exposure, noise, raw
+//!    mosaic and ISP, whose processed beauty every display then writes;
 //! 6. the EXR **header attributes**: the projection, a partial render's missing tiles, the camera and
 //!    ID JSON;
 //! 7. every **display**, atomically ([`crate::job::write_displays`]), once per frame number the image
@@ -79,10 +81,11 @@ pub trait Reporter: Sync {
     fn rendered(&self) {}
 }
 
-/// When a frame writes its sidecars (the ID table beside each EXR with an ID AOV, and the camera JSON).
+/// When a frame writes its sidecars (the ID table beside each EXR with an ID AOV, and the camera JSON,
+/// which also records the sensor).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Sidecars {
-    /// When a display of the frame holds a ground-truth AOV.
+    /// When a display of the frame holds a ground-truth AOV, or the scene has a sensor.
     WithGroundTruth,
     /// Always: a sequence that resumes knows a complete frame by its camera JSON.
     Always,
@@ -147,6 +150,10 @@ pub enum FrameError {
     /// A sidecar could not be written.
     #[error("{0}")]
     Sidecar(String),
+    /// The sensor cannot be used with this scene (a rolling shutter through a projection without
+    /// time samples by line).
+    #[error("{0}")]
+    Sensor(String),
 }
 
 /// Renders one frame of `job` through the projection in `registry` and writes it (see the module
@@ -159,7 +166,8 @@ pub fn render_frame(
     registry: &mut Registry,
     reporter: &dyn Reporter,
 ) -> Result<FrameResult, FrameError> {
-    let scene = job.scene;
+    let rolling = crate::sensor::rolling_shutter_scene(job.scene).map_err(FrameError::Sensor)?;
+    let scene = rolling.as_ref().unwrap_or(job.scene);
     let first: &[Display] = job.writes.first().map_or(&[], |w| w.displays);
     for w in job.writes {
         check_render(scene, w.displays, job.options.samples_per_pixel, job.size_source)?;
@@ -191,6 +199,7 @@ pub fn render_frame(
             reporter.message(Message::Flow, &w);
         }
     }
+    crate::sensor::expose(scene, &prepared, &mut out, job.header_frame.map_or(0, u64::from));
     let mut attributes = vec![("obscura:projection", scene.projection.clone())];
     if let Some(note) = out.stats.partial_note() {
         attributes.push(("obscura:partial", note));
@@ -198,7 +207,9 @@ pub fn render_frame(
     attributes.extend(header_attributes(scene, &prepared, job.header_frame)?);
     let sidecars = match job.sidecars {
         Sidecars::Always => true,
-        Sidecars::WithGroundTruth => first.iter().any(|d| d.aovs.iter().any(|a| a.is_ground_truth())),
+        Sidecars::WithGroundTruth => {
+            scene.sensor.is_some() || first.iter().any(|d| d.aovs.iter().any(|a| a.is_ground_truth()))
+        }
     };
     let mut written = Vec::new();
     for w in job.writes {

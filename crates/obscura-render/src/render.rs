@@ -426,6 +426,8 @@ pub struct RenderOutput {
     pub deep: Option<DeepImage>,
     /// Counts and times.
     pub stats: RenderStats,
+    /// The sensor stage's result, when the scene has a sensor ([`crate::sensor::expose`]).
+    pub sensor: Option<crate::sensor::SensorOutput>,
 }
 
 impl Prepared {
@@ -681,6 +683,7 @@ impl Accumulator {
                 cancelled: finished < total,
                 missing_tiles: Vec::new(),
             },
+            sensor: None,
         }
     }
 }
@@ -951,6 +954,7 @@ impl<'a> TileIntegrator<'a> {
             uv: path.uv,
             truth,
             flow: obscura_image::samples::FlowPixel::NONE,
+            sensor: obscura_image::film::SensorPixel::default(),
         }
     }
 }

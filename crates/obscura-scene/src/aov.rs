@@ -46,6 +46,11 @@ pub enum Aov {
     Albedo,
     /// The first texture coordinate set at the first hit, as stored in the file (`uv`).
     Uv,
+    /// The sensor's raw mosaic in DN, an integer stored as a float (`raw`; needs a sensor).
+    Raw,
+    /// The sensor's noise-free expected photoelectrons of each pixel's channel (`electrons`; needs a
+    /// sensor).
+    Electrons,
 }
 
 /// How an AOV's pixels are made and stored.
@@ -57,7 +62,8 @@ pub enum AovKind {
     Nearest,
     /// An integer of the nearest sample, never filtered: `UINT` channels whatever the precision asked.
     Id,
-    /// Computed once per pixel, through its centre, after the samples (the flow).
+    /// Computed once per pixel after the samples (the flow, through the pixel's centre; the sensor,
+    /// from the resolved beauty).
     Centre,
 }
 
@@ -72,6 +78,8 @@ pub enum AovSource {
     Texture,
     /// The flow pass after the samples, through the projection's `unproject`.
     Flow,
+    /// The sensor after the film resolves (`obscura_sensor`).
+    Sensor,
 }
 
 /// Where an AOV belongs among the outputs.
@@ -83,6 +91,8 @@ pub enum AovGroup {
     GroundTruth,
     /// What the textures give: `--aov all` adds them after the ground truth.
     Texture,
+    /// The sensor's planes: written when a sensor is configured, never by `--aov all`.
+    Sensor,
 }
 
 /// One row of the AOV table.
@@ -130,7 +140,7 @@ use AovKind::{Centre, Filtered, Id, Nearest};
 
 /// Every AOV, in the order of [`Aov`]'s variants (each row at its variant's index). `--aov all`
 /// takes the ground-truth rows, then the texture rows, in this order.
-pub const AOVS: [AovSpec; 18] = [
+pub const AOVS: [AovSpec; 20] = [
     row(
         Aov::Ci,
         "Ci",
@@ -285,6 +295,24 @@ pub const AOVS: [AovSpec; 18] = [
         AovSource::Texture,
         Texture,
     ),
+    row(
+        Aov::Raw,
+        "raw",
+        "raw",
+        &["raw"],
+        Centre,
+        AovSource::Sensor,
+        AovGroup::Sensor,
+    ),
+    row(
+        Aov::Electrons,
+        "electrons",
+        "electrons",
+        &["electrons"],
+        Centre,
+        AovSource::Sensor,
+        AovGroup::Sensor,
+    ),
 ];
 
 impl Aov {
@@ -316,6 +344,12 @@ impl Aov {
     #[must_use]
     pub fn is_flow(self) -> bool {
         self.spec().source == AovSource::Flow
+    }
+
+    /// True for the sensor's planes (`raw`, `electrons`).
+    #[must_use]
+    pub fn is_sensor(self) -> bool {
+        self.spec().source == AovSource::Sensor
     }
 
     /// True for the ground-truth AOVs (a display holding one gets the frame's ID and camera sidecars).

@@ -402,6 +402,8 @@ pub enum DisplayDriver {
     /// `"tiff"` (and RenderMan's `"file"`, `"zfile"`, `"shadow"`): baseline TIFF, 8-bit colour or
     /// 32-bit float depth.
     Tiff,
+    /// `"dng"`: the sensor's raw mosaic as a DNG file (needs a sensor, [`Scene::sensor`]).
+    Dng,
 }
 
 /// `Display "file" "driver" "channels"`.
@@ -467,6 +469,9 @@ pub struct Scene {
     /// The materials that shade by local illumination (the classic shaders'; see [`LocalShading`]),
     /// by index into [`Scene::materials`]. Every other material is path traced.
     pub local_shading: BTreeMap<u32, LocalShading>,
+    /// The image sensor after the lens (`Option "sensor"`, `--sensor`): `None` keeps the film's
+    /// noiseless linear image as the output.
+    pub sensor: Option<obscura_sensor::SensorConfig>,
 }
 
 impl Scene {
@@ -492,6 +497,7 @@ impl Scene {
             clip_planes: Vec::new(),
             exposure: Exposure::default(),
             local_shading: BTreeMap::new(),
+            sensor: None,
         }
     }
 }

@@ -34,6 +34,7 @@ pub(crate) fn pixel_value(x: u32, y: u32) -> SampleValues {
             material_id: 4_000_000_000,
         },
         flow: crate::samples::FlowPixel::NONE,
+        sensor: crate::film::SensorPixel::default(),
     }
 }
 

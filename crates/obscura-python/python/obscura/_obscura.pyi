@@ -225,6 +225,8 @@ def render(
     progress: Optional[Callable[[int, int], Any]] = None,
     output: Optional[Union[str, PathLike[str]]] = None,
     write: bool = False,
+    sensor: Optional[Union[Dict[str, Any], str, PathLike[str]]] = None,
+    raw_output: Optional[Union[str, PathLike[str]]] = None,
 ) -> Dict[str, Any]:
     """Renders a scene (RIB, glTF, OBJ; None for the built-in one) through ``camera`` (default the
     scene's), with the same frame pipeline as ``obscura render``, and returns ``beauty`` (H×W×3),
@@ -235,7 +237,12 @@ def render(
     …`` writes (EXR, PNG preview, ID and camera sidecars with ground truth); ``write=True`` writes
     the scene's own displays (else ``render.exr``). ``stats["written"]`` lists the files and
     ``stats["warnings"]`` the messages. ``progress(done, total)`` is called with tile counts; Ctrl-C
-    raises KeyboardInterrupt."""
+    raises KeyboardInterrupt. ``sensor`` (a dict of the sensor keys of docs/sensor.md, or a JSON
+    file's path) puts an image sensor after the lens: ``beauty`` is then the ISP's noisy processed
+    image, ``clean`` the same ISP on the noise-free exposure, ``film`` the renderer's noiseless
+    linear image, ``raw`` the mosaic in DN and ``electrons`` the expected photoelectrons (H×W);
+    ``raw_output`` writes the mosaic as a DNG file."""
+
 
 def parse_frames(frames: str) -> List[int]:
     """The frames of a frame list as farms write it ("1-24", "1-24:6", "1-24x6", "1-3,5,7-20:2",

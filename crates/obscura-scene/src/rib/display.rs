@@ -58,6 +58,7 @@ fn by_extension(path: &Path) -> Option<DisplayDriver> {
         "exr" => Some(DisplayDriver::OpenExr),
         "png" => Some(DisplayDriver::Png),
         "tif" | "tiff" => Some(DisplayDriver::Tiff),
+        "dng" => Some(DisplayDriver::Dng),
         _ => None,
     }
 }
@@ -75,6 +76,7 @@ fn target(driver: &str, path: PathBuf, base: &Path) -> Target {
         "openexr" | "exr" => plain(DisplayDriver::OpenExr),
         "png" => plain(DisplayDriver::Png),
         "deepexr" => plain(DisplayDriver::DeepExr),
+        "dng" => plain(DisplayDriver::Dng),
         "tiff" | "tif" => plain(DisplayDriver::Tiff),
         "file" => plain(by_extension(&path).unwrap_or(DisplayDriver::Tiff)),
         "zfile" | "shadow" => Target {

@@ -72,6 +72,7 @@ mod patch;
 mod pattern;
 mod request;
 mod searchpath;
+mod sensor;
 mod shading;
 mod teapot;
 mod transform;

@@ -285,6 +285,9 @@ impl Reader {
         if name == "searchpath" {
             return self.search_path(r, &r.args[1..]);
         }
+        if name == "sensor" {
+            return self.sensor(r, &r.args[1..]);
+        }
         if self.warned_options.insert(name.clone()) {
             self.warn(r, format!("Option \"{name}\" is not supported, ignored"));
         }

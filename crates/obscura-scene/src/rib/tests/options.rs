@@ -240,7 +240,7 @@ fn display_leaves_out_an_unknown_aov_with_a_warning_naming_it() {
         [
             "t.rib:2: Display \"a.exr\": AOV \"Cs\" is not produced by this renderer, left out (known: rgb, \
           rgba, rgbz, rgbaz, az, Z, depth, Ci, a, z, N, P, cameraDirection, cameraZ, distance, Pcamera, Ncamera, \
-          objectId, instanceId, materialId, flowForward, flowBackward, flowValid, albedo, uv)"
+          objectId, instanceId, materialId, flowForward, flowBackward, flowValid, albedo, uv, raw, electrons)"
         ]
     );
     // A display left with no AOV is skipped, said so.
