@@ -24,6 +24,7 @@ use obscura_render::sequence::FrameSpec;
 use obscura_sdk::{Format, ScreenWindow};
 
 mod args;
+mod build_plugin;
 mod check;
 mod lens;
 mod params;
@@ -77,6 +78,9 @@ enum Command {
     /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
     /// drawing with traced ray fans (--diagram out.svg|png).
     Lens(Box<lens::LensArgs>),
+    /// Compile a RenderMan projection plugin's C++ sources, as they are written (RenderMan 19-21, 22 or
+    /// 23-27), into an Obscura plugin with the embedded RenderMan-compatible headers.
+    BuildPlugin(Box<build_plugin::BuildPluginArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -398,6 +402,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
+        Command::BuildPlugin(a) => build_plugin::run(a).map_err(|e| e.to_string()),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),
