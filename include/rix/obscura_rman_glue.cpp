@@ -13,7 +13,9 @@
  *                          22: CreateProjection(ctx, env, handle, params), env.deepMetric read back;
  *                          19–21: RIX_PROJECTIONCREATE, Init, RenderBegin(ctx, env, params)
  *                          then every property is asked once to check its pointer
- *   property               GetProperty, the answer read through the pointer it hands back
+ *   property               GetProperty, the answer read through the pointer it hands back (19–21, which
+ *                          have no GetProperty: dicing Spherical, deep metric RayLength, the description
+ *                          that holds for any rays)
  *   project                Project on the batch (rays pre-filled by the host)
  *   destroy_projection     RenderEnd (23–27, 19–21), DestroyProjection (19–21: Finalize,
  *                          RIX_PROJECTIONDESTROY)
@@ -603,10 +605,21 @@ ObscuraStatus c_property(void const *projection, ObscuraProjectionProperty prope
         return OBSCURA_OK;
     }
 #else
+    // RenderMan 19-21 projections cannot describe themselves: Obscura takes the description that holds
+    // for any rays they may write (spherical dicing, depth along the ray, clipping spheres).
     PIXAR_ARGUSED(projection);
-    PIXAR_ARGUSED(property);
-    PIXAR_ARGUSED(value);
-    return OBSCURA_UNSUPPORTED;
+    switch (property) {
+    case OBSCURA_PROPERTY_DICING_HINT:
+        value->kind = OBSCURA_VALUE_DICING_HINT;
+        value->enum_value = OBSCURA_DICING_SPHERICAL;
+        return OBSCURA_OK;
+    case OBSCURA_PROPERTY_DEEP_METRIC:
+        value->kind = OBSCURA_VALUE_DEEP_METRIC;
+        value->enum_value = OBSCURA_DEEP_RAY_LENGTH;
+        return OBSCURA_OK;
+    default:
+        return OBSCURA_UNSUPPORTED;
+    }
 #endif
 }
 
