@@ -42,8 +42,9 @@
 static_assert(sizeof(RtPoint2) == sizeof(ObscuraPoint2), "RtPoint2 must be two floats");
 static_assert(sizeof(RtColorRGB) == sizeof(ObscuraRgb), "RtColorRGB must be three floats");
 static_assert(sizeof(RtFloat3) == sizeof(ObscuraVec3), "RtFloat3 must be three floats");
-static_assert(offsetof(RtRayGeometry, maxDist) == offsetof(ObscuraRayGeometry, max_dist),
-              "RtRayGeometry's first members must be laid out as ObscuraRayGeometry");
+static_assert(sizeof(RtRayGeometry) == sizeof(ObscuraRayGeometry),
+              "RtRayGeometry must be laid out as ObscuraRayGeometry (a batch crosses in place)");
+static_assert(alignof(RtRayGeometry) == alignof(ObscuraRayGeometry), "RtRayGeometry's alignment");
 
 /* ------------------------------------------------------------------------------------------------ */
 /* Interned strings.                                                                                */
@@ -623,41 +624,51 @@ ObscuraStatus c_property(void const *projection, ObscuraProjectionProperty prope
 #endif
 }
 
+/** The batch `Project` is working on, on this thread: RtRayGeometry::time finds its entry here. */
+struct BatchView {
+    RtRayGeometry *rays = nullptr;
+    float *time = nullptr;
+    uint32_t n = 0;
+};
+thread_local BatchView t_batch;
+
+/** The time entry of `ray`, or NULL when it is not one of the current batch's rays. */
+float *time_of(void const *time_member) {
+    static ptrdiff_t const offset = [] {
+        RtRayGeometry probe;
+        return reinterpret_cast<char const *>(&probe.time) - reinterpret_cast<char const *>(&probe);
+    }();
+    BatchView const &b = t_batch;
+    if (!b.rays || !b.time) return nullptr;
+    char const *ray = reinterpret_cast<char const *>(time_member) - offset;
+    char const *base = reinterpret_cast<char const *>(b.rays);
+    if (ray < base) return nullptr;
+    size_t bytes = (size_t)(ray - base);
+    if (bytes % sizeof(RtRayGeometry) != 0) return nullptr;
+    size_t i = bytes / sizeof(RtRayGeometry);
+    return i < b.n ? b.time + i : nullptr;
+}
+
 ObscuraStatus c_project(void const *projection, ObscuraProjectionContext const *c, ObscuraErrorSink const *error) {
     Projection const *w = static_cast<Projection const *>(projection);
-    uint32_t n = c->num_rays;
-    thread_local std::vector<RtRayGeometry> rays;
-    thread_local std::vector<float> times;
-    if (rays.size() < n) {
-        rays.resize(n);
-        times.resize(n);
-    }
-    for (uint32_t i = 0; i < n; ++i) {
-        RtRayGeometry &r = rays[i];
-        memcpy(static_cast<void *>(&r), &c->rays[i], sizeof(ObscuraRayGeometry));
-        r.time = times[i] = c->time[i];
-        r.raytype = 0;
-        r.lobeSampled = 0;
-        r.shadingCtxId = 0;
-    }
     ProjectContext pc(&w->ctx);
-    pc.numRays = (int)n;
+    pc.numRays = (int)c->num_rays;
     pc.screen = reinterpret_cast<RtPoint2 const *>(c->screen);
     pc.lens = reinterpret_cast<RtPoint2 const *>(c->lens);
     pc.aperture = reinterpret_cast<RtPoint2 const *>(c->aperture);
     pc.time = c->time;
-    pc.rays = rays.data();
+    pc.rays = reinterpret_cast<RtRayGeometry *>(c->rays);
     pc.tint = reinterpret_cast<RtColorRGB *>(c->tint);
+    BatchView saved = t_batch;
+    t_batch = BatchView{pc.rays, c->time, c->num_rays};
     try {
         w->p->Project(pc);
     } catch (...) {
+        t_batch = saved;
         report(error, "Project " + current_exception_text());
         return OBSCURA_PANIC;
     }
-    for (uint32_t i = 0; i < n; ++i) {
-        memcpy(&c->rays[i], &rays[i], sizeof(ObscuraRayGeometry));
-        if (rays[i].time != times[i]) c->time[i] = rays[i].time;
-    }
+    t_batch = saved;
     return OBSCURA_OK;
 }
 
@@ -803,6 +814,16 @@ Library *load() {
 }
 
 } // namespace
+
+obscura_rman::RayTime::operator float() const {
+    float const *t = time_of(this);
+    return t ? *t : 0.0f;
+}
+
+obscura_rman::RayTime &obscura_rman::RayTime::operator=(float v) {
+    if (float *t = time_of(this)) *t = v;
+    return *this;
+}
 
 extern "C" OBSCURA_EXPORT const ObscuraProjectionDescriptor *obscura_projection_entry(uint32_t host_abi_version) {
     if (host_abi_version != OBSCURA_PROJECTION_ABI_VERSION) return nullptr;

@@ -34,7 +34,9 @@ public:
     {
         for (int i = 0; i < pCtx.numRays; ++i)
         {
-            pCtx.time[i] = floorf(pCtx.time[i] * m_strobes) / m_strobes;
+            // RenderMan 22 style: through the ray's own time field
+            RtRayGeometry& ray = pCtx.rays[i];
+            ray.time = floorf(ray.time * m_strobes) / m_strobes;
             pCtx.tint[i] = pCtx.tint[i] * m_tint;
         }
     }

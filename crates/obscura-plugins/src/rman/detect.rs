@@ -102,7 +102,7 @@ pub fn detect_text(name: &str, text: &str) -> Option<Detected> {
             ));
         }
     }
-    if let Some(pos) = find_word(&code, "deepMetric") {
+    if let Some(pos) = env_deep_metric_write(&code) {
         return Some(found(
             Generation::G2,
             pos,
@@ -164,6 +164,24 @@ pub fn detect_text(name: &str, text: &str) -> Option<Detected> {
             pos,
             "RIX_PROJECTIONFACTORYCREATE (a factory)",
         ));
+    }
+    None
+}
+
+/// Where `code` writes the environment's deep metric (RenderMan 22): `RixProjectionEnvironment::k_…`
+/// or `.deepMetric =` (a member of the plugin's own named `deepMetric` is not one).
+fn env_deep_metric_write(code: &str) -> Option<usize> {
+    if let Some(pos) = code.find("RixProjectionEnvironment::k_") {
+        return Some(pos);
+    }
+    let mut from = 0;
+    while let Some(rel) = code[from..].find(".deepMetric") {
+        let pos = from + rel;
+        let rest = code[pos + ".deepMetric".len()..].trim_start();
+        if rest.starts_with('=') && !rest.starts_with("==") {
+            return Some(pos);
+        }
+        from = pos + 1;
     }
     None
 }
@@ -293,6 +311,11 @@ mod tests {
             Generation::G3
         );
         assert_eq!(detect_text("e.cpp", "int main() { return 0; }"), None);
+        // A projection's own member called deepMetric is RenderMan 23-27's GetProperty idiom.
+        let member = format!("DeepMetric const deepMetric;\n: deepMetric(k_rayLength)\n{g3}");
+        assert_eq!(detect_text("f.cpp", &member).unwrap().generation, Generation::G3);
+        let g2b = "env.deepMetric = RixProjectionEnvironment::k_rayLength;";
+        assert_eq!(detect_text("g.cpp", g2b).unwrap().generation, Generation::G2);
     }
 
     #[test]
