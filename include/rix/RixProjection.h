@@ -78,9 +78,17 @@ public:
 class RixProjectionContext : public RixContext {
 public:
     int numRays;
+    /* RenderMan 19-21 declared the sample arrays without const (its plugins bind non-const references
+       to them); they are inputs all the same: a plugin must not write them. */
+#if OBSCURA_RMAN_GENERATION == 1
+    RtPoint2 *screen;         /* screen-space samples */
+    RtPoint2 *lens;           /* canonical [0,1)^2 */
+    RtPoint2 *aperture;       /* lens samples warped by the aperture into [-1,1]^2 */
+#else
     RtPoint2 const *screen;   /* screen-space samples */
     RtPoint2 const *lens;     /* canonical [0,1)^2 */
     RtPoint2 const *aperture; /* lens samples warped by the aperture into [-1,1]^2 */
+#endif
     union {
         float *time;          /* in/out, [0,1) */
         float *shutter;       /* RenderMan 21's name for the same array */

@@ -653,9 +653,9 @@ ObscuraStatus c_project(void const *projection, ObscuraProjectionContext const *
     Projection const *w = static_cast<Projection const *>(projection);
     ProjectContext pc(&w->ctx);
     pc.numRays = (int)c->num_rays;
-    pc.screen = reinterpret_cast<RtPoint2 const *>(c->screen);
-    pc.lens = reinterpret_cast<RtPoint2 const *>(c->lens);
-    pc.aperture = reinterpret_cast<RtPoint2 const *>(c->aperture);
+    pc.screen = const_cast<RtPoint2 *>(reinterpret_cast<RtPoint2 const *>(c->screen));
+    pc.lens = const_cast<RtPoint2 *>(reinterpret_cast<RtPoint2 const *>(c->lens));
+    pc.aperture = const_cast<RtPoint2 *>(reinterpret_cast<RtPoint2 const *>(c->aperture));
     pc.time = c->time;
     pc.rays = reinterpret_cast<RtRayGeometry *>(c->rays);
     pc.tint = reinterpret_cast<RtColorRGB *>(c->tint);
