@@ -264,6 +264,8 @@ fn configure(
         calibration,
         params: ParamList::new(),
     };
+    // RIB `Option "searchpath" "string rixplugin"` directories join the search after --plugin-path.
+    let search = &search.with_scene_dirs(&scene.plugin_path);
     let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
     let factory = registry.find(&projection).map_err(|e| e.to_string())?;
     overrides.params =

@@ -651,3 +651,34 @@ fn the_sdk_installs_with_a_cmake_package_and_a_pkg_config_file_that_build_a_plug
     let out = obscura(&["--plugin-path", ".", "check", "CullingFisheye"], &dir);
     assert!(out.status.success(), "{}", text(&out));
 }
+
+#[test]
+fn a_rib_finds_its_plugin_through_the_rixplugin_searchpath_and_names_it_by_file_stem() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rman-searchpath");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("plugins")).unwrap();
+    // Renamed: the projection answers to its file's stem.
+    std::fs::copy(
+        dir_of("rman27").join("CullingFisheye.so"),
+        dir.join("plugins/StudioFisheye.so"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("scene.rib"),
+        "Option \"searchpath\" \"string rixplugin\" [\"plugins:&\"]\nFormat 32 24 1\n\
+         Projection \"StudioFisheye\" \"float fov\" [180]\nWorldBegin\nTranslate 0 0 5\nSphere 1 -1 1 360\nWorldEnd\n",
+    )
+    .unwrap();
+    let out = obscura(&["render", "scene.rib", "--spp", "1", "-o", "out.exr"], &dir);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(dir.join("out.exr").is_file());
+    // Without the searchpath the name is unknown, and the message says where it looked.
+    std::fs::write(
+        dir.join("bare.rib"),
+        "Format 32 24 1\nProjection \"StudioFisheye\"\nWorldBegin\nWorldEnd\n",
+    )
+    .unwrap();
+    let out = obscura(&["render", "bare.rib", "--spp", "1", "-o", "bare.exr"], &dir);
+    assert!(!out.status.success());
+    assert!(text(&out).contains("StudioFisheye"), "{}", text(&out));
+}

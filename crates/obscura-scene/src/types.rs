@@ -467,6 +467,10 @@ pub struct Scene {
     /// The materials that shade by local illumination (the classic shaders'; see [`LocalShading`]),
     /// by index into [`Scene::materials`]. Every other material is path traced.
     pub local_shading: BTreeMap<u32, LocalShading>,
+    /// RIB `Option "searchpath" "string rixplugin"`: directories where projection plugins
+    /// (`<Name>.so`) are looked for, after the command line's `--plugin-path` and before
+    /// `OBSCURA_PLUGIN_PATH`; relative ones are taken from the RIB file's directory.
+    pub plugin_path: Vec<std::path::PathBuf>,
 }
 
 impl Scene {
@@ -492,6 +496,7 @@ impl Scene {
             clip_planes: Vec::new(),
             exposure: Exposure::default(),
             local_shading: BTreeMap::new(),
+            plugin_path: Vec::new(),
         }
     }
 }
