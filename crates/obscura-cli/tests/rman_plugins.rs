@@ -682,3 +682,74 @@ fn a_rib_finds_its_plugin_through_the_rixplugin_searchpath_and_names_it_by_file_
     assert!(!out.status.success());
     assert!(text(&out).contains("StudioFisheye"), "{}", text(&out));
 }
+
+#[test]
+fn args_files_describe_the_plugin_give_defaults_and_warn_on_disagreement_or_malformed_xml() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rman-args");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("Args")).unwrap();
+    std::fs::copy(dir_of("rman27").join("OdsStereo.so"), dir.join("OdsStereo.so")).unwrap();
+    std::fs::write(
+        dir.join("Args/OdsStereo.args"),
+        r#"<args format="1.0">
+  <shaderType><tag value="projection"/></shaderType>
+  <param name="eye" label="Eye" type="string" default="right" widget="popup">
+    <hintdict name="options"><string name="left" value="left"/><string name="right" value="right"/></hintdict>
+    <help>Which eye the camera renders.</help>
+  </param>
+  <param name="interpupillaryDistance" label="IPD" type="float" default="0.2" min="0" max="1"/>
+  <param name="convergence" type="float" default="5"/>
+</args>
+"#,
+    )
+    .unwrap();
+    let out = obscura(&["--plugin-path", ".", "plugins", "OdsStereo"], &dir);
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    assert!(
+        t.contains("string eye: default right, label \"Eye\", options left|right, widget popup"),
+        "{t}"
+    );
+    assert!(t.contains("Which eye the camera renders."), "{t}");
+    assert!(
+        t.contains("float interpupillaryDistance: default 0.2, label \"IPD\", range [0, 1]"),
+        "{t}"
+    );
+    assert!(
+        t.contains("Args/OdsStereo.args:8: parameter \"convergence\" is not in OdsStereo's parameter table"),
+        "the disagreement names both: {t}"
+    );
+    // The defaults reach the plugin where the scene gives none: the right eye, 0.2 apart.
+    let cam = CameraDesc::new(Format::new(64, 32));
+    let mut reg = builtin_registry();
+    ensure(&mut reg, "OdsStereo", &PluginSearch::new(vec![dir.clone()])).unwrap();
+    let stage = CameraStage::new(&mut reg, "OdsStereo", &ParamList::new(), &cam).unwrap();
+    let mut b = batch(&cam);
+    stage.run(&mut b);
+    let sw = cam.screen_window();
+    for (i, r) in b.rays.iter().enumerate().step_by(97) {
+        let u = (2.0 * f64::from(b.screen[i].x) - f64::from(sw.left) - f64::from(sw.right))
+            / f64::from(sw.right - sw.left);
+        let lon = u * std::f64::consts::PI;
+        let want = [0.1 * lon.cos(), 0.0, -0.1 * lon.sin()];
+        for k in 0..3 {
+            let got = [r.origin.x, r.origin.y, r.origin.z][k];
+            assert!(
+                (f64::from(got) - want[k]).abs() < 1e-6,
+                "sample {i}: origin {:?}, expected {want:?}",
+                r.origin
+            );
+        }
+    }
+    // A malformed file is a warning naming it; the plugin still loads from its table.
+    std::fs::write(
+        dir.join("Args/OdsStereo.args"),
+        "<args>\n<param name=\"eye\" type=\"string\">\n</args>\n",
+    )
+    .unwrap();
+    let out = obscura(&["--plugin-path", ".", "check", "OdsStereo"], &dir);
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    assert!(t.contains("Args/OdsStereo.args:3: malformed XML"), "{t}");
+    assert!(t.contains("OdsStereo loads from its own parameter table"), "{t}");
+}

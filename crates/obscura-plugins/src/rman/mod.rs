@@ -7,6 +7,7 @@
 //! [`detect`] finds the interface generation a source is written for; [`explain`] turns a compiler's
 //! generation-mismatch errors into a sentence naming both generations.
 
+pub mod args;
 mod build;
 mod detect;
 mod explain;
