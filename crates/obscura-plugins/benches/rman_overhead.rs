@@ -15,14 +15,18 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use divan::{Bencher, counter::ItemsCount};
-use obscura_host::{Batch, CameraDesc, CameraStage, Registry};
+use obscura_host::{CameraStage, Registry};
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_plugins::rman::{BuildRequest, build};
-use obscura_sdk::{Format, ParamList, ParamValue, Point2, Projection, ProjectionContext, RayGeometry, Rgb};
+use obscura_sdk::{ParamList, ParamValue, Projection, ProjectionContext, RayGeometry, Rgb};
 
 const BATCH: usize = 256;
 const WAYS: [&str; 3] = ["builtin", "c_abi", "rman_cpp"];
+
+mod common;
+
+use common::{camera, samples};
 
 fn main() {
     divan::main();
@@ -57,12 +61,6 @@ fn plugin_dir() -> &'static Path {
     })
 }
 
-fn camera() -> CameraDesc {
-    let mut c = CameraDesc::new(Format::new(1920, 1080));
-    c.shutter = (0.0, 1.0);
-    c
-}
-
 /// The projection's name in its registry, and the registry.
 fn registry(way: &str) -> (&'static str, Registry) {
     let mut reg = builtin_registry();
@@ -87,24 +85,6 @@ fn params() -> ParamList {
     p.push("float fov", ParamValue::Floats(vec![180.0]), None)
         .unwrap();
     p
-}
-
-/// `n` screen samples over the frame (a 16-column grid), stratified lens and time samples.
-fn samples(cam: &CameraDesc, n: usize) -> Batch {
-    let mut b = Batch::with_capacity(n);
-    let rows = n.div_ceil(16) as f64;
-    for i in 0..n {
-        let (x, y) = (
-            (i % 16) as f64 * 120.0 + 60.0,
-            ((i / 16) as f64 + 0.5) * 1080.0 / rows,
-        );
-        b.push(
-            cam.raster_to_screen(x, y),
-            Point2::new(((i * 37) % n) as f32 / n as f32, ((i * 91) % n) as f32 / n as f32),
-            i as f32 / n as f32,
-        );
-    }
-    b
 }
 
 #[divan::bench(args = WAYS)]
