@@ -753,3 +753,83 @@ fn args_files_describe_the_plugin_give_defaults_and_warn_on_disagreement_or_malf
     assert!(t.contains("Args/OdsStereo.args:3: malformed XML"), "{t}");
     assert!(t.contains("OdsStereo loads from its own parameter table"), "{t}");
 }
+
+/// The closed form of `PxrPerspective` with field of view `fov_deg`: the unit direction through screen
+/// point `s`, `normalize(s.x, s.y, 1/tan(fov/2))`.
+fn perspective(s: Point2, fov_deg: f64) -> [f64; 3] {
+    let d = 1.0 / (0.5 * fov_deg.to_radians()).tan();
+    norm(v3(f64::from(s.x), f64::from(s.y), d))
+}
+
+#[test]
+fn a_modifier_declared_after_a_builtin_edits_the_builtins_rays_read_from_a_rib() {
+    // RenderMan's projection modifiers: the built-in declared first fills the rays, the plugin then
+    // rewrites only time and tint; the built-in answers the properties.
+    let rib = "Format 64 48 1\nProjection \"PxrPerspective\" \"float fov\" [40]\n\
+               Projection \"TimeTint\" \"int strobes\" [3] \"color tint\" [1 0.5 0.25]\n\
+               WorldBegin\nWorldEnd\n";
+    let scene = obscura_scene::rib::parse_str(rib, "chain.rib", Path::new(".")).unwrap();
+    assert_eq!(scene.projection, "TimeTint");
+    let (base, base_params) = scene.projection_base.clone().expect("the built-in is kept");
+    assert_eq!(base, "PxrPerspective");
+    assert!(base_params.get("fov").is_some());
+    let cam = &scene.camera;
+    for g in GENERATIONS {
+        let mut reg = builtin_registry();
+        ensure(&mut reg, "TimeTint", &PluginSearch::new(vec![dir_of(g)])).unwrap();
+        let stage = CameraStage::chained(
+            &mut reg,
+            scene.projection_base.as_ref(),
+            &scene.projection,
+            &scene.projection_params,
+            cam,
+        )
+        .unwrap_or_else(|e| panic!("{g}: {e}"));
+        assert_eq!(stage.properties().field_of_view, Some(40.0), "{g}");
+        let mut b = batch(cam);
+        let canonical = b.time.clone();
+        let report = stage.run(&mut b);
+        assert_eq!(report.lost(), 0, "{g}");
+        assert_eq!(report.violations(), 0, "{g}");
+        for (i, r) in b.rays.iter().enumerate() {
+            assert_ray(
+                &format!("{g}/PxrPerspective+TimeTint"),
+                i,
+                r,
+                perspective(b.screen[i], 40.0),
+                [0.0; 3],
+            );
+            // The default shutter opening leaves canonical time as it is; the plugin strobes it.
+            let t = (canonical[i] * 3.0).floor() / 3.0;
+            assert_eq!(b.time[i], t, "{g} sample {i}: time");
+            assert_eq!(
+                (b.tint[i].r, b.tint[i].g, b.tint[i].b),
+                (1.0, 0.5, 0.25),
+                "{g} sample {i}: tint"
+            );
+        }
+    }
+    // Two built-ins, or a plugin first: the last projection wins, as before.
+    let rib = "Projection \"PxrPerspective\" \"float fov\" [40]\nProjection \"PxrOrthographic\"\n\
+               WorldBegin\nWorldEnd\n";
+    let scene = obscura_scene::rib::parse_str(rib, "two.rib", Path::new(".")).unwrap();
+    let stage = CameraStage::chained(
+        &mut builtin_registry(),
+        scene.projection_base.as_ref(),
+        &scene.projection,
+        &scene.projection_params,
+        &scene.camera,
+    )
+    .unwrap();
+    let mut b = batch(&scene.camera);
+    stage.run(&mut b);
+    assert!(b.rays.iter().all(|r| r.direction == Vec3::new(0.0, 0.0, 1.0)));
+    // A single projection keeps no base.
+    let scene = obscura_scene::rib::parse_str(
+        "Projection \"TimeTint\"\nWorldBegin\nWorldEnd\n",
+        "one.rib",
+        Path::new("."),
+    )
+    .unwrap();
+    assert!(scene.projection_base.is_none());
+}

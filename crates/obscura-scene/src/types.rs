@@ -426,6 +426,11 @@ pub struct Scene {
     pub projection: String,
     /// The projection's parameters as given.
     pub projection_params: ParamList,
+    /// The projection declared in the RIB just before [`Scene::projection`] (name and parameters), or
+    /// `None` when that one is the first `Projection`. When it is a built-in and [`Scene::projection`]
+    /// a plugin, the two are chained as in RenderMan: the built-in fills the rays, then the plugin
+    /// edits them (`obscura_host::CameraStage::chained`); otherwise the last `Projection` wins.
+    pub projection_base: Option<(String, ParamList)>,
     /// `Hider "raytrace" "int maxsamples"`, or `PixelSamples x y` as `⌈x⌉·⌈y⌉`, whichever came last
     /// (default 64).
     pub samples_per_pixel: u32,
@@ -481,6 +486,7 @@ impl Scene {
             camera,
             projection: "PxrPerspective".into(),
             projection_params: ParamList::new(),
+            projection_base: None,
             samples_per_pixel: 64,
             filter: PixelFilter::default(),
             displays: Vec::new(),
