@@ -24,6 +24,7 @@ use obscura_render::sequence::FrameSpec;
 use obscura_sdk::{Format, ScreenWindow};
 
 mod args;
+mod build_plugin;
 mod check;
 mod farm;
 mod lens;
@@ -90,6 +91,9 @@ enum Command {
     /// Write a farm job for a shot (a Slurm job array over frame chunks × tiles and a collect job, or
     /// an Open Job Description template) and submit it (sbatch / openjd run), printing the job ids.
     Submit(Box<farm::SubmitArgs>),
+    /// Compile a RenderMan projection plugin's C++ sources, as they are written (RenderMan 19-21, 22 or
+    /// 23-27), into an Obscura plugin with the embedded RenderMan-compatible headers.
+    BuildPlugin(Box<build_plugin::BuildPluginArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -459,6 +463,7 @@ fn main() -> ExitCode {
         Command::UsdCameras(a) => usd::run(a),
         Command::Merge(a) => farm::merge(a),
         Command::Submit(a) => farm::submit(a),
+        Command::BuildPlugin(a) => build_plugin::run(a).map_err(|e| e.to_string()),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),
             check::Outcome::Broken(e) => Err(e),

@@ -520,6 +520,8 @@ fn configure(
         params: ParamList::new(),
         sensor: cli_sensor(a)?,
     };
+    // RIB `Option "searchpath" "string rixplugin"` directories join the search after --plugin-path.
+    let search = &search.with_scene_dirs(&scene.plugin_path);
     let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
     let factory = registry.find(&projection).map_err(|e| e.to_string())?;
     overrides.params =

@@ -19,8 +19,8 @@
 pub use obscura_sdk::contract::Violation;
 use obscura_sdk::contract::check_ray;
 use obscura_sdk::{
-    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
-    Vec3,
+    ParamList, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment, ProjectionProperty,
+    PropertyValue, RayGeometry, Rgb, Vec3,
 };
 
 pub use crate::contract::Properties;
@@ -295,6 +295,35 @@ impl CameraStage {
         Self::with_projection(name, projection, env, camera)
     }
 
+    /// A stage for a scene's projection `name` that may filter an earlier one, `base` (RenderMan's
+    /// projection modifiers: a built-in projection declared before a plugin projection is applied
+    /// first, and the plugin edits its rays). When `base` names a built-in (registered with an empty
+    /// path) and `name` a loaded plugin, both are created, in that order, from the same environment, and
+    /// each batch runs the built-in's `project` and then the plugin's on the same rays; the built-in
+    /// answers every property (field of view, dicing, depth metric, …), since the rays' geometry is
+    /// its own, and the chain offers no inverse (the plugin may have moved the rays). Otherwise the
+    /// last projection wins: `base` is ignored and this is [`CameraStage::new`].
+    ///
+    /// # Errors
+    /// As [`CameraStage::new`], for either projection.
+    pub fn chained(
+        registry: &mut Registry,
+        base: Option<&(String, ParamList)>,
+        name: &str,
+        params: &ParamList,
+        camera: &CameraDesc,
+    ) -> Result<Self, HostError> {
+        let plugin = registry.path(name).is_some_and(|p| !p.is_empty());
+        let Some((first, first_params)) = base.filter(|(b, _)| plugin && registry.path(b) == Some("")) else {
+            return Self::new(registry, name, params, camera);
+        };
+        camera.validate()?;
+        let mut env = camera.environment();
+        let first = registry.create(first, &mut env, first_params)?;
+        let then = registry.create(name, &mut env, params)?;
+        Self::with_projection(name, Box::new(Chain { first, then }), env, camera)
+    }
+
     /// A stage around an already-created projection (tests, tools).
     ///
     /// # Errors
@@ -411,6 +440,23 @@ impl CameraStage {
         }
         validate(batch, &mut report);
         report
+    }
+}
+
+/// A built-in projection and the plugin that filters its rays ([`CameraStage::chained`]).
+struct Chain {
+    first: Box<dyn Projection>,
+    then: Box<dyn Projection>,
+}
+
+impl Projection for Chain {
+    fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
+        self.first.property(property)
+    }
+
+    fn project(&self, ctx: &mut ProjectionContext<'_>) {
+        self.first.project(ctx);
+        self.then.project(ctx);
     }
 }
 

@@ -21,17 +21,19 @@ use std::sync::OnceLock;
 
 use divan::{Bencher, counter::ItemsCount};
 use obscura_example_tiny_planet::TinyPlanetFactory;
-use obscura_host::{Batch, CameraDesc, CameraStage, Registry};
+use obscura_host::{CameraStage, Registry};
 use obscura_plugins::isolate::{Isolation, WorkerCommand};
 use obscura_plugins::loader::{PluginSearch, ensure};
-use obscura_sdk::{
-    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionFactory, RayGeometry, Rgb,
-};
+use obscura_sdk::{ParamList, Projection, ProjectionContext, ProjectionFactory, RayGeometry, Rgb};
 
 const BATCH: usize = 256;
 const WAYS: [&str; 2] = ["builtin", "plugin"];
 const ISOLATION_BATCH: usize = 4096;
 const ISOLATION_WAYS: [&str; 2] = ["plugin", "isolated"];
+
+mod common;
+
+use common::{camera, samples};
 
 fn main() {
     divan::main();
@@ -78,12 +80,6 @@ fn plugin_dir() -> &'static Path {
     })
 }
 
-fn camera() -> CameraDesc {
-    let mut c = CameraDesc::new(Format::new(1920, 1080));
-    c.shutter = (0.0, 1.0);
-    c
-}
-
 /// A registry where `TinyPlanet` is the built-in factory or the loaded plugin.
 fn registry(way: &str) -> Registry {
     let mut reg = Registry::new();
@@ -102,24 +98,6 @@ fn registry(way: &str) -> Registry {
     }
     assert_eq!(reg.get("TinyPlanet").unwrap().name(), TinyPlanetFactory.name());
     reg
-}
-
-/// `n` screen samples spread over the frame (a 16-column grid), stratified lens and time samples.
-fn samples(cam: &CameraDesc, n: usize) -> Batch {
-    let mut b = Batch::with_capacity(n);
-    let rows = n.div_ceil(16) as f64;
-    for i in 0..n {
-        let (x, y) = (
-            (i % 16) as f64 * 120.0 + 60.0,
-            ((i / 16) as f64 + 0.5) * 1080.0 / rows,
-        );
-        b.push(
-            cam.raster_to_screen(x, y),
-            Point2::new(((i * 37) % n) as f32 / n as f32, ((i * 91) % n) as f32 / n as f32),
-            i as f32 / n as f32,
-        );
-    }
-    b
 }
 
 #[divan::bench(args = WAYS)]

@@ -14,7 +14,9 @@
 //!   compiles in;
 //! - [`isolate`]: plugins run in worker processes (`--isolate-plugins`), so a crash or hang in one
 //!   costs a batch, never the host;
-//! - [`listing`]: the text of `obscura plugins`.
+//! - [`listing`]: the text of `obscura plugins`;
+//! - [`rman`]: RenderMan projection plugins as they are written (the C++ headers, the glue and
+//!   `obscura build-plugin`).
 //!
 //! A host asks for a projection by name ([`loader::ensure`]): a registered name is used as is, an
 //! unknown one is looked up as `<Name>.so` along the plugin path and registered. From then on a plugin
@@ -27,6 +29,7 @@ pub mod isolate;
 pub mod library;
 pub mod listing;
 pub mod loader;
+pub mod rman;
 
 pub use builtins::{builtin_registry, register_builtins};
 pub use loader::{PluginLoadError, PluginSearch, ensure};

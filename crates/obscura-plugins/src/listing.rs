@@ -60,6 +60,50 @@ fn allowed_text(d: &ParamDecl) -> String {
     }
 }
 
+/// What `Args/<name>.args` beside the library at `path` says of each parameter (default, label,
+/// range, options, widget, page, help), or nothing when there is no such file or it is malformed.
+fn args_text(path: &std::path::Path, name: &str) -> String {
+    let file = crate::rman::args::args_path(path, name);
+    let Ok(args) = crate::rman::args::read(&file) else {
+        return String::new();
+    };
+    let mut out = format!("    {}:\n", file.display());
+    for p in &args.params {
+        let mut parts = Vec::new();
+        if let Some(d) = &p.default {
+            parts.push(format!("default {d}"));
+        }
+        if let Some(l) = &p.label {
+            parts.push(format!("label \"{l}\""));
+        }
+        match (&p.min, &p.max) {
+            (Some(a), Some(b)) => parts.push(format!("range [{a}, {b}]")),
+            (Some(a), None) => parts.push(format!("min {a}")),
+            (None, Some(b)) => parts.push(format!("max {b}")),
+            (None, None) => {}
+        }
+        if !p.options.is_empty() {
+            let o: Vec<String> = p
+                .options
+                .iter()
+                .map(|(l, v)| if l == v { v.clone() } else { format!("{l}={v}") })
+                .collect();
+            parts.push(format!("options {}", o.join("|")));
+        }
+        if let Some(w) = &p.widget {
+            parts.push(format!("widget {w}"));
+        }
+        if let Some(pg) = &p.page {
+            parts.push(format!("page \"{pg}\""));
+        }
+        out.push_str(&format!("      {} {}: {}\n", p.ty, p.name, parts.join(", ")));
+        if let Some(h) = &p.help {
+            out.push_str(&format!("        {h}\n"));
+        }
+    }
+    out
+}
+
 /// Every projection in `registry`, or only `name`.
 ///
 /// # Errors
@@ -72,6 +116,7 @@ pub fn list(registry: &Registry, name: Option<&str>) -> Result<String, PluginErr
             let at = text.find('\n').map_or(text.len(), |i| i + 1);
             let at = text[at..].find('\n').map_or(text.len(), |i| at + i + 1);
             text.insert_str(at, &format!("    plugin: {path}\n"));
+            text.push_str(&args_text(std::path::Path::new(path), n));
         }
         Ok(text)
     };

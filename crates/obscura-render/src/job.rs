@@ -226,10 +226,12 @@ impl Overrides {
         if let Some(p) = &self.projection {
             scene.projection = p.clone();
             scene.projection_params = ParamList::new();
+            scene.projection_base = None;
         }
         if let Some(c) = &self.calibration {
             scene.projection = CALIBRATED.to_string();
             scene.projection_params = c.params.clone();
+            scene.projection_base = None;
             if self.format.is_none() {
                 let (w, h) = c.size();
                 scene.camera.format = Format::new(w, h);

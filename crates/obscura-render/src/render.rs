@@ -240,15 +240,23 @@ pub fn prepare(
     opts: &RenderOptions,
 ) -> Result<Prepared, RenderError> {
     let start = Instant::now();
-    let mut stage = CameraStage::new(
+    let base = scene.projection_base.as_ref();
+    let mut stage = CameraStage::chained(
         registry,
+        base,
         &scene.projection,
         &scene.projection_params,
         &scene.camera,
     )?;
     let staged = crate::staging::Staged::new(scene, &stage);
     if let Some(camera) = &staged.camera {
-        stage = CameraStage::new(registry, &scene.projection, &scene.projection_params, camera)?;
+        stage = CameraStage::chained(
+            registry,
+            base,
+            &scene.projection,
+            &scene.projection_params,
+            camera,
+        )?;
     }
     let props = *stage.properties();
     let shutter = scene.camera.shutter;

@@ -428,6 +428,11 @@ pub struct Scene {
     pub projection: String,
     /// The projection's parameters as given.
     pub projection_params: ParamList,
+    /// The projection declared in the RIB just before [`Scene::projection`] (name and parameters), or
+    /// `None` when that one is the first `Projection`. When it is a built-in and [`Scene::projection`]
+    /// a plugin, the two are chained as in RenderMan: the built-in fills the rays, then the plugin
+    /// edits them (`obscura_host::CameraStage::chained`); otherwise the last `Projection` wins.
+    pub projection_base: Option<(String, ParamList)>,
     /// `Hider "raytrace" "int maxsamples"`, or `PixelSamples x y` as `⌈x⌉·⌈y⌉`, whichever came last
     /// (default 64).
     pub samples_per_pixel: u32,
@@ -472,6 +477,10 @@ pub struct Scene {
     /// The image sensor after the lens (`Option "sensor"`, `--sensor`): `None` keeps the film's
     /// noiseless linear image as the output.
     pub sensor: Option<obscura_sensor::SensorConfig>,
+    /// RIB `Option "searchpath" "string rixplugin"`: directories where projection plugins
+    /// (`<Name>.so`) are looked for, after the command line's `--plugin-path` and before
+    /// `OBSCURA_PLUGIN_PATH`; relative ones are taken from the RIB file's directory.
+    pub plugin_path: Vec<std::path::PathBuf>,
 }
 
 impl Scene {
@@ -482,6 +491,7 @@ impl Scene {
             camera,
             projection: "PxrPerspective".into(),
             projection_params: ParamList::new(),
+            projection_base: None,
             samples_per_pixel: 64,
             filter: PixelFilter::default(),
             displays: Vec::new(),
@@ -498,6 +508,7 @@ impl Scene {
             exposure: Exposure::default(),
             local_shading: BTreeMap::new(),
             sensor: None,
+            plugin_path: Vec::new(),
         }
     }
 }

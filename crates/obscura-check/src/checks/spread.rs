@@ -158,6 +158,28 @@ impl AxisAngles {
     }
 }
 
+/// Advice for the classic RenderMan mistakes a spread `got` against `expected` betrays (empty when none
+/// fits): unset (0), a quarter-pixel step (RenderMan's perspective example computes `xyStep` as a
+/// quarter of a pixel, half of the half-pixel footprint), a whole pixel's angle, or degrees for
+/// radians.
+fn spread_advice(got: f64, expected: f64) -> &'static str {
+    if expected <= 0.0 || !got.is_finite() {
+        return "";
+    }
+    let ratio = got / expected;
+    if got == 0.0 {
+        "; raySpread is 0: unset, or an orthographic camera's (a camera with one centre must give the footprint's growth per unit distance)"
+    } else if (0.4..0.6).contains(&ratio) {
+        "; half the footprint: a quarter-pixel step (RenderMan's example's xyStep = 0.25·pixel) where the footprint's radius is half a pixel: use 0.5·pixel"
+    } else if (1.7..2.3).contains(&ratio) {
+        "; twice the footprint: a whole pixel's angle where the radius is half of it"
+    } else if (45.0..70.0).contains(&ratio) {
+        "; about 57x: the angle in degrees where radians are expected"
+    } else {
+        ""
+    }
+}
+
 /// Records a failure in `r` when the spread `got` of the chief ray at screen `at` is more than `tol`
 /// (relative) off half of `sqrt(ax·ay)`.
 fn compare_spread(r: &mut CheckResult, at: Point2, (ax, ay): (f64, f64), got: f64, tol: f64) {
@@ -186,13 +208,29 @@ fn compare_spread(r: &mut CheckResult, at: Point2, (ax, ay): (f64, f64), got: f6
             tol * 100.0
         ),
         got: format!(
-            "{got:.6e} ({:+.1} %)",
+            "{got:.6e} ({:+.1} %){}",
             if expected > 0.0 {
                 (got / expected - 1.0) * 100.0
             } else {
                 f64::INFINITY
-            }
+            },
+            spread_advice(got, expected)
         ),
         severity: 0.0,
     });
+}
+
+#[cfg(test)]
+mod advice_tests {
+    use super::spread_advice;
+
+    #[test]
+    fn the_classic_spread_mistakes_are_named() {
+        assert!(spread_advice(0.0, 0.01).contains("unset"));
+        assert!(spread_advice(0.005, 0.01).contains("quarter-pixel"));
+        assert!(spread_advice(0.02, 0.01).contains("twice"));
+        assert!(spread_advice(0.573, 0.01).contains("degrees"));
+        assert_eq!(spread_advice(0.013, 0.01), "");
+        assert_eq!(spread_advice(0.005, 0.0), "");
+    }
 }

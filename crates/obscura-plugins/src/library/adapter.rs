@@ -120,6 +120,19 @@ impl ProjectionFactory for PluginFactory {
             plugin: name.clone(),
             message,
         };
+        // RenderMan's Args/<Name>.args defaults, where the scene gives no value.
+        let merged;
+        let params = match &self.lib.args {
+            Some(args) => {
+                let (list, warnings) = args.with_defaults(&self.lib.table, params);
+                for w in warnings {
+                    eprintln!("warning: {w}");
+                }
+                merged = list;
+                &merged
+            }
+            None => params,
+        };
         Params::resolve(name, &self.lib.table, params)?;
         let list = OwnedParamList::new(&self.lib.table, params).map_err(|e| invalid(e.to_string()))?;
         let mut raw_env = OwnedEnvironment::new(env);

@@ -46,6 +46,8 @@ pub(super) struct Loaded {
     pub(super) name: String,
     pub(super) summary: String,
     pub(super) table: Vec<ParamDecl>,
+    /// `Args/<Name>.args` beside the library, when there is a readable one.
+    pub(super) args: Option<crate::rman::args::ArgsFile>,
     descriptor: *const ProjectionDescriptor,
     init: InitFn,
     finalize: Option<FinalizeFn>,
@@ -227,12 +229,14 @@ fn check_descriptor(path: &Path, d: *const ProjectionDescriptor) -> Result<Loade
         .ok_or_else(|| required("destroy_projection"))?;
     let property = desc.property.ok_or_else(|| required("property"))?;
     let project = desc.project.ok_or_else(|| required("project"))?;
-    let table = read_table(&desc, &name).map_err(invalid)?;
+    let mut table = read_table(&desc, &name).map_err(invalid)?;
+    let args = read_args(path, &name, &mut table);
     Ok(Loaded {
         path: path.to_path_buf(),
         name,
         summary,
         table,
+        args,
         descriptor: d,
         init,
         finalize: desc.finalize,
@@ -299,6 +303,36 @@ fn copy_descriptor(
         std::ptr::copy_nonoverlapping(d.cast::<u8>(), out.as_mut_ptr().cast::<u8>(), n);
         out.assume_init()
     })
+}
+
+/// RenderMan's `Args/<Name>.args` beside the library at `path`: read once when the library loads,
+/// its help (else label) becoming each row's documentation. A malformed file, and each parameter the
+/// file and the table disagree on, is a warning on stderr naming both; the plugin loads from its table.
+fn read_args(path: &Path, name: &str, table: &mut [ParamDecl]) -> Option<crate::rman::args::ArgsFile> {
+    let file = crate::rman::args::args_path(path, name);
+    if !file.is_file() {
+        return None;
+    }
+    match crate::rman::args::read(&file) {
+        Ok(args) => {
+            for w in args.disagreements(name, path, table) {
+                eprintln!("warning: {w}");
+            }
+            for d in table.iter_mut() {
+                if let Some(p) = args.params.iter().find(|p| p.name == d.name)
+                    && d.doc.is_empty()
+                    && let Some(doc) = p.help.clone().or_else(|| p.label.clone())
+                {
+                    d.doc = doc.into();
+                }
+            }
+            Some(args)
+        }
+        Err(e) => {
+            eprintln!("warning: {e}; {name} loads from its own parameter table");
+            None
+        }
+    }
 }
 
 /// The descriptor's parameter table, each row checked ([`decl_from_raw`]) and copied, no name twice.

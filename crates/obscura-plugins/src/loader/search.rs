@@ -11,6 +11,8 @@ pub use crate::library::PLUGIN_PATH_VAR;
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct PluginSearch {
     paths: Vec<PathBuf>,
+    /// How many of `paths` came from the command line (searched before a scene's own directories).
+    explicit: usize,
     isolation: Option<Isolation>,
 }
 
@@ -19,6 +21,7 @@ impl PluginSearch {
     #[must_use]
     pub fn new(paths: Vec<PathBuf>) -> Self {
         PluginSearch {
+            explicit: paths.len(),
             paths,
             isolation: None,
         }
@@ -53,7 +56,24 @@ impl PluginSearch {
         if let Some(v) = plugin_path {
             paths.extend(std::env::split_paths(v).filter(|p| !p.as_os_str().is_empty()));
         }
-        PluginSearch::new(paths)
+        PluginSearch {
+            explicit: extra.len(),
+            ..PluginSearch::new(paths)
+        }
+    }
+
+    /// The same search with a scene's own plugin directories (RIB `Option "searchpath" "string
+    /// rixplugin"`) after the command line's and before `OBSCURA_PLUGIN_PATH`'s.
+    #[must_use]
+    pub fn with_scene_dirs(&self, dirs: &[PathBuf]) -> Self {
+        let mut paths = self.paths[..self.explicit].to_vec();
+        paths.extend(dirs.iter().cloned());
+        paths.extend(self.paths[self.explicit..].iter().cloned());
+        PluginSearch {
+            paths,
+            explicit: self.explicit + dirs.len(),
+            isolation: self.isolation.clone(),
+        }
     }
 
     /// The directories, in search order.

@@ -85,6 +85,8 @@ impl Reader {
         }
         self.scene.projection = "PxrPerspective".into();
         self.scene.projection_params = obscura_sdk::ParamList::new();
+        self.scene.projection_base = None;
+        self.projection_declared = true;
         self.scene
             .projection_params
             .push("float fov", ParamValue::Floats(vec![fov]), Some(r.at()))

@@ -69,6 +69,7 @@ pub(super) struct Saved {
     painted: HashMap<PathBuf, u32>,
     /// `Option "searchpath"`.
     search: searchpath::SearchPaths,
+    projection_declared: bool,
 }
 
 /// An open `FrameBegin`: its number, where it is, and the options to restore.
@@ -114,6 +115,7 @@ impl Reader {
             patterns: self.patterns.clone(),
             painted: self.classic_state.textures.clone(),
             search: self.search.clone(),
+            projection_declared: self.projection_declared,
         }
     }
 
@@ -138,6 +140,7 @@ impl Reader {
         self.patterns = saved.patterns;
         self.classic_state.textures = saved.painted;
         self.search = saved.search;
+        self.projection_declared = saved.projection_declared;
     }
 
     /// `FrameBegin n`: saves the options.

@@ -459,6 +459,8 @@ struct Reader {
     patterns: pattern::Patterns,
     /// `Option "searchpath"`.
     search: searchpath::SearchPaths,
+    /// Whether a `Projection` request has been read (the scene's projection is no longer the default).
+    projection_declared: bool,
 }
 
 /// An `ArchiveBegin` block being read.
@@ -502,6 +504,7 @@ impl Reader {
             retained: objects::Retained::default(),
             patterns: pattern::Patterns::new(),
             search: searchpath::SearchPaths::default(),
+            projection_declared: false,
         }
     }
 

@@ -223,7 +223,9 @@ impl Reader {
     }
 
     /// `Projection "name"` and its parameters, kept as given for the projection plugin (`perspective` and
-    /// `orthographic` name `PxrPerspective` and `PxrOrthographic`).
+    /// `orthographic` name `PxrPerspective` and `PxrOrthographic`). A `Projection` that follows another
+    /// keeps the earlier one as [`Scene::projection_base`](crate::Scene::projection_base): RenderMan
+    /// applies a built-in declared before a plugin first, and the plugin filters its rays.
     pub(super) fn projection(&mut self, r: &Req<'_>) -> Result<(), RibError> {
         let [Value::Str(name), rest @ ..] = r.args else {
             return Err(r.err("Projection expects a projection name (a string) then parameters"));
@@ -234,8 +236,10 @@ impl Reader {
             other => other,
         };
         let list = self.params(r, rest, &PROJECTION_BARE_NAMES, true)?;
-        self.scene.projection = plugin.to_string();
-        self.scene.projection_params = list;
+        let earlier = std::mem::replace(&mut self.scene.projection, plugin.to_string());
+        let earlier_params = std::mem::replace(&mut self.scene.projection_params, list);
+        self.scene.projection_base = self.projection_declared.then_some((earlier, earlier_params));
+        self.projection_declared = true;
         Ok(())
     }
 

@@ -8,7 +8,8 @@
 //! before this request and `@` for the default (which is empty here). Relative directories are taken
 //! from the directory of the RIB file that sets them. A relative texture (`texture`) or
 //! `ReadArchive` name (`archive`) is looked for in each directory in order, then beside the RIB file
-//! that names it; an absolute name is used as it is. The other kinds (`shader`, `procedural`,
+//! that names it; an absolute name is used as it is. `rixplugin` directories are where projection
+//! plugins are looked for ([`crate::Scene::plugin_path`]). The other kinds (`shader`, `procedural`,
 //! `display`, `resource`) are noted once and ignored: the renderer runs no shaders or programs.
 
 use std::path::{Path, PathBuf};
@@ -45,8 +46,9 @@ impl SearchPaths {
 }
 
 /// The kinds `Option "searchpath"` takes, declared for names written bare.
-const KINDS: [&str; 6] = [
+const KINDS: [&str; 7] = [
     "string texture",
+    "string rixplugin",
     "string shader",
     "string archive",
     "string procedural",
@@ -85,6 +87,7 @@ impl Reader {
             match kind {
                 "texture" => self.search.texture = parse_path(value, r.base, &self.search.texture),
                 "archive" => self.search.archive = parse_path(value, r.base, &self.search.archive),
+                "rixplugin" => self.scene.plugin_path = parse_path(value, r.base, &self.scene.plugin_path),
                 _ => self.warn_once(
                     r,
                     &format!("searchpath {kind}"),

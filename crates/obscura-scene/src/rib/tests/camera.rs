@@ -71,6 +71,40 @@ fn projection_perspective_and_the_perspective_request_give_the_pinhole_with_that
 }
 
 #[test]
+fn a_projection_after_another_keeps_the_earlier_as_its_base_and_frames_restore_it() {
+    // RenderMan applies a built-in declared before a plugin first; the reader keeps the order.
+    let s = ok("Projection \"perspective\" \"fov\" 40\nProjection \"Strobe\" \"int n\" 3\nWorldBegin\n");
+    assert_eq!(s.projection, "Strobe");
+    let (name, params) = s.projection_base.expect("the earlier projection is kept");
+    assert_eq!(name, "PxrPerspective");
+    assert_eq!(params.get("fov").unwrap().value, ParamValue::Floats(vec![40.0]));
+    // `Perspective` declares the built-in too.
+    let s = ok("Perspective 35\nProjection \"Strobe\"\nWorldBegin\n");
+    assert_eq!(s.projection_base.unwrap().0, "PxrPerspective");
+    // The first projection has no base, and a later `Perspective` replaces the chain.
+    assert!(
+        ok("Projection \"Strobe\"\nWorldBegin\n")
+            .projection_base
+            .is_none()
+    );
+    assert!(
+        ok("Projection \"Strobe\"\nPerspective 35\nWorldBegin\n")
+            .projection_base
+            .is_none()
+    );
+    // A projection declared inside one frame is not the base of the next frame's.
+    let frames = crate::rib::parse_bytes_frames(
+        b"FrameBegin 1\nProjection \"perspective\"\nWorldBegin\nWorldEnd\nFrameEnd\n\
+          FrameBegin 2\nProjection \"Strobe\"\nWorldBegin\nWorldEnd\nFrameEnd\n",
+        "frames.rib",
+        std::path::Path::new("."),
+    )
+    .unwrap();
+    assert_eq!(frames[1].scene.projection, "Strobe");
+    assert!(frames[1].scene.projection_base.is_none());
+}
+
+#[test]
 fn depth_of_field_is_the_perspective_cameras_thin_lens() {
     let s = ok("Projection \"perspective\" \"fov\" 40\nDepthOfField 2.8 0.05 4\nWorldBegin\n");
     let f = |n: &str| s.projection_params.get(n).map(|p| p.value.clone());

@@ -203,3 +203,13 @@ proptest! {
         let _ = parse_str(&words.join(" "), "p.rib", Path::new("/nonexistent-obscura-dir"));
     }
 }
+
+#[test]
+fn the_rixplugin_searchpath_lists_plugin_directories_from_the_rib_files_folder() {
+    let s = ok(
+        "Option \"searchpath\" \"string rixplugin\" [\"plugins:/opt/rman/lib/plugins\"]\n\
+                Option \"searchpath\" \"rixplugin\" [\"more:&\"]\nWorldBegin\nWorldEnd\n",
+    );
+    let dirs: Vec<String> = s.plugin_path.iter().map(|p| p.display().to_string()).collect();
+    assert_eq!(dirs, ["/base/more", "/base/plugins", "/opt/rman/lib/plugins"]);
+}

@@ -1,0 +1,2 @@
+/* prmanapi.h — Obscura's RenderMan-compatible headers: the value types live in RixInterfaces.h. */
+#include "RixInterfaces.h"
