@@ -5,7 +5,9 @@
 # The checkers we did not write (OpenEXR's Python reader, OpenCV with its contrib modules, pycolmap)
 # go into the test's own virtual environment, which is first on PATH for both halves: the Rust tests
 # call `python3` for them too. With OBSCURA_REQUIRE_* set a missing checker fails its test instead of
-# skipping it, so a newcomer's run and CI's run the same tests and nothing is skipped.
+# skipping it, so a newcomer's run and CI's run the same tests and nothing is skipped. The farm tests
+# at the end run a real single-node Slurm (Debian's slurm-wlm and munge, installed as root when
+# missing) and Open Job Description's runner (openjd-cli, in a virtual environment of its own).
 set -euo pipefail
 cd "$(dirname "$0")"
 root=$(pwd)
@@ -47,4 +49,17 @@ maturin build --release --quiet -m crates/obscura-python/Cargo.toml -o "$target/
 cargo build --release -q -p obscura
 export OBSCURA_BIN="$target/release/obscura"
 # From outside the source tree, so `import obscura` is the installed wheel.
-cd "$target" && "$py" -m pytest -q -p no:cacheprovider "$root/crates/obscura-python/tests"
+(cd "$target" && "$py" -m pytest -q -p no:cacheprovider "$root/crates/obscura-python/tests")
+
+# Farm engines (issue 27): a real single-node Slurm on loopback and Open Job Description's runner,
+# running the shipped job files (scripts/farm) on the release obscura; outputs cmp-identical to a
+# one-process render. Slurm's daemons are started and stopped by PID inside scripts/farm/ci-farm.sh.
+echo "== farm: Slurm (slurm-wlm, munge) and openjd-cli, through the shipped job files"
+if ! command -v slurmctld >/dev/null 2>&1 || ! command -v munged >/dev/null 2>&1; then
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends slurm-wlm munge >/dev/null
+fi
+farm_venv="$target/openjd-venv"
+[ -x "$farm_venv/bin/openjd" ] || { python3 -m venv "$farm_venv" && "$farm_venv/bin/pip" install --quiet --disable-pip-version-check openjd-cli==0.8.0; }
+farm_start=$(date +%s)
+scripts/farm/ci-farm.sh "$OBSCURA_BIN" "$farm_venv/bin/openjd"
+echo "farm stage: $(( $(date +%s) - farm_start )) s"
