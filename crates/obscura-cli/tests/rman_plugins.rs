@@ -824,6 +824,25 @@ fn a_modifier_declared_after_a_builtin_edits_the_builtins_rays_read_from_a_rib()
     let mut b = batch(&scene.camera);
     stage.run(&mut b);
     assert!(b.rays.iter().all(|r| r.direction == Vec3::new(0.0, 0.0, 1.0)));
+    // `obscura render` takes the same path: the plugin found through the RIB's searchpath, chained.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("rman-chain");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let plugins = dir_of("rman27");
+    std::fs::write(
+        dir.join("chain.rib"),
+        format!(
+            "Option \"searchpath\" \"string rixplugin\" [\"{}\"]\nFormat 32 24 1\n\
+             Projection \"PxrPerspective\" \"float fov\" [40]\nProjection \"TimeTint\" \"int strobes\" [2]\n\
+             WorldBegin\nTranslate 0 0 5\nSphere 1 -1 1 360\nWorldEnd\n",
+            plugins.display()
+        ),
+    )
+    .unwrap();
+    let out = obscura(&["render", "chain.rib", "--spp", "1", "-o", "chain.exr"], &dir);
+    assert!(out.status.success(), "{}", text(&out));
+    assert!(!text(&out).contains("contract"), "{}", text(&out));
+    assert!(dir.join("chain.exr").is_file());
     // A single projection keeps no base.
     let scene = obscura_scene::rib::parse_str(
         "Projection \"TimeTint\"\nWorldBegin\nWorldEnd\n",
