@@ -87,6 +87,7 @@
 
 mod distortion;
 mod focal_plane;
+mod split_diopter;
 mod vignetting;
 
 use std::sync::LazyLock;
@@ -105,6 +106,7 @@ use crate::rolling_shutter::RollingShutter;
 use crate::{screen, simd};
 use distortion::Distortion;
 use focal_plane::{FocalPlane, MAX_TILT_DEGREES};
+use split_diopter::SplitDiopter;
 
 /// The name scenes use.
 pub const NAME: &str = "PxrCamera";
@@ -181,6 +183,7 @@ static TABLE: LazyLock<Vec<ParamDecl>> = LazyLock::new(|| {
             .doc("zoom into screen point (x, y) by z without changing dicing: s -> (x, y) + s/z"),
     ];
     table.extend(RollingShutter::params());
+    table.extend(split_diopter::params());
     table
 });
 
@@ -218,6 +221,9 @@ pub struct PxrCamera {
     /// `δ_c`: the plane of focus of each channel.
     delta: [f32; 3],
     normal: Vec3,
+    /// `z₀`: the axial distance of the plane of focus (before `axial`).
+    axis: f32,
+    split: Option<SplitDiopter>,
     lens_radius: f32,
     natural: f32,
     optical: f32,
@@ -284,6 +290,24 @@ impl PxrCamera {
             delta[c] = plane.shifted_delta(axial[c] as f64) as f32;
         }
 
+        let split = SplitDiopter::from_params(p, env.screen_window())?;
+        if let Some(sd) = &split {
+            for (i, z) in sd.focus_distances().enumerate() {
+                for (c, name) in ["red", "green", "blue"].iter().enumerate() {
+                    if z as f64 + axial[c] as f64 <= 0.0 {
+                        return Err(invalid(format!(
+                            "\"axial\" moves diopter {}'s {name} focus to {} ({} = {z}, + {}): \
+                             expected every channel's focal distance to stay positive",
+                            i + 1,
+                            z as f64 + axial[c] as f64,
+                            split_diopter::FOCUS[i],
+                            axial[c]
+                        )));
+                    }
+                }
+            }
+        }
+
         let enhance = p.floats("enhance", 3)?;
         if enhance[2].is_nan() || enhance[2] <= 0.0 {
             return Err(invalid(format!(
@@ -329,6 +353,8 @@ impl PxrCamera {
                 plane.normal[1] as f32,
                 plane.normal[2] as f32,
             ),
+            axis: axis as f32,
+            split,
             lens_radius: if lens_radius > 0.0 && lens_radius.is_finite() {
                 lens_radius
             } else {
@@ -461,7 +487,10 @@ impl PxrCamera {
             factor *= fraction;
         }
         let (origin, dir) = if LENS {
-            let delta = self.delta[c];
+            let delta = match &self.split {
+                Some(sd) => self.delta[c] + (sd.focus_distance(se, self.axis) - self.axis) * self.normal.z,
+                None => self.delta[c],
+            };
             let o = Vec3::new(self.lens_radius * lens.0, self.lens_radius * lens.1, 0.0);
             let h = w * delta - o * self.normal.dot(w);
             let inv_lh = 1.0 / h.length();

@@ -728,3 +728,142 @@ fn bad_parameters_name_the_plugin_and_parameter() {
     ];
     assert_refused(&PxrCameraFactory, "PxrCamera", Format::new(8, 8), &cases);
 }
+
+/// The split-diopter focus distance written out independently: ξ, smoothstep, nested lerps.
+fn diopter_focus(xi: f64, main: f64, regions: &[(f64, f64, f64, f64)]) -> f64 {
+    let mut z = main;
+    for &(side, offset, width, focus) in regions {
+        let d = side * (xi - offset);
+        let s = if width > 0.0 {
+            let x = (0.5 + d / width).clamp(0.0, 1.0);
+            3.0 * x * x - 2.0 * x * x * x
+        } else if d >= 0.0 {
+            1.0
+        } else {
+            0.0
+        };
+        z += (focus - z) * s;
+    }
+    z
+}
+
+#[test]
+fn split_diopter_focuses_each_region_at_its_distance_and_blends_across_the_band() {
+    let format = Format::new(64, 48); // window [−4/3, 4/3] × [−1, 1]: h = 4/3
+    let h = 4.0 / 3.0;
+    let regions = [(1.0, 0.3, 0.2, 1.5), (-1.0, -0.3, 0.0, 8.0)];
+    for (angle, across) in [(0.0f64, [1.0f64, 0.0]), (90.0, [0.0, -1.0]), (30.0, [0.0, 0.0])] {
+        let across = if angle == 30.0 {
+            [angle.to_radians().cos(), -angle.to_radians().sin()]
+        } else {
+            across
+        };
+        let p = make(
+            &[
+                ("float fov", "60"),
+                ("float fStop", "2"),
+                ("float focalLength", "0.1"),
+                ("float focalDistance", "3"),
+                ("int splitDiopter:count", "2"),
+                ("float splitDiopter:angle", &format!("{angle}")),
+                ("float splitDiopter:offset1", "0.3"),
+                ("float splitDiopter:width1", "0.2"),
+                ("float splitDiopter:focusDistance1", "1.5"),
+                ("float splitDiopter:offset2", "-0.3"),
+                ("float splitDiopter:focusDistance2", "8"),
+            ],
+            format,
+        );
+        // ξ from −0.89 to 0.91: region 2, the main focus, through the band, region 1.
+        for k in 0..=36 {
+            let xi = -0.89 + 0.05 * k as f64; // never exactly on the hard edge at −0.3
+            let s = Point2::new((xi * h * across[0]) as f32, (xi * h * across[1]) as f32);
+            let z = diopter_focus(xi, 3.0, &regions);
+            if (0.0..=0.75).contains(&xi) || xi < -0.3 {
+                let expected = if xi > 0.4 {
+                    1.5
+                } else if xi < -0.3 {
+                    8.0
+                } else if xi < 0.2 {
+                    3.0
+                } else {
+                    z
+                };
+                assert!((z - expected).abs() < 1e-12, "ξ = {xi}: {z} vs {expected}");
+            }
+            let (chief, _, _) = one(p.as_ref(), s, Point2::ZERO, 0.0);
+            let target = meet(&chief, [0.0, 0.0, 1.0], z);
+            for a in [(1.0, 0.0), (-0.7, 0.7), (0.0, -1.0), (0.3, 0.9)] {
+                let (r, _, _) = one(p.as_ref(), s, Point2::new(a.0, a.1), 0.0);
+                assert!(r.origin.x != 0.0 || r.origin.y != 0.0);
+                let got = meet(&r, [0.0, 0.0, 1.0], z);
+                assert!(
+                    dist3(got, target) < 2e-5 * z,
+                    "angle {angle}, ξ = {xi}: aperture {a:?} meets z = {z} at {got:?}, chief at {target:?}"
+                );
+            }
+        }
+    }
+    // The smoothstep across band 1 at its midpoint is ½: the focus is halfway.
+    assert!((diopter_focus(0.3, 3.0, &regions) - 2.25).abs() < 1e-12);
+}
+
+#[test]
+fn the_contract_holds_with_a_split_diopter() {
+    let format = Format::new(48, 32);
+    let p = make(
+        &[
+            ("float fStop", "2.8"),
+            ("float focalLength", "0.05"),
+            ("float focalDistance", "3"),
+            ("float tilt", "10"),
+            ("int splitDiopter:count", "2"),
+            ("float splitDiopter:angle", "20"),
+            ("float splitDiopter:offset1", "0.2"),
+            ("float splitDiopter:width1", "0.3"),
+            ("float splitDiopter:focusDistance1", "1"),
+            ("float splitDiopter:offset2", "-0.4"),
+            ("float splitDiopter:width2", "0.1"),
+            ("float splitDiopter:focusDistance2", "20"),
+        ],
+        format,
+    );
+    let stats = assert_contract(p.as_ref(), &ContractTest::new(format));
+    assert!(
+        stats.valid == stats.samples && stats.spread_checked > 1500 && stats.roundtrips > 1500,
+        "{stats:?}"
+    );
+}
+
+#[test]
+fn bad_split_diopter_parameters_are_refused_by_name() {
+    let format = Format::new(48, 32);
+    assert_refused(
+        &PxrCameraFactory,
+        NAME,
+        format,
+        &[
+            ("int splitDiopter:count", "3", "splitDiopter:count"),
+            ("float splitDiopter:width1", "-0.1", "splitDiopter:width1"),
+            (
+                "float splitDiopter:focusDistance2",
+                "0",
+                "splitDiopter:focusDistance2",
+            ),
+        ],
+    );
+    let err = try_make(
+        &[
+            ("int splitDiopter:count", "1"),
+            ("float splitDiopter:focusDistance1", "0.5"),
+            ("color axial", "-0.6 0 0"),
+        ],
+        format,
+    )
+    .err()
+    .expect("refused")
+    .to_string();
+    for needle in ["PxrCamera", "splitDiopter:focusDistance1", "axial", "red"] {
+        assert!(err.contains(needle), "{err}");
+    }
+}
