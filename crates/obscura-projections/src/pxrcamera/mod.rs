@@ -1,6 +1,6 @@
 //! `PxrCamera`: RenderMan's full-featured perspective camera — zoom, thin lens with a tilted
-//! (Scheimpflug) plane of focus, lens shift, distortion, chromatic aberration, natural and optical
-//! vignetting, rolling shutter and enhance.
+//! (Scheimpflug) plane of focus, split diopter, lens shift, distortion, chromatic aberration,
+//! natural and optical vignetting, rolling shutter and enhance.
 //!
 //! # Mapping
 //!
@@ -41,6 +41,15 @@
 //!    `D = normalize(δ_c·w − (n·w)·O)` — the same line written without dividing by `n·w`, so a chief
 //!    ray that meets a tilted plane only behind the camera (a virtual focus) or never (focus at
 //!    infinity, `D = w`) still gives a ray, continuous across. Without a lens `O = 0`, `D = w`.
+//!    **Split diopter** (`split_diopter.rs`, with `splitDiopter:count` 1 or 2): the plane moves
+//!    along the axis to the focus distance `z(ξ)` of the sample's position `ξ` across the diopters'
+//!    edges, `δ_c = δ + (z(ξ) − z₀ + axial[c])·n.z`, `z₀ = δ/n.z` the lens's own axial focus distance:
+//!    `ξ = ((sₑ − c)·(cos angle, −sin angle))/h` (`c` the screen window's centre, `h` half its width,
+//!    `angle` clockwise from up), `S(x) = 3x² − 2x³` of
+//!    `x = clamp(½ + (ξ − offset1)/width1)` for diopter 1 (covering `ξ > offset1`) and
+//!    `x = clamp(½ − (ξ − offset2)/width2)` for diopter 2 (covering `ξ < offset2`), a hard step at
+//!    width 0, and `z(ξ) = lerp(lerp(z₀, focusDistance1, S₁), focusDistance2, S₂)`. Every ray of the
+//!    sample then meets at `F = w·δ_c/(n·w)` as above.
 //! 10. **footprint**: `origin_radius = 0`. The per-pixel turn of the chief ray along screen x is
 //!     `αx = Δx/(ez·transverse[c])·|w × (J₀₀, J₁₀, 0)|/|v|`, along y
 //!     `αy = Δy/(ez·transverse[c])·|w × (J₀₁, J₁₁, 0)|/|v|`, with `v = (u.x, u.y, d)`, `J = ∂u/∂p` the
@@ -84,6 +93,13 @@
 //! - `enhance` is a `float[3]`, not a `point`: it is a screen position and a zoom factor, which no
 //!   transform should touch.
 //! - `optical` is the clipping disk's offset in aperture radii per unit tangent of the field angle.
+//! - The split-diopter parameters carry USD/Hydra's names (`HdCameraTokens`: `splitDiopter:count`,
+//!   `splitDiopter:angle`, `splitDiopter:offset1`, `splitDiopter:width1`,
+//!   `splitDiopter:focusDistance1`, `…2`); RenderMan 27's own RIB names for PxrCamera are not in
+//!   public material. Which side each diopter covers, that `width` is the full width of the blend
+//!   band centred on the edge, the smoothstep, the order of the nested lerps and the normalisation
+//!   by half the screen window's width are ours. `focusDistance1/2` default to 1 (Hydra's 0 would be
+//!   refused: a focus distance must be positive). Without depth of field the diopters change nothing.
 
 mod distortion;
 mod focal_plane;
