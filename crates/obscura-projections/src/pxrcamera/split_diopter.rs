@@ -27,13 +27,7 @@ pub(super) const FOCUS: [&str; 2] = ["splitDiopter:focusDistance1", "splitDiopte
 
 /// The parameter declarations.
 pub(super) fn params() -> Vec<ParamDecl> {
-    let finite = ValueRange::open(f64::NEG_INFINITY, f64::INFINITY);
-    let non_negative = ValueRange {
-        min: 0.0,
-        max: f64::INFINITY,
-        min_inclusive: true,
-        max_inclusive: false,
-    };
+    let (finite, non_negative) = (super::FINITE, super::NON_NEGATIVE);
     let mut v = vec![
         ParamDecl::int(COUNT, 0)
             .range(ValueRange::closed(0.0, 2.0))
