@@ -358,6 +358,45 @@ fn error_of(path: &Path, camera: Option<&str>) -> String {
     }
 }
 
+/// `kannalaBrandtK3`, `radTanThinPrism` and `lut`: NVIDIA publishes their attribute names but no
+/// formula turning `k0…`, the nominal size and the optical centre into rays, so a stage using
+/// one is refused, naming the prim and the schema, whether the model token or only the applied
+/// schema says which model it is; never rendered through a guessed mapping.
+#[test]
+fn omni_models_without_a_documented_projection_are_refused_naming_the_schema() {
+    let dir = tempfile::tempdir().unwrap();
+    for (model, api) in [
+        ("kannalaBrandtK3", "OmniLensDistortionKannalaBrandtK3API"),
+        ("radTanThinPrism", "OmniLensDistortionRadTanThinPrismAPI"),
+        ("lut", "OmniLensDistortionLutAPI"),
+    ] {
+        let attrs = format!(
+            "    float omni:lensdistortion:{model}:nominalWidth = 1936\n    \
+             float omni:lensdistortion:{model}:nominalHeight = 1216\n    \
+             float2 omni:lensdistortion:{model}:opticalCenter = (968, 608)\n"
+        );
+        for with_token in [true, false] {
+            let token = if with_token {
+                format!("    token omni:lensdistortion:model = \"{model}\"\n")
+            } else {
+                String::new()
+            };
+            let p = write(
+                dir.path(),
+                &format!("{model}-{with_token}.usda"),
+                &format!(
+                    "#usda 1.0\ndef Camera \"Cam\" (\n    prepend apiSchemas = [\"{api}\"]\n)\n{{\n{token}{attrs}}}\n"
+                ),
+            );
+            let e = error_of(&p, None);
+            assert!(
+                e.contains("</Cam>") && e.contains(api) && e.contains("is not supported"),
+                "{model} (token {with_token}): {e}"
+            );
+        }
+    }
+}
+
 #[test]
 fn bad_input_is_a_located_error() {
     let dir = tempfile::tempdir().unwrap();
