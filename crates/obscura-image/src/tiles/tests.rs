@@ -486,3 +486,31 @@ fn place_overscan_names_a_frame_of_the_wrong_size() {
         Err(OverscanError::Unreadable { .. })
     ));
 }
+
+proptest! {
+    /// The margins are the least whole pixels that keep `FILTER_PAD` pixels beyond every side of
+    /// the box: with them the data window reaches 2 px past the box, one pixel less would not.
+    #[test]
+    fn overscan_covering_is_the_least_padded_cover(
+        x0 in -500.0f64..300.0, y0 in -500.0f64..300.0,
+        dx in 0.0f64..900.0, dy in 0.0f64..900.0,
+        w in 1u32..400, h in 1u32..400,
+    ) {
+        let b = [x0, y0, x0 + dx, y0 + dy];
+        let o = Overscan::covering(b, w, h).unwrap();
+        let dw = o.data_window(w, h);
+        let (lo, hi) = (dw.position, dw.end());
+        let pad = f64::from(FILTER_PAD);
+        // Covers, with the pad.
+        prop_assert!(f64::from(lo.0) <= b[0] - pad + 1e-9 || o.left == 0);
+        prop_assert!(f64::from(lo.1) <= b[1] - pad + 1e-9 || o.top == 0);
+        prop_assert!(f64::from(hi.0) >= b[2] + pad - 1e-9 || o.right == 0);
+        prop_assert!(f64::from(hi.1) >= b[3] + pad - 1e-9 || o.bottom == 0);
+        // Never smaller than the plate, and least: a margin one pixel smaller loses the pad.
+        prop_assert!(lo.0 <= 0 && lo.1 <= 0 && hi.0 >= w as i32 && hi.1 >= h as i32);
+        if o.left > 0 { prop_assert!(f64::from(lo.0 + 1) > b[0] - pad); }
+        if o.top > 0 { prop_assert!(f64::from(lo.1 + 1) > b[1] - pad); }
+        if o.right > 0 { prop_assert!(f64::from(hi.0 - 1) < b[2] + pad); }
+        if o.bottom > 0 { prop_assert!(f64::from(hi.1 - 1) < b[3] + pad); }
+    }
+}
