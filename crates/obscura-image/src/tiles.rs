@@ -4,7 +4,8 @@
 //!
 //! This is the one place that reasons about data windows of a split frame: a tile's data window is
 //! its rectangle of the region being split (the full render's data window), and the merged file's
-//! data window is the union of the tiles'.
+//! data window is the union of the tiles'. An overscanned render ([`Overscan`]) is the other case:
+//! its data window reaches past the display window (the plate) on every side, from a negative origin.
 //!
 //! ## The grid
 //!
@@ -596,6 +597,217 @@ pub fn merge_png(tiles: &[PathBuf], grid: TileGrid, output: &Path) -> Result<(),
         }
     }
     Ok(write_png_rgb(output, width, height, &data)?)
+}
+
+/// Pixels of filter support Nuke adds on each side of a distortion node's bounding box (and
+/// [`Overscan::covering`] with it).
+pub const FILTER_PAD: u32 = 2;
+
+/// The margins, in whole pixels, by which a render for a `width × height` plate reaches past the
+/// plate on each side (overscan), so that redistorting it onto the plate leaves no uncovered pixel.
+///
+/// The overscanned render is `(width + left + right) × (height + top + bottom)` pixels of the same
+/// pinhole, extended: its pixel `(i, j)` is the plate's raster position `(i − left, j − top)`. Its
+/// OpenEXR keeps the plate as the display window `[0, width) × [0, height)` and stores the data
+/// window `[−left, width + right) × [−top, height + bottom)`, so a compositor places it on the plate
+/// without a reformat.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Overscan {
+    /// Pixels left of the plate (x < 0).
+    pub left: u32,
+    /// Pixels above the plate (y < 0, raster y down).
+    pub top: u32,
+    /// Pixels right of the plate (x ≥ width).
+    pub right: u32,
+    /// Pixels below the plate (y ≥ height).
+    pub bottom: u32,
+}
+
+impl Overscan {
+    /// The same margin on all four sides.
+    #[must_use]
+    pub fn uniform(pixels: u32) -> Self {
+        Self {
+            left: pixels,
+            top: pixels,
+            right: pixels,
+            bottom: pixels,
+        }
+    }
+
+    /// The margins of the data window Nuke's `LD_3DE4_*` node gives the undistorted plate: the box
+    /// `[x0, y0, x1, y1]` (raster, y down; a lens's undistorted box of the plate, e.g.
+    /// `obscura_calibration::lens3de::Lens::undistorted_box`) widened to whole pixels and then by
+    /// [`FILTER_PAD`] pixels of filter support per side, `[⌊x0⌋ − 2, ⌈x1⌉ + 2) × [⌊y0⌋ − 2, ⌈y1⌉ + 2)`,
+    /// around a `width × height` plate: `left = 2 − ⌊x0⌋`, `top = 2 − ⌊y0⌋`,
+    /// `right = ⌈x1⌉ + 2 − width`, `bottom = ⌈y1⌉ + 2 − height`, each at least 0 (a box inside the
+    /// plate needs no margin there). The padding is what lets a bilinear or wider filter resample
+    /// the box's edge from rendered pixels only. An extreme that lies exactly on a whole pixel (a
+    /// corner of a symmetric lens) may land a pixel either way, as in Nuke, from the last bits of
+    /// the box; either way every pixel of the box stays covered.
+    ///
+    /// # Errors
+    /// A message when a bound is not finite or a margin exceeds `i32::MAX / 2` pixels.
+    pub fn covering(bounds: [f64; 4], width: u32, height: u32) -> Result<Self, String> {
+        let pad = f64::from(FILTER_PAD);
+        let margin = |beyond: f64| -> Result<u32, String> {
+            if !beyond.is_finite() {
+                return Err(format!("the box {bounds:?} is not finite"));
+            }
+            let m = beyond.max(0.0);
+            if m > f64::from(i32::MAX / 2) {
+                return Err(format!("the box {bounds:?} needs a margin of {m} pixels"));
+            }
+            Ok(m as u32)
+        };
+        Ok(Self {
+            left: margin(pad - bounds[0].floor())?,
+            top: margin(pad - bounds[1].floor())?,
+            right: margin(bounds[2].ceil() + pad - f64::from(width))?,
+            bottom: margin(bounds[3].ceil() + pad - f64::from(height))?,
+        })
+    }
+
+    /// Reads `PIXELS` (all sides) or `LEFT,TOP,RIGHT,BOTTOM`.
+    ///
+    /// # Errors
+    /// A message quoting `text` when it is neither.
+    pub fn parse(text: &str) -> Result<Self, String> {
+        let bad = || {
+            format!(
+                "'{text}' is not an overscan; expected PIXELS or LEFT,TOP,RIGHT,BOTTOM (whole pixels ≥ 0)"
+            )
+        };
+        let v: Vec<u32> = (text.split(','))
+            .map(|p| p.trim().parse::<u32>().map_err(|_| bad()))
+            .collect::<Result<_, _>>()?;
+        let o = match v[..] {
+            [p] => Self::uniform(p),
+            [left, top, right, bottom] => Self {
+                left,
+                top,
+                right,
+                bottom,
+            },
+            _ => return Err(bad()),
+        };
+        if [o.left, o.top, o.right, o.bottom]
+            .iter()
+            .any(|&m| m > i32::MAX as u32 / 2)
+        {
+            return Err(bad());
+        }
+        Ok(o)
+    }
+
+    /// The overscanned render's size for a `width × height` plate.
+    #[must_use]
+    pub fn render_size(&self, width: u32, height: u32) -> (u32, u32) {
+        (width + self.left + self.right, height + self.top + self.bottom)
+    }
+
+    /// The data window of the overscanned render, in the plate's pixel coordinates:
+    /// `[−left, width + right) × [−top, height + bottom)`.
+    #[must_use]
+    pub fn data_window(&self, width: u32, height: u32) -> IntegerBounds {
+        let (w, h) = self.render_size(width, height);
+        IntegerBounds::new(
+            (-(self.left as i32), -(self.top as i32)),
+            (w as usize, h as usize),
+        )
+    }
+
+    /// The screen window of the overscanned pinhole, given the plate's `[left, right, bottom, top]`
+    /// (RenderMan's `ScreenWindow`, y up; for a `w × h` plate by default `[−w/h, w/h, −1, 1]` when
+    /// `w ≥ h`): each side pushed out in proportion, `left − (right − left)·self.left / width`, … so
+    /// that the plate's pixels keep their rays and the margins continue the same pinhole.
+    #[must_use]
+    pub fn screen_window(&self, plate: [f64; 4], width: u32, height: u32) -> [f64; 4] {
+        let (sx, sy) = (
+            (plate[1] - plate[0]) / f64::from(width),
+            (plate[3] - plate[2]) / f64::from(height),
+        );
+        [
+            plate[0] - sx * f64::from(self.left),
+            plate[1] + sx * f64::from(self.right),
+            plate[2] - sy * f64::from(self.bottom),
+            plate[3] + sy * f64::from(self.top),
+        ]
+    }
+}
+
+impl fmt::Display for Overscan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{},{},{},{}", self.left, self.top, self.right, self.bottom)
+    }
+}
+
+/// Why an overscanned render could not be placed on its plate.
+#[derive(Debug, thiserror::Error)]
+pub enum OverscanError {
+    /// The file is not a readable flat OpenEXR.
+    #[error("{path}: cannot read this render: {reason}")]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// The reader's message.
+        reason: String,
+    },
+    /// The render is not the overscanned size.
+    #[error(
+        "{path}: holds {got}, but a {width}x{height} plate overscanned by {overscan} (left,top,right,bottom) is {want}"
+    )]
+    WrongSize {
+        /// The file.
+        path: PathBuf,
+        /// Its data window.
+        got: String,
+        /// The data window the overscan asks for, at the origin.
+        want: String,
+        /// The plate's width.
+        width: u32,
+        /// The plate's height.
+        height: u32,
+        /// The overscan.
+        overscan: Overscan,
+    },
+    /// The placed image could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::atomic::AtomicWriteError),
+}
+
+/// Places an overscanned render on its plate: the flat EXR at `path`, rendered as an ordinary
+/// `render_size` frame (data window `[0, w') × [0, h')`), is rewritten atomically with the display
+/// window `[0, width) × [0, height)` and the data window [`Overscan::data_window`]. Pixels,
+/// channels and attributes are kept.
+///
+/// # Errors
+/// [`OverscanError::Unreadable`], [`OverscanError::WrongSize`] when the file's data window is not
+/// the overscanned frame at the origin, or [`OverscanError::Write`].
+pub fn place_overscan(path: &Path, overscan: Overscan, width: u32, height: u32) -> Result<(), OverscanError> {
+    let mut image = read_tile(path).map_err(|e| match e {
+        MergeError::Unreadable { path, reason } => OverscanError::Unreadable { path, reason },
+        other => OverscanError::Unreadable {
+            path: path.to_path_buf(),
+            reason: other.to_string(),
+        },
+    })?;
+    let got = IntegerBounds::new(image.layer_data.attributes.layer_position, image.layer_data.size);
+    let (w, h) = overscan.render_size(width, height);
+    let want = IntegerBounds::new((0, 0), (w as usize, h as usize));
+    if got != want {
+        return Err(OverscanError::WrongSize {
+            path: path.to_path_buf(),
+            got: show(got),
+            want: show(want),
+            width,
+            height,
+            overscan,
+        });
+    }
+    image.layer_data.attributes.layer_position = overscan.data_window(width, height).position;
+    image.attributes.display_window = IntegerBounds::new((0, 0), (width as usize, height as usize));
+    Ok(write_exr_image(image, path)?)
 }
 
 #[cfg(test)]

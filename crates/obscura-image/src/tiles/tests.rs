@@ -266,3 +266,251 @@ fn deep_tiles_merge_to_the_bytes_of_the_full_deep_image() {
         );
     }
 }
+
+// ---- Overscan ----
+
+use obscura_calibration::lens3de::{Kind, Lens};
+
+/// Nuke's LD node defaults (0.8 × 0.6 cm back) with `Distortion - Degree 2` = 0.5: the
+/// supplement's lens (its undistorted plate is larger than the plate on every side).
+fn supplement_lens(w: u32, h: u32) -> Lens {
+    let params: Vec<f64> = (Kind::RadialStandard4.all_params().iter())
+        .map(|(n, d)| if *n == "Distortion - Degree 2" { 0.5 } else { *d })
+        .collect();
+    Lens::new(Kind::RadialStandard4, &params, f64::from(w), f64::from(h)).unwrap()
+}
+
+/// The supplement's §2.2.2 figure: on 2000 × 1500 Nuke's node gives the undistorted plate the box
+/// `[−503, 2502) × [−377, 1877)` (y up; symmetric in y, so the same y down).
+#[test]
+fn overscan_of_a_lens_is_nukes_undistorted_box() {
+    let (w, h) = (2000, 1500);
+    let b = supplement_lens(w, h)
+        .undistorted_box(f64::from(w), f64::from(h))
+        .unwrap();
+    let o = Overscan::covering(b, w, h).unwrap();
+    let want = [503, 377, 502, 377];
+    // The extremes lie on whole pixels (the corners); the figure must be reproduced by the box
+    // moved by at most 1e-6 px, as the supplement's own check allows.
+    for (k, want) in want.into_iter().enumerate() {
+        let ok = [-1e-6, 0.0, 1e-6].iter().any(|e| {
+            let mut moved = b;
+            moved[k] += e;
+            let m = Overscan::covering(moved, w, h).unwrap();
+            [m.left, m.top, m.right, m.bottom][k] == want
+        });
+        assert!(ok, "side {k} of {b:?} does not give {want} ({o:?})");
+    }
+    let o = Overscan {
+        left: 503,
+        top: 377,
+        right: 502,
+        bottom: 377,
+    };
+    assert_eq!(o.render_size(w, h), (3005, 2254));
+    assert_eq!(
+        o.data_window(w, h),
+        IntegerBounds::new((-503, -377), (3005, 2254))
+    );
+}
+
+#[test]
+fn overscan_parses_and_rejects() {
+    assert_eq!(Overscan::parse("16").unwrap(), Overscan::uniform(16));
+    let o = Overscan::parse("1, 2,3,4").unwrap();
+    assert_eq!((o.left, o.top, o.right, o.bottom), (1, 2, 3, 4));
+    assert_eq!(Overscan::parse(&o.to_string()).unwrap(), o);
+    for bad in ["", "-1", "1,2", "1,2,3,4,5", "x", "2000000000"] {
+        let e = Overscan::parse(bad).unwrap_err();
+        assert!(
+            e.contains(&format!("'{bad}'")) && e.contains("LEFT,TOP,RIGHT,BOTTOM"),
+            "{e}"
+        );
+    }
+    assert!(Overscan::covering([f64::NAN, 0.0, 1.0, 1.0], 4, 4).is_err());
+    // A box inside the plate still gets the filter's margin only where it reaches the edge.
+    assert_eq!(
+        Overscan::covering([10.0, 10.0, 20.0, 20.0], 64, 64).unwrap(),
+        Overscan::default()
+    );
+}
+
+/// The overscanned screen window keeps the plate's pixel pitch: the plate's corner pixels keep
+/// their screen positions and the margins continue them.
+#[test]
+fn overscan_screen_window_keeps_the_pixel_pitch() {
+    let o = Overscan {
+        left: 10,
+        top: 4,
+        right: 6,
+        bottom: 2,
+    };
+    let (w, h) = (64, 48);
+    let plate = [-4.0 / 3.0, 4.0 / 3.0, -1.0, 1.0];
+    let sw = o.screen_window(plate, w, h);
+    let (rw, rh) = o.render_size(w, h);
+    let pitch = |s: [f64; 4], w: u32, h: u32| ((s[1] - s[0]) / f64::from(w), (s[3] - s[2]) / f64::from(h));
+    let (a, b) = (pitch(plate, w, h), pitch(sw, rw, rh));
+    assert!((a.0 - b.0).abs() < 1e-12 && (a.1 - b.1).abs() < 1e-12);
+    // The plate's top-left corner is the overscanned render's pixel (left, top) corner.
+    assert!((sw[0] + f64::from(o.left) * b.0 - plate[0]).abs() < 1e-12);
+    assert!((sw[3] - f64::from(o.top) * b.1 - plate[3]).abs() < 1e-12);
+}
+
+/// The scene both renders see, as a function of the undistorted pinhole's raster position (a
+/// textured card facing the camera): a smooth grid of period 12 px, so that bilinear resampling's
+/// error has the bound `(Δx² + Δy²)/8 · max|f''| ≤ (1/4)·(1/8)·(2π/12)²·2 ≈ 0.0171` at pixel
+/// spacing 1.
+fn card(q: [f64; 2]) -> f64 {
+    let k = std::f64::consts::TAU / 12.0;
+    0.5 + 0.25 * (k * q[0]).sin() * (k * q[1]).sin()
+}
+
+/// A flat one-channel EXR of `w × h` at the origin, as a render writes an ordinary frame.
+fn write_frame(path: &Path, w: u32, h: u32, value: &dyn Fn(u32, u32) -> f32) {
+    let samples: Vec<f32> = (0..h).flat_map(|y| (0..w).map(move |x| value(x, y))).collect();
+    let channels = AnyChannels::sort(vec![AnyChannel::new("Y", FlatSamples::F32(samples))].into());
+    let layer = Layer::new(
+        (w as usize, h as usize),
+        exr::prelude::LayerAttributes::default(),
+        exr::prelude::Encoding::FAST_LOSSLESS,
+        channels,
+    );
+    write_exr_image(Image::from_layer(layer), path).unwrap();
+}
+
+/// An EXR's one channel, its data window and display window.
+fn read_frame(path: &Path) -> (Vec<f32>, IntegerBounds, IntegerBounds) {
+    let image = read_tile(path).unwrap();
+    let data = match &image.layer_data.channel_data.list[0].sample_data {
+        FlatSamples::F32(v) => v.clone(),
+        other => panic!("not f32: {other:?}"),
+    };
+    let dw = IntegerBounds::new(image.layer_data.attributes.layer_position, image.layer_data.size);
+    (data, dw, image.attributes.display_window)
+}
+
+/// Bilinear lookup at display position `p` of an image whose pixels fill `dw` (pixel `(i, j)`
+/// centred at `(i + ½, j + ½)`); `None` where the four pixels are not all in the data window
+/// (there the image would be black).
+fn bilinear(data: &[f32], dw: IntegerBounds, p: [f64; 2]) -> Option<f64> {
+    let fx = p[0] - 0.5 - f64::from(dw.position.0);
+    let fy = p[1] - 0.5 - f64::from(dw.position.1);
+    let (i, j) = (fx.floor(), fy.floor());
+    let (w, h) = (dw.size.0 as f64, dw.size.1 as f64);
+    if !(i >= 0.0 && j >= 0.0 && i + 1.0 < w && j + 1.0 < h) {
+        return None;
+    }
+    let (tx, ty, i, j) = (fx - i, fy - j, i as usize, j as usize);
+    let at = |x: usize, y: usize| f64::from(data[y * dw.size.0 + x]);
+    Some(
+        (1.0 - ty) * ((1.0 - tx) * at(i, j) + tx * at(i + 1, j))
+            + ty * ((1.0 - tx) * at(i, j + 1) + tx * at(i + 1, j + 1)),
+    )
+}
+
+/// An overscanned pinhole render, placed on its plate and redistorted through the lens's ST-map
+/// (Nuke's convention: the plate pixel's `(s, t)` = its undistorted position over the plate, `t`
+/// up), equals the render through the lens to within bilinear resampling's bound, with every plate
+/// pixel covered; the same render without overscan leaves uncovered (black) pixels at the edge.
+#[test]
+fn overscanned_render_redistorts_onto_the_plate() {
+    let (w, h) = (200, 150);
+    let lens = supplement_lens(w, h);
+    let b = lens.undistorted_box(f64::from(w), f64::from(h)).unwrap();
+    let o = Overscan::covering(b, w, h).unwrap();
+    assert!(o.left > 2 && o.top > 2 && o.right > 2 && o.bottom > 2, "{o:?}");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cg.exr");
+    let (rw, rh) = o.render_size(w, h);
+    // The pinhole's pixel (x, y) of the overscanned frame is the plate's raster (x − left, y − top).
+    let (l, t) = (f64::from(o.left), f64::from(o.top));
+    write_frame(&path, rw, rh, &|x, y| {
+        card([f64::from(x) + 0.5 - l, f64::from(y) + 0.5 - t]) as f32
+    });
+    place_overscan(&path, o, w, h).unwrap();
+    let (data, dw, display) = read_frame(&path);
+    assert_eq!(display, IntegerBounds::new((0, 0), (w as usize, h as usize)));
+    assert_eq!(dw, o.data_window(w, h));
+    // The data window is the undistorted box, padded as Nuke pads it.
+    assert_eq!(dw.position.0, b[0].floor() as i32 - 2);
+    assert_eq!(dw.position.1, b[1].floor() as i32 - 2);
+    assert_eq!(dw.end().0, b[2].ceil() as i32 + 2);
+    assert_eq!(dw.end().1, b[3].ceil() as i32 + 2);
+
+    let k = std::f64::consts::TAU / 12.0;
+    let bound = 0.25 * 0.125 * k * k * 2.0 + 1e-6;
+    let (mut worst, mut uncovered_plain) = (0.0_f64, 0);
+    let plain = IntegerBounds::new((0, 0), (w as usize, h as usize));
+    let plain_data: Vec<f32> = (0..h)
+        .flat_map(|y| (0..w).map(move |x| card([f64::from(x) + 0.5, f64::from(y) + 0.5]) as f32))
+        .collect();
+    for y in 0..h {
+        for x in 0..w {
+            let p = [f64::from(x) + 0.5, f64::from(y) + 0.5];
+            // The ray of plate pixel p through the lens is the undistorted pinhole's ray at q.
+            let q = lens.undistort(p).unwrap();
+            let through_lens = card(q);
+            // The ST-map's (s, t) and back to display pixels.
+            let (s, tt) = (q[0] / f64::from(w), 1.0 - q[1] / f64::from(h));
+            let lookup = [s * f64::from(w), (1.0 - tt) * f64::from(h)];
+            let Some(v) = bilinear(&data, dw, lookup) else {
+                panic!("plate pixel ({x}, {y}) maps to {lookup:?}, outside the data window {dw:?}");
+            };
+            worst = worst.max((v - through_lens).abs());
+            if bilinear(&plain_data, plain, lookup).is_none() {
+                uncovered_plain += 1;
+            }
+        }
+    }
+    eprintln!("redistorted vs through the lens: worst {worst:.5}, bilinear bound {bound:.5}");
+    assert!(worst <= bound, "worst {worst} > bilinear bound {bound}");
+    // Without overscan the plate's whole border ring is black.
+    assert!(uncovered_plain >= 2 * (w + h) as usize, "{uncovered_plain}");
+}
+
+#[test]
+fn place_overscan_names_a_frame_of_the_wrong_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cg.exr");
+    write_frame(&path, 10, 10, &|_, _| 0.0);
+    let e = place_overscan(&path, Overscan::uniform(2), 10, 10).unwrap_err();
+    let m = e.to_string();
+    assert!(
+        m.contains("cg.exr") && m.contains("[0, 14) × [0, 14)") && m.contains("10x10"),
+        "{m}"
+    );
+    let missing = dir.path().join("none.exr");
+    assert!(matches!(
+        place_overscan(&missing, Overscan::uniform(2), 10, 10),
+        Err(OverscanError::Unreadable { .. })
+    ));
+}
+
+proptest! {
+    /// The margins are the least whole pixels that keep `FILTER_PAD` pixels beyond every side of
+    /// the box: with them the data window reaches 2 px past the box, one pixel less would not.
+    #[test]
+    fn overscan_covering_is_the_least_padded_cover(
+        x0 in -500.0f64..300.0, y0 in -500.0f64..300.0,
+        dx in 0.0f64..900.0, dy in 0.0f64..900.0,
+        w in 1u32..400, h in 1u32..400,
+    ) {
+        let b = [x0, y0, x0 + dx, y0 + dy];
+        let o = Overscan::covering(b, w, h).unwrap();
+        let dw = o.data_window(w, h);
+        let (lo, hi) = (dw.position, dw.end());
+        let pad = f64::from(FILTER_PAD);
+        // Covers, with the pad.
+        prop_assert!(f64::from(lo.0) <= b[0] - pad + 1e-9 || o.left == 0);
+        prop_assert!(f64::from(lo.1) <= b[1] - pad + 1e-9 || o.top == 0);
+        prop_assert!(f64::from(hi.0) >= b[2] + pad - 1e-9 || o.right == 0);
+        prop_assert!(f64::from(hi.1) >= b[3] + pad - 1e-9 || o.bottom == 0);
+        // Never smaller than the plate, and least: a margin one pixel smaller loses the pad.
+        prop_assert!(lo.0 <= 0 && lo.1 <= 0 && hi.0 >= w as i32 && hi.1 >= h as i32);
+        if o.left > 0 { prop_assert!(f64::from(lo.0 + 1) > b[0] - pad); }
+        if o.top > 0 { prop_assert!(f64::from(lo.1 + 1) > b[1] - pad); }
+        if o.right > 0 { prop_assert!(f64::from(hi.0 - 1) < b[2] + pad); }
+        if o.bottom > 0 { prop_assert!(f64::from(hi.1 - 1) < b[3] + pad); }
+    }
+}
