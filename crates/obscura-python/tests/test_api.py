@@ -149,7 +149,9 @@ def test_projections_lists_builtins_with_parameter_tables():
     assert table["PxrPerspective"]["path"] is None
     models = {m["name"]: m for m in obscura.calibration_models()}
     assert models["OPENCV_OMNIDIR"]["pixel_convention"] == "opencv"
-    assert len(models) == 25
+    # The 25 models of COLMAP, OpenCV, Kalibr, OCamCalib, f-theta, … and 3DEqualizer's eight.
+    assert len(models) == 33
+    assert {"3DE Classic LD Model", "3DE4 Radial - Fisheye, Degree 8"} <= set(models)
 
 
 def test_check_reports_a_clean_builtin():
