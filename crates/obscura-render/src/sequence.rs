@@ -56,13 +56,15 @@ pub struct FrameSpecError {
 fn parse_item(item: &str) -> Result<(i32, i32, u32), String> {
     let quoted = format!("'{item}'");
     let bad = |what: &str| format!("{quoted}: {what}");
-    // The step: after ':' or 'x' (the last one; neither can appear in a number).
-    let (range, step) = match item.rfind([':', 'x']) {
+    // The step: after the first ':' or 'x' (neither can appear in a number), all the rest of the item.
+    let (range, step) = match item.find([':', 'x']) {
         Some(i) => {
+            let sep = &item[i..=i];
             let s = item[i + 1..].trim();
             let step = match s.parse::<u32>() {
                 Ok(0) => return Err(bad("the step must be at least 1")),
                 Ok(n) => n,
+                Err(_) if s.is_empty() => return Err(bad(&format!("the step after '{sep}' is missing"))),
                 Err(_) => return Err(bad(&format!("the step '{s}' is not a positive integer"))),
             };
             (&item[..i], Some(step))
@@ -142,10 +144,14 @@ impl FrameSpec {
     /// starts, a step of 0 or on a single number, or stepped items naming more than
     /// [`MAX_STEPPED_FRAMES`] frames.
     pub fn parse(text: &str) -> Result<Self, FrameSpecError> {
+        // A selection of one item names it once: `'1-3:x': the step …`, not `'1-3:x': '1-3:x': …`.
         let fail = |token: &str, reason: String| FrameSpecError {
             text: text.to_string(),
             token: token.to_string(),
-            reason,
+            reason: match reason.strip_prefix(&format!("'{token}': ")) {
+                Some(what) if token == text.trim() => what.to_string(),
+                _ => reason,
+            },
         };
         let mut ranges = Vec::new();
         let mut stepped: u64 = 0;
@@ -512,16 +518,23 @@ mod tests {
             ("1-2-3", "1-2-3", "'2-3' is not a frame number"),
             ("99999999999", "99999999999", "'99999999999' is out of range"),
             ("1-24:0", "1-24:0", "the step must be at least 1"),
-            ("1,5-24x", "5-24x", "the step '' is not a positive integer"),
+            ("1,5-24x", "5-24x", "the step after 'x' is missing"),
+            ("1-3:x", "1-3:x", "the step 'x' is not a positive integer"),
             ("1-24:-2", "1-24:-2", "the step '-2' is not a positive integer"),
-            ("1-24:6x2", "1-24:6x2", "'24:6' is not a frame number"),
+            ("1-24:6x2", "1-24:6x2", "the step '6x2' is not a positive integer"),
             ("1-3,7:2", "7:2", "a step needs a range A-B before it"),
             ("0-2000000:1,1-2000001:2", "1-2000001:2", "at most 1000000 frames"),
         ] {
             let e = FrameSpec::parse(bad).unwrap_err();
             assert_eq!(e.token, token, "{bad}: {e}");
             let e = e.to_string();
-            assert!(e.starts_with(&format!("'{bad}': '{token}'")), "{bad}: {e}");
+            if token == bad && !bad.is_empty() {
+                // One item: named once.
+                assert!(e.starts_with(&format!("'{bad}': ")), "{bad}: {e}");
+                assert!(!e.starts_with(&format!("'{bad}': '{bad}': ")), "{bad}: {e}");
+            } else {
+                assert!(e.starts_with(&format!("'{bad}': '{token}'")), "{bad}: {e}");
+            }
             assert!(e.contains(reason), "{bad}: {e}");
             assert!(e.contains("expected a frame N, a range A-B"), "{bad}: {e}");
         }
