@@ -382,25 +382,62 @@ fn set_camera(
             scene.warnings.push(e.to_string());
         }
     };
+    let ri_camera = crate::ri::RiCamera::read(stage, &cam.path, Time::Code(t))?;
+    ri_camera.apply(stage, &cam.path, &mut scene.camera)?;
+    let distortion_unused = |scene: &mut Scene, why: &str| {
+        if ri_camera.lens_distortion.is_some() {
+            scene.warnings.push(format!(
+                "{}: <{}>: lensDistortion:* is not applied: {why} (hdPrman gives it to the perspective PxrCamera only)",
+                stage.file, cam.path
+            ));
+        }
+    };
     if let Some(lens) = stage.lens(&cam.path, Time::Code(t))? {
         scene.projection = "CalibratedCamera".into();
         scene.projection_params = lens.param_list(&format!("{}: <{}> {}", stage.file, cam.path, lens.schema));
         scene.camera.screen_window = None;
+        distortion_unused(scene, &format!("the camera renders through {}", lens.schema));
         return Ok(());
     }
     if let Some(ri) = crate::ri::projection(stage, &cam.path, Time::Code(t))?
         && ri.name != "PxrPerspective"
     {
+        distortion_unused(
+            scene,
+            &format!("the camera renders through {} from <{}>", ri.name, ri.source),
+        );
         scene.projection = ri.name;
         scene.projection_params = ri.params;
         return Ok(());
     }
     if cam.projection == "orthographic" {
+        distortion_unused(scene, "the camera is orthographic");
         scene.projection = "PxrOrthographic".into();
         return Ok(());
     }
-    scene.projection = "PxrPerspective".into();
-    push(scene, "float fov", 90.0, "focalLength");
+    if let Some(d) = &ri_camera.lens_distortion {
+        // hdPrman's PxrCamera: fov = 2·atan(W/2f) over the screen window normalised by half the
+        // camera's own horizontal aperture, so the distortion's x is ±1 at the gate's sides.
+        scene.projection = "PxrCamera".into();
+        let half = cam.horizontal_aperture / 2.0;
+        let fov = 2.0 * (half / cam.focal_length).atan().to_degrees();
+        push(scene, "float fov", fov as f32, "focalLength");
+        let k = cam.focal_length / half;
+        scene.camera.screen_window = Some(ScreenWindow::new(
+            (l * k) as f32,
+            (r * k) as f32,
+            (b * k) as f32,
+            (top * k) as f32,
+        ));
+        let (params, warnings) = d.pxrcamera_params(&stage.file, &cam.path);
+        for (decl, v, attr) in params {
+            push(scene, decl, v, attr);
+        }
+        scene.warnings.extend(warnings);
+    } else {
+        scene.projection = "PxrPerspective".into();
+        push(scene, "float fov", 90.0, "focalLength");
+    }
     if cam.f_stop > 0.0 && cam.focus_distance > 0.0 {
         push(scene, "float fStop", cam.f_stop as f32, "fStop");
         push(

@@ -508,3 +508,78 @@ fn a_point_instancer_places_its_prototypes_and_hides_invisible_ids() {
     assert!((m.transform_vector3(glam::Vec3::X) - glam::Vec3::Y).length() < 1e-3);
     assert!(matches!(s.objects[1].shape, obscura_scene::Shape::Sphere { radius, .. } if radius == 0.5));
 }
+
+/// hdPrman's camera attributes (`hdPrman/camera.cpp`, `cameraContext.cpp`): `ri:shutterOpenTime`,
+/// `ri:shutterCloseTime`, `ri:shutteropening` and the `ri:aperture*` shape go to the host's shutter
+/// opening and aperture; Hydra's `lensDistortion:k1/k2/anaSq/asym` make the camera PxrCamera with
+/// `fov = 2·atan(W/2f)` over the window normalised by half the gate width, so the rays are
+/// PxrCamera's division model on the gate: `s = film/(W/2)`, `q = (sx/anaSq)² + sy²`,
+/// `u = (sx/(1 + (k1 + asymX)q + k2q²), sy/(1 + (k1 + asymY)q + k2q²))`, direction `(u·W/2, f)`.
+#[test]
+fn hdprman_camera_attributes_and_lens_distortion_are_read_as_hdprman_reads_them() {
+    let file = data("ri_camera.usda");
+    let (w, h) = (120.0, 80.0);
+    let s = scene(&file, Some("Warped"), 120, 80, 1);
+    assert_eq!(s.projection, "PxrCamera");
+    let o = &s.camera.shutter_opening;
+    assert_eq!((o.open_time, o.close_time), (0.2, 0.7));
+    assert_eq!(o.opening, [0.1, 0.2, 0.3, 0.4, 0.6, 0.7, 0.8, 0.9]);
+    let a = &s.camera.aperture;
+    assert_eq!(
+        (a.n_sides, a.angle_deg, a.roundness, a.density),
+        (6, 15.0, 0.25, -0.5)
+    );
+    assert_eq!(
+        s.camera.shutter,
+        (-0.25, 0.25),
+        "USD's shutter:open/close stay the interval"
+    );
+    let (k1, k2, sq, ax, ay) = (-0.12, 0.03, 1.33, 0.02, -0.01);
+    let (gw, gh, ox, oy, f) = (36.0, 24.0, 2.0, -1.0, 35.0);
+    let at = grid(w, h, 9);
+    let mut worst: f64 = 0.0;
+    for (&(x, y), d) in at.iter().zip(rays(&s, &at)) {
+        let film = [(x / w - 0.5) * gw + ox, (0.5 - y / h) * gh + oy];
+        let (sx, sy) = (film[0] / (gw / 2.0), film[1] / (gw / 2.0));
+        let q = (sx / sq).powi(2) + sy * sy;
+        let ux = sx / (1.0 + (k1 + ax) * q + k2 * q * q);
+        let uy = sy / (1.0 + (k1 + ay) * q + k2 * q * q);
+        worst = worst.max(angle(d, [ux * gw / 2.0, uy * gw / 2.0, f]));
+    }
+    assert!(worst <= RAY_TOLERANCE, "worst {worst:e} rad");
+    // A distortion centre or scale PxrCamera cannot express is warned about, naming prim and
+    // attribute; the rest still applies.
+    let c = scene(&file, Some("Centred"), 16, 16, 1);
+    assert_eq!(c.projection, "PxrCamera");
+    let warnings = c.warnings.join("\n");
+    assert!(
+        warnings.contains("<Centred>.lensDistortion:center")
+            || warnings.contains("</World/Centred>.lensDistortion:center"),
+        "{warnings}"
+    );
+    assert!(warnings.contains("lensDistortion:scale = 1.1"), "{warnings}");
+    // hdPrman applies it to perspective cameras only: an orthographic one says it is not applied.
+    let ortho = scene(&file, Some("Ortho"), 16, 16, 1);
+    assert_eq!(ortho.projection, "PxrOrthographic");
+    assert!(
+        ortho
+            .warnings
+            .join("\n")
+            .contains("lensDistortion:* is not applied"),
+        "{:?}",
+        ortho.warnings
+    );
+    // Bad values are located errors naming the camera and the attribute.
+    for (camera, what) in [
+        ("BadBlades", "ri:apertureNSides"),
+        ("BadRoundness", "apertureRoundness"),
+        ("BadOpening", "ri:shutteropening"),
+        ("BadK1", "lensDistortion:k1"),
+    ] {
+        let e = error_of(&file, Some(camera));
+        assert!(
+            e.contains(camera) && e.contains(what) && e.contains("ri_camera.usda"),
+            "{camera}: {e}"
+        );
+    }
+}
