@@ -9,12 +9,17 @@
 //! - `Mesh`: `points`, `faceVertexCounts`/`Indices` (polygons fanned into triangles; `orientation =
 //!   leftHanded` reverses them), vertex `normals`; `subdivisionScheme = catmullClark` (the fallback)
 //!   is Obscura's own Catmull–Clark surface, `none` a polygon mesh. `Sphere` (radius), `Cube` (size),
-//!   `Cylinder` and `Cone` (radius, height, axis) are quadrics or meshes of the same shape.
+//!   `Cylinder` and `Cone` (radius, height, axis) are quadrics or meshes of the same shape; `Capsule`
+//!   (and `Capsule_1` with equal radii) a mesh of the cylinder of `height` between two hemispheres.
 //! - Visibility: `invisible` (inherited) and `purpose` `guide`/`proxy` prims are not rendered.
 //! - Material: the bound `UsdPreviewSurface`'s constant `diffuseColor`, `roughness` and
 //!   `specularColor`/`metallic` as PxrSurface, else `primvars:displayColor` (constant) as PxrDiffuse.
-//! - Lights: `DistantLight`, `DomeLight`, `SphereLight`, `RectLight` with `inputs:intensity`,
-//!   `inputs:exposure`, `inputs:color` (and `inputs:angle`, `inputs:radius`, `inputs:width/height`).
+//! - Lights: `DistantLight`, `DomeLight` (and `DomeLight_1`), `SphereLight`, `RectLight` with
+//!   `inputs:intensity`, `inputs:exposure`, `inputs:color` (and `inputs:angle`, `inputs:radius`,
+//!   `inputs:width/height`). A dome's `inputs:texture:file` (an EXR, `latlong` or `automatic`) is
+//!   PxrDomeLight's map in USD's orientation, OpenEXR's lat-long layout: for a light-space direction
+//!   `d`, `u = ½ − atan2(d.x, d.z)/2π`, `v = acos(d.y)/π` (Obscura's dome mirrored in x); a
+//!   `DomeLight_1` whose `poleAxis` is `Z` (or `scene` on a Z-up stage) is first turned by `R_x(90°)`.
 //! - IDs: each object's name and instance name are its prim path.
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
@@ -83,8 +88,11 @@ pub fn build(
                 | "Cube"
                 | "Cylinder"
                 | "Cone"
+                | "Capsule"
+                | "Capsule_1"
                 | "DistantLight"
                 | "DomeLight"
+                | "DomeLight_1"
                 | "SphereLight"
                 | "RectLight"
         ) || !visible(&values, path, time)?
@@ -115,10 +123,21 @@ pub fn build(
             }
             "Cube" => Some(Shape::Mesh(cube(values.real(path, "size", time, 2.0)? as f32))),
             "Cylinder" | "Cone" => Some(Shape::Mesh(round(&values, path, ty, time)?)),
+            "Capsule" | "Capsule_1" => {
+                capsule(&values, path, ty, time, &mut scene.warnings)?.map(Shape::Mesh)
+            }
             light_type => {
-                scene
-                    .lights
-                    .push(light(&values, path, light_type, time, motion.samples[0].1)?);
+                let transform = motion.samples[0].1;
+                let light = light(
+                    &values,
+                    path,
+                    light_type,
+                    time,
+                    transform,
+                    stage,
+                    &mut scene.warnings,
+                )?;
+                scene.lights.push(light);
                 continue;
             }
         };
@@ -821,7 +840,15 @@ fn display_color(values: &Values<'_>, path: &str, time: Time, scene: &mut Scene)
     (scene.materials.len() - 1) as u32
 }
 
-fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4) -> Result<Light, UsdError> {
+fn light(
+    values: &Values<'_>,
+    path: &str,
+    ty: &str,
+    time: Time,
+    transform: Mat4,
+    stage: &Stage,
+    warnings: &mut Vec<String>,
+) -> Result<Light, UsdError> {
     let intensity = values.real(path, "inputs:intensity", time, 1.0)? as f32;
     let exposure = values.real(path, "inputs:exposure", time, 0.0)? as f32;
     let c = values
@@ -839,13 +866,28 @@ fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4)
             enable_shadows: true,
             transform: transform * flip,
         },
-        "DomeLight" => Light::Dome {
-            color,
-            intensity,
-            exposure,
-            map: None,
-            transform,
-        },
+        "DomeLight" | "DomeLight_1" => {
+            // USD's dome is OpenEXR's lat-long layout in the light's frame (longitude +π at the left
+            // edge, 0 toward +Z, π/2 toward +X); Obscura's dome is that layout mirrored in x.
+            let mut orient = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+            if ty == "DomeLight_1" {
+                let pole = values
+                    .token_opt(path, "poleAxis", Time::Default)?
+                    .unwrap_or_else(|| "scene".into());
+                // poleAxis Z (or "scene" on a Z-up stage): the pole is +Z and longitude 0 looks
+                // down −Y, R_x(+90°) applied to the dome alone.
+                if pole == "Z" || (pole == "scene" && stage.up_axis == "Z") {
+                    orient = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2) * orient;
+                }
+            }
+            Light::Dome {
+                color,
+                intensity,
+                exposure,
+                map: dome_map(values, path, time, stage, warnings)?,
+                transform: transform * orient,
+            }
+        }
         "SphereLight" => {
             let r = values.real(path, "inputs:radius", time, 0.5)? as f32;
             Light::Sphere {
@@ -866,4 +908,141 @@ fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4)
             }
         }
     })
+}
+
+/// A dome's `inputs:texture:file` as the lat-long EXR PxrDomeLight reads; `None`, with a warning
+/// naming the prim and the attribute, for a layout or a file it cannot read (the dome then lights
+/// with its colour alone).
+fn dome_map(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    stage: &Stage,
+    warnings: &mut Vec<String>,
+) -> Result<Option<std::path::PathBuf>, UsdError> {
+    let Some(raw) = values.raw(path, "inputs:texture:file", time)? else {
+        return Ok(None);
+    };
+    let openusd::sdf::Value::AssetPath(asset) = raw else {
+        return Err(values.error(path, "inputs:texture:file", "expected an asset path"));
+    };
+    if asset.authored_path.is_empty() {
+        return Ok(None);
+    }
+    let format = values
+        .token_opt(path, "inputs:texture:format", time)?
+        .unwrap_or_else(|| "automatic".into());
+    let mut skip = |why: String| {
+        warnings.push(format!(
+            "{}: <{path}>.inputs:texture:file @{}@ is not applied: {why}; the dome lights with its colour alone",
+            stage.file, asset.authored_path
+        ));
+        Ok(None)
+    };
+    if !matches!(format.as_str(), "automatic" | "latlong") {
+        return skip(format!(
+            "inputs:texture:format {format:?} (only latlong maps are read)"
+        ));
+    }
+    let stage_dir = std::path::Path::new(&stage.file)
+        .parent()
+        .unwrap_or(std::path::Path::new(""));
+    match crate::shading::image_source(stage_dir, &asset, &stage.file, path)? {
+        obscura_scene::texture::ImageSource::File(file) => {
+            let exr = file
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+            if !exr {
+                return skip("PxrDomeLight reads OpenEXR lat-long maps only".into());
+            }
+            if !file.is_file() {
+                return skip(format!("{} does not exist", file.display()));
+            }
+            Ok(Some(file))
+        }
+        _ => skip("a map inside a .usdz package is not read for a dome".into()),
+    }
+}
+
+/// A `Capsule` (`radius`, `height` of the cylinder between the hemispherical caps, `axis`) or a
+/// `Capsule_1` with equal `radiusTop` and `radiusBottom`, as a mesh: 64 segments around, 16 rings on
+/// each cap, the whole `height + 2·radius` long. A `Capsule_1` with different radii is left out with
+/// a warning naming the prim (its tapered caps are not meshed).
+fn capsule(
+    values: &Values<'_>,
+    path: &str,
+    ty: &str,
+    time: Time,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Mesh>, UsdError> {
+    let (r, h) = if ty == "Capsule_1" {
+        let top = values.real(path, "radiusTop", time, 0.5)?;
+        let bottom = values.real(path, "radiusBottom", time, 0.5)?;
+        if top != bottom {
+            warnings.push(format!(
+                "{}: <{path}>: a Capsule_1 with radiusTop {top} and radiusBottom {bottom} is not rendered \
+                 (tapered caps are not meshed; equal radii are)",
+                values.file
+            ));
+            return Ok(None);
+        }
+        (top, values.real(path, "height", time, 1.0)?)
+    } else {
+        (
+            values.real(path, "radius", time, 0.5)?,
+            values.real(path, "height", time, 1.0)?,
+        )
+    };
+    if !(r.is_finite() && h.is_finite() && r >= 0.0 && h >= 0.0) {
+        return Err(values.error(
+            path,
+            "radius",
+            format!("expected a non-negative radius and height, found {r} and {h}"),
+        ));
+    }
+    let (r, h) = (r as f32, h as f32);
+    let axis = values
+        .token_opt(path, "axis", Time::Default)?
+        .unwrap_or_else(|| "Z".into());
+    let (around, rings) = (64u32, 16u32);
+    // Rings from the bottom pole to the top pole: the bottom cap's, then the top cap's (the
+    // cylinder is the band between the two equators).
+    let mut profile = Vec::new();
+    for k in 0..=rings {
+        let a = -std::f32::consts::FRAC_PI_2 + k as f32 / rings as f32 * std::f32::consts::FRAC_PI_2;
+        profile.push((r * a.cos(), -h / 2.0 + r * a.sin()));
+    }
+    for k in 0..=rings {
+        let a = k as f32 / rings as f32 * std::f32::consts::FRAC_PI_2;
+        profile.push((r * a.cos(), h / 2.0 + r * a.sin()));
+    }
+    let mut positions = Vec::new();
+    for &(rad, z) in &profile {
+        for j in 0..around {
+            let a = j as f32 / around as f32 * std::f32::consts::TAU;
+            positions.push(Vec3::new(rad * a.cos(), rad * a.sin(), z));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..profile.len() as u32 - 1 {
+        for j in 0..around {
+            let (a0, a1) = (i * around + j, i * around + (j + 1) % around);
+            let (b0, b1) = (a0 + around, a1 + around);
+            triangles.push([a0, a1, b1]);
+            triangles.push([a0, b1, b0]);
+        }
+    }
+    let to_axis = |p: Vec3| match axis.as_str() {
+        "X" => Vec3::new(p.z, p.x, p.y),
+        "Y" => Vec3::new(p.y, p.z, p.x),
+        _ => p,
+    };
+    Ok(Some(Mesh {
+        positions: positions.into_iter().map(to_axis).collect(),
+        normals: None,
+        triangles,
+        uvs: Vec::new(),
+        colors: None,
+    }))
 }

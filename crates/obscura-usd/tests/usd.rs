@@ -583,3 +583,96 @@ fn hdprman_camera_attributes_and_lens_distortion_are_read_as_hdprman_reads_them(
         );
     }
 }
+
+/// The mesh of the one object a stage of `text` renders through `camera`-less staging.
+fn objects_of(text: &str) -> (Scene, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "stage.usda", text);
+    let options = Options { camera: None };
+    let source = open(&p, CameraDesc::new(Format::new(16, 16)), &options).unwrap();
+    (source.frame(0).unwrap(), dir)
+}
+
+/// `Capsule`: a cylinder of `height` between two hemispheres of `radius` (UsdGeomCapsule), so it is
+/// `height + 2·radius` long along its axis and `radius` round; `Capsule_1` with equal radii the
+/// same; with different radii it is left out with a warning naming the prim.
+#[test]
+fn a_capsule_is_its_cylinder_between_two_hemispheres() {
+    let (s, _dir) = objects_of(
+        "#usda 1.0\n(\n    upAxis = \"Y\"\n)\n\
+         def Capsule \"A\" { double radius = 0.5\n double height = 2\n uniform token axis = \"Y\" }\n\
+         def Capsule_1 \"B\" { double radiusTop = 0.25\n double radiusBottom = 0.25\n double height = 1\n uniform token axis = \"X\" }\n\
+         def Capsule_1 \"C\" { double radiusTop = 0.25\n double radiusBottom = 0.5 }\n",
+    );
+    assert_eq!(s.objects.len(), 2, "{:?}", s.warnings);
+    let check = |i: usize, axis: usize, r: f32, h: f32| {
+        let obscura_scene::Shape::Mesh(m) = &s.objects[i].shape else {
+            panic!("not a mesh")
+        };
+        let (mut lo, mut hi, mut round) = (f32::MAX, f32::MIN, 0.0f32);
+        for p in &m.positions {
+            let p = p.to_array();
+            lo = lo.min(p[axis]);
+            hi = hi.max(p[axis]);
+            let radial = (0..3)
+                .filter(|&k| k != axis)
+                .map(|k| p[k] * p[k])
+                .sum::<f32>()
+                .sqrt();
+            round = round.max(radial);
+            // Every point lies on the capsule: distance r from the axis segment of length h.
+            let along = p[axis].clamp(-h / 2.0, h / 2.0);
+            let d = ((p[axis] - along).powi(2) + radial * radial).sqrt();
+            assert!((d - r).abs() < 1e-5, "point {p:?} is {d} from the segment");
+        }
+        assert!(
+            (lo + h / 2.0 + r).abs() < 1e-6 && (hi - h / 2.0 - r).abs() < 1e-6,
+            "{lo} {hi}"
+        );
+        assert!((round - r).abs() < 1e-6);
+    };
+    check(0, 1, 0.5, 2.0);
+    check(1, 0, 0.25, 1.0);
+    let w = s.warnings.join("\n");
+    assert!(w.contains("<C>") || w.contains("</C>"), "{w}");
+}
+
+/// A DomeLight's lat-long texture reads as USD specifies (OpenEXR's layout: longitude +π at the
+/// left edge, 0 toward +Z, +π/2 toward +X; the top row +Y), and a `DomeLight_1` on a Z-up stage
+/// with `poleAxis = "scene"` has its pole on +Z and longitude 0 toward −Y.
+#[test]
+fn a_dome_texture_is_openexrs_lat_long_as_usd_specifies() {
+    let dir = tempfile::tempdir().unwrap();
+    // Texel (column c, row r) = (c + 1, r + 1, 1).
+    exr::prelude::write_rgba_file(dir.path().join("sky.exr"), 4, 2, |x, y| {
+        ((x + 1) as f32, (y + 1) as f32, 1.0_f32, 1.0_f32)
+    })
+    .unwrap();
+    let radiance = |stage: &str, dirs: &[([f32; 3], [f32; 2])]| {
+        let p = write(dir.path(), "dome.usda", stage);
+        let source = open(&p, CameraDesc::new(Format::new(8, 8)), &Options { camera: None }).unwrap();
+        let s = source.frame(0).unwrap();
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let lights = obscura_shading::light::Lights::new(&s.lights, dir.path()).unwrap();
+        for &(d, want) in dirs {
+            let (l, _) = lights.escaped(glam::Vec3A::from_array(d));
+            assert_eq!([l.x, l.y], want, "direction {d:?}");
+        }
+    };
+    // Longitude atan2(x, z): 45° → column 1, −45° → 2, 135° → 0, −135° → 3; y > 0 the top row.
+    radiance(
+        "#usda 1.0\n(\n    upAxis = \"Y\"\n)\ndef DomeLight \"Sky\" { asset inputs:texture:file = @sky.exr@ }\n",
+        &[
+            ([1.0, 0.3, 1.0], [2.0, 1.0]),
+            ([-1.0, 0.3, 1.0], [3.0, 1.0]),
+            ([1.0, -0.3, -1.0], [1.0, 2.0]),
+            ([-1.0, -0.3, -1.0], [4.0, 2.0]),
+        ],
+    );
+    // Z up, poleAxis "scene": USD (1, −1, 0.3) is longitude 45° above the horizon; Obscura's world
+    // is the stage turned by R_x(−90°): (x, y, z) ↦ (x, z, −y).
+    radiance(
+        "#usda 1.0\n(\n    upAxis = \"Z\"\n)\ndef DomeLight_1 \"Sky\" { asset inputs:texture:file = @sky.exr@ }\n",
+        &[([1.0, 0.3, 1.0], [2.0, 1.0]), ([-1.0, -0.3, -1.0], [4.0, 2.0])],
+    );
+}
