@@ -14,6 +14,10 @@
 //! - Visibility: `invisible` (inherited) and `purpose` `guide`/`proxy` prims are not rendered.
 //! - Material: the bound `UsdPreviewSurface`'s constant `diffuseColor`, `roughness` and
 //!   `specularColor`/`metallic` as PxrSurface, else `primvars:displayColor` (constant) as PxrDiffuse.
+//!   A mesh's `GeomSubset` children of the `materialBind` family (`elementType = face`) bind their
+//!   own material to their faces: the mesh becomes one object per material (as polygons, sharing the
+//!   points), the faces of no subset keeping the mesh's material (not yet inside PointInstancer
+//!   prototypes).
 //! - Lights: `DistantLight`, `DomeLight` (and `DomeLight_1`), `SphereLight`, `RectLight` with
 //!   `inputs:intensity`, `inputs:exposure`, `inputs:color` (and `inputs:angle`, `inputs:radius`,
 //!   `inputs:width/height`). A dome's `inputs:texture:file` (an EXR, `latlong` or `automatic`) is
@@ -105,12 +109,18 @@ pub fn build(
         } else {
             crate::shading::bound_material(&values, &stage_dir, path, time, &mut scene, &mut materials)?
         };
+        let subsets = if ty == "Mesh" {
+            material_subsets(&values, &prims, path, time)?
+        } else {
+            Vec::new()
+        };
         let shape = match ty.as_str() {
             "Mesh" => mesh(
                 &values,
                 path,
                 time,
                 bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
+                !subsets.is_empty(),
             )?,
             "Sphere" => {
                 let r = values.real(path, "radius", time, 1.0)? as f32;
@@ -149,19 +159,47 @@ pub fn build(
             Some(b) => b.material,
             None => display_color(&values, path, time, &mut scene),
         };
-        scene.objects.push(Object {
+        let object = |shape: Shape, material: u32, source: &str| Object {
             shape,
-            transform: motion,
+            transform: motion.clone(),
             material,
             micropolygon_length: 1.0,
-            source: format!("{}: <{path}>", stage.file),
+            source: format!("{}: <{source}>", stage.file),
             identity: Identity {
                 object: path.clone(),
                 instance: path.clone(),
             },
             sides: Sides::Both,
             visibility: Visibility::default(),
-        });
+        };
+        if let (false, Shape::Mesh(m)) = (subsets.is_empty(), &shape) {
+            // Per-face materials: one object per material, each with its faces' triangles.
+            let mut parts = Vec::new();
+            for (subset, _) in &subsets {
+                let b = crate::shading::bound_material(
+                    &values,
+                    &stage_dir,
+                    subset,
+                    time,
+                    &mut scene,
+                    &mut materials,
+                )?;
+                parts.push(b.map_or(material, |b| b.material));
+            }
+            for (which, triangles) in split_faces(&values, path, time, &subsets, &m.triangles)? {
+                let (material, source) = match which {
+                    Some(i) => (parts[i], subsets[i].0.as_str()),
+                    None => (material, path.as_str()),
+                };
+                let part = Mesh {
+                    triangles,
+                    ..m.clone()
+                };
+                scene.objects.push(object(Shape::Mesh(part), material, source));
+            }
+            continue;
+        }
+        scene.objects.push(object(shape, material, path));
     }
     let all_prims = if instancers.is_empty() {
         Vec::new()
@@ -256,6 +294,7 @@ fn instance(
                     path,
                     time,
                     bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
+                    false,
                 )?,
                 "Sphere" => {
                     let r = values.real(path, "radius", time, 1.0)? as f32;
@@ -528,7 +567,92 @@ fn visible(values: &Values<'_>, path: &str, time: Time) -> Result<bool, UsdError
     Ok(true)
 }
 
-fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result<Option<Shape>, UsdError> {
+/// The `GeomSubset` children of mesh `path` in the `materialBind` family with `elementType` `face`:
+/// each subset's path and its face indices.
+fn material_subsets(
+    values: &Values<'_>,
+    prims: &[(String, String)],
+    path: &str,
+    time: Time,
+) -> Result<Vec<(String, Vec<i64>)>, UsdError> {
+    let mut out = Vec::new();
+    for (child, ty) in prims {
+        let is_child = child
+            .strip_prefix(path)
+            .and_then(|rest| rest.strip_prefix('/'))
+            .is_some_and(|name| !name.contains('/'));
+        if ty != "GeomSubset" || !is_child {
+            continue;
+        }
+        let family = values.token_opt(child, "familyName", Time::Default)?;
+        let element = values
+            .token_opt(child, "elementType", Time::Default)?
+            .unwrap_or_else(|| "face".into());
+        if family.as_deref() != Some("materialBind") || element != "face" {
+            continue;
+        }
+        let indices = values.ints_opt(child, "indices", time)?.unwrap_or_default();
+        out.push((child.clone(), indices));
+    }
+    Ok(out)
+}
+
+/// The triangles of the faces of one subset (its index), or of the faces in none (`None`).
+type FaceGroup = (Option<usize>, Vec<[u32; 3]>);
+
+/// The fanned `triangles` of mesh `path` (each face's `c − 2`, in face order, as [`mesh`] makes
+/// them) grouped by the subset each face belongs to (`None`: no subset); a face listed by two subsets belongs to the first (UsdGeomSubset's
+/// `materialBind` family must not overlap). A face index outside the mesh is a located error.
+fn split_faces(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    subsets: &[(String, Vec<i64>)],
+    triangles: &[[u32; 3]],
+) -> Result<Vec<FaceGroup>, UsdError> {
+    let counts = values
+        .ints_opt(path, "faceVertexCounts", time)?
+        .unwrap_or_default();
+    let mut owner: Vec<Option<usize>> = vec![None; counts.len()];
+    for (i, (subset, faces)) in subsets.iter().enumerate() {
+        for &f in faces {
+            let slot = usize::try_from(f)
+                .ok()
+                .and_then(|f| owner.get_mut(f))
+                .ok_or_else(|| {
+                    values.error(
+                        subset,
+                        "indices",
+                        format!("face {f} is outside the {} faces of <{path}>", counts.len()),
+                    )
+                })?;
+            slot.get_or_insert(i);
+        }
+    }
+    let mut groups: Vec<FaceGroup> = Vec::new();
+    let mut next = triangles.iter();
+    for (face, &c) in counts.iter().enumerate() {
+        let which = owner[face];
+        let tris: Vec<[u32; 3]> = next
+            .by_ref()
+            .take(c.saturating_sub(2) as usize)
+            .copied()
+            .collect();
+        match groups.iter_mut().find(|(w, _)| *w == which) {
+            Some((_, g)) => g.extend(tris),
+            None => groups.push((which, tris)),
+        }
+    }
+    Ok(groups)
+}
+
+fn mesh(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    uv: Option<&str>,
+    polygons: bool,
+) -> Result<Option<Shape>, UsdError> {
     let Some(points) = values.tuples_opt(path, "points", time, 3)? else {
         return Ok(None);
     };
@@ -588,6 +712,7 @@ fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result
         None => None,
     };
     if uvs.is_none()
+        && !polygons
         && scheme == "catmullClark"
         && counts.iter().all(|&c| c >= 3)
         && !counts.is_empty()

@@ -676,3 +676,70 @@ fn a_dome_texture_is_openexrs_lat_long_as_usd_specifies() {
         &[([1.0, 0.3, 1.0], [2.0, 1.0]), ([-1.0, -0.3, -1.0], [4.0, 2.0])],
     );
 }
+
+/// `GeomSubset`s of the `materialBind` family bind materials per face: the faces of a subset render
+/// with its material, the others with the mesh's; a subset of another family changes nothing; a
+/// subdivision mesh with subsets renders as its polygons; a face index outside the mesh is a located
+/// error naming the subset.
+#[test]
+fn geom_subsets_bind_materials_per_face() {
+    let material = |name: &str, c: &str| {
+        format!(
+            "def Material \"{name}\" {{\n token outputs:surface.connect = </Looks/{name}/S.outputs:surface>\n\
+             def Shader \"S\" {{\n uniform token info:id = \"UsdPreviewSurface\"\n color3f inputs:diffuseColor = {c}\n\
+             float inputs:metallic = 0\n token outputs:surface\n }}\n}}\n"
+        )
+    };
+    let stage = |indices: &str| {
+        format!(
+            "#usda 1.0\n(\n    upAxis = \"Y\"\n)\ndef Scope \"Looks\" {{\n{}{}}}\n\
+             def Mesh \"Strip\" (\n prepend apiSchemas = [\"MaterialBindingAPI\"]\n) {{\n\
+             point3f[] points = [(0,0,0), (1,0,0), (2,0,0), (3,0,0), (0,1,0), (1,1,0), (2,1,0), (3,1,0)]\n\
+             int[] faceVertexCounts = [4, 4, 4]\n int[] faceVertexIndices = [0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6]\n\
+             rel material:binding = </Looks/Green>\n\
+             def GeomSubset \"Red\" (\n prepend apiSchemas = [\"MaterialBindingAPI\"]\n) {{\n\
+             uniform token elementType = \"face\"\n uniform token familyName = \"materialBind\"\n\
+             int[] indices = [{indices}]\n rel material:binding = </Looks/Red>\n }}\n\
+             def GeomSubset \"Other\" {{\n uniform token elementType = \"face\"\n uniform token familyName = \"parts\"\n\
+             int[] indices = [0]\n }}\n}}\n",
+            material("Green", "(0, 1, 0)"),
+            material("Red", "(1, 0, 0)")
+        )
+    };
+    let (s, _dir) = objects_of(&stage("2, 0"));
+    assert_eq!(s.objects.len(), 2, "{:?}", s.warnings);
+    let mut seen = Vec::new();
+    for o in &s.objects {
+        let obscura_scene::Shape::Mesh(m) = &o.shape else {
+            panic!("a mesh with subsets renders as its polygons")
+        };
+        let obscura_scene::Material::Surface { diffuse, .. } = &s.materials[o.material as usize] else {
+            panic!("{:?}", s.materials[o.material as usize])
+        };
+        // Which faces: each quad is two triangles whose centroid x is its face's x + ½.
+        let mut faces: Vec<u32> = m
+            .triangles
+            .iter()
+            .map(|t| (t.iter().map(|&i| m.positions[i as usize].x).sum::<f32>() / 3.0).floor() as u32)
+            .collect();
+        faces.dedup();
+        seen.push(((diffuse.r > 0.5, diffuse.g > 0.5), faces));
+    }
+    seen.sort();
+    assert_eq!(
+        seen,
+        vec![((false, true), vec![1]), ((true, false), vec![0, 2])],
+        "green on face 1, red on faces 0 and 2"
+    );
+    let e = objects_error(&stage("1, 7"));
+    assert!(
+        e.contains("/Strip/Red") && e.contains("indices") && e.contains("face 7"),
+        "{e}"
+    );
+}
+
+fn objects_error(text: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "stage.usda", text);
+    error_of(&p, None)
+}
