@@ -7,7 +7,8 @@
 //! - Motion: with `shutter:open < shutter:close`, every transform is sampled at the shutter's ends and
 //!   at each time sample in between (times relative to the frame's time code), the camera's too.
 //! - `Mesh`: `points`, `faceVertexCounts`/`Indices` (polygons fanned into triangles; `orientation =
-//!   leftHanded` reverses them), vertex `normals`; `subdivisionScheme = catmullClark` (the fallback)
+//!   leftHanded` reverses them), normals (`primvars:normals` with its indices, else `normals`) by point,
+//!   face corner or face; `subdivisionScheme = catmullClark` (the fallback)
 //!   is Obscura's own Catmull–Clark surface, `none` a polygon mesh. `Sphere` (radius), `Cube` (size),
 //!   `Cylinder` and `Cone` (radius, height, axis) are quadrics or meshes of the same shape; `Capsule`
 //!   (and `Capsule_1` with equal radii) a mesh of the cylinder of `height` between two hemispheres.
@@ -121,6 +122,7 @@ pub fn build(
                 time,
                 bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
                 !subsets.is_empty(),
+                &mut scene.warnings,
             )?,
             "Sphere" => {
                 let r = values.real(path, "radius", time, 1.0)? as f32;
@@ -295,6 +297,7 @@ fn instance(
                     time,
                     bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
                     false,
+                    &mut scene.warnings,
                 )?,
                 "Sphere" => {
                     let r = values.real(path, "radius", time, 1.0)? as f32;
@@ -652,6 +655,7 @@ fn mesh(
     time: Time,
     uv: Option<&str>,
     polygons: bool,
+    warnings: &mut Vec<String>,
 ) -> Result<Option<Shape>, UsdError> {
     let Some(points) = values.tuples_opt(path, "points", time, 3)? else {
         return Ok(None);
@@ -739,23 +743,29 @@ fn mesh(
         }
         start += c;
     }
-    let normals = values
-        .tuples_opt(path, "normals", time, 3)
-        .ok()
-        .flatten()
-        .filter(|n| n.len() == positions.len())
-        .map(|n| n.iter().map(|v| DVec3::new(v[0], v[1], v[2]).as_vec3()).collect());
-    match uvs {
-        Some(Primvar::Vertex(uv)) => Ok(Some(Shape::Mesh(Mesh {
+    let normals = normals_of(values, path, time, positions.len(), &counts, warnings)?;
+    let vertex_normals = |n: &Option<Primvar3>| match n {
+        Some(Primvar3::Vertex(n)) => Some(n.clone()),
+        _ => None,
+    };
+    match (uvs, normals) {
+        (Some(Primvar::Vertex(uv)), n @ (None | Some(Primvar3::Vertex(_)))) => Ok(Some(Shape::Mesh(Mesh {
             positions,
-            normals,
+            normals: vertex_normals(&n),
             triangles,
             uvs: vec![uv],
             colors: None,
         }))),
-        Some(Primvar::Corner(uv)) => {
-            // Face-varying coordinates: one vertex per face corner (in the file's corner order,
-            // which `face_indices` kept unless left-handed reversed it).
+        (None, n @ (None | Some(Primvar3::Vertex(_)))) => Ok(Some(Shape::Mesh(Mesh {
+            positions,
+            normals: vertex_normals(&n),
+            triangles,
+            uvs: Vec::new(),
+            colors: None,
+        }))),
+        (uvs, normals) => {
+            // Face-varying coordinates or normals: one vertex per face corner (in the file's
+            // corner order, which `face_indices` kept unless left-handed reversed it).
             let mut corner_of = Vec::with_capacity(face_indices.len());
             let mut start = 0usize;
             for &c in &counts {
@@ -769,8 +779,16 @@ fn mesh(
                 start += c;
             }
             let p: Vec<Vec3> = face_indices.iter().map(|&i| positions[i as usize]).collect();
-            let n = normals.map(|n: Vec<Vec3>| face_indices.iter().map(|&i| n[i as usize]).collect());
-            let uv = corner_of.iter().map(|&k| uv[k]).collect();
+            let n = match normals {
+                Some(Primvar3::Vertex(n)) => Some(face_indices.iter().map(|&i| n[i as usize]).collect()),
+                Some(Primvar3::Corner(n)) => Some(corner_of.iter().map(|&k| n[k]).collect()),
+                None => None,
+            };
+            let uv = match uvs {
+                Some(Primvar::Vertex(uv)) => vec![face_indices.iter().map(|&i| uv[i as usize]).collect()],
+                Some(Primvar::Corner(uv)) => vec![corner_of.iter().map(|&k| uv[k]).collect()],
+                None => Vec::new(),
+            };
             let mut tris = Vec::new();
             let mut start = 0u32;
             for &c in &counts {
@@ -784,18 +802,91 @@ fn mesh(
                 positions: p,
                 normals: n,
                 triangles: tris,
-                uvs: vec![uv],
+                uvs: uv,
                 colors: None,
             })))
         }
-        None => Ok(Some(Shape::Mesh(Mesh {
-            positions,
-            normals,
-            triangles,
-            uvs: Vec::new(),
-            colors: None,
-        }))),
     }
+}
+
+/// Normals by vertex or by face corner (a `uniform` normal repeated on its face's corners).
+enum Primvar3 {
+    Vertex(Vec<Vec3>),
+    Corner(Vec<Vec3>),
+}
+
+/// A polygon mesh's normals: `primvars:normals` (with its `:indices`) when authored, else
+/// `normals`, by their interpolation (`vertex`/`varying` per point, `faceVarying` per face corner,
+/// `uniform` per face; `constant` is none). A count that fits no interpolation is a located error.
+fn normals_of(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    points: usize,
+    counts: &[i64],
+    warnings: &mut Vec<String>,
+) -> Result<Option<Primvar3>, UsdError> {
+    let (attr, raw) = match values.tuples_opt(path, "primvars:normals", time, 3)? {
+        Some(n) => ("primvars:normals", n),
+        None => match values.tuples_opt(path, "normals", time, 3)? {
+            Some(n) => ("normals", n),
+            None => return Ok(None),
+        },
+    };
+    let flat: Vec<Vec3> = raw
+        .iter()
+        .map(|v| DVec3::new(v[0], v[1], v[2]).as_vec3())
+        .collect();
+    let data = match values.ints_opt(path, &format!("{attr}:indices"), time)? {
+        Some(ix) if attr == "primvars:normals" => ix
+            .iter()
+            .map(|&i| {
+                flat.get(i as usize).copied().ok_or_else(|| {
+                    values.error(
+                        path,
+                        &format!("{attr}:indices"),
+                        format!("index {i} outside the {} values", flat.len()),
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?,
+        _ => flat,
+    };
+    let corners = counts.iter().sum::<i64>() as usize;
+    // `normals` is vertex-interpolated unless its metadata says otherwise (UsdGeomPointBased);
+    // a primvar's fallback is constant.
+    let interpolation = match values.interpolation(path, attr).as_str() {
+        "constant" if attr == "normals" && !has_interpolation(values, path, attr) => "vertex".to_string(),
+        other => other.to_string(),
+    };
+    let uniform = |data: &[Vec3]| {
+        counts
+            .iter()
+            .zip(data)
+            .flat_map(|(&c, &n)| std::iter::repeat_n(n, c as usize))
+            .collect()
+    };
+    Ok(match interpolation.as_str() {
+        "constant" if data.len() <= 1 => None,
+        "faceVarying" if data.len() == corners => Some(Primvar3::Corner(data)),
+        "uniform" if data.len() == counts.len() => Some(Primvar3::Corner(uniform(&data))),
+        "vertex" | "varying" if data.len() == points => Some(Primvar3::Vertex(data)),
+        other => {
+            warnings.push(format!(
+                "{}: <{path}>.{attr}: {} normals with interpolation {other:?} fit neither the {points} points, \
+                 the {corners} face corners nor the {} faces; the mesh is shaded with its geometric normals",
+                values.file,
+                data.len(),
+                counts.len()
+            ));
+            None
+        }
+    })
+}
+
+/// Whether `prim.name` states its `interpolation`.
+fn has_interpolation(values: &Values<'_>, prim: &str, name: &str) -> bool {
+    values.states_metadata(prim, name, "interpolation")
 }
 
 /// True when no edge is shared by more than two faces: Catmull–Clark is defined there; a mesh

@@ -743,3 +743,90 @@ fn objects_error(text: &str) -> String {
     let p = write(dir.path(), "stage.usda", text);
     error_of(&p, None)
 }
+
+/// Normals by face corner (`faceVarying`), by face (`uniform`) and by point: each corner of the
+/// rendered mesh carries its own point and the normal the file gives that corner (indexed
+/// `primvars:normals` win over `normals`); a left-handed mesh keeps each corner's pair while its
+/// faces turn round.
+#[test]
+fn face_varying_and_uniform_normals_follow_their_corners() {
+    let points = "[(0,0,0), (1,0,0), (2,0,0), (0,1,0), (1,1,0), (2,1,0)]";
+    let topology = "int[] faceVertexCounts = [4, 4]\n int[] faceVertexIndices = [0, 1, 4, 3, 1, 2, 5, 4]\n";
+    let mesh_of = |normals: &str, left: bool| {
+        let orientation = if left {
+            "uniform token orientation = \"leftHanded\"\n"
+        } else {
+            ""
+        };
+        let (s, _dir) = objects_of(&format!(
+            "#usda 1.0\n(\n    upAxis = \"Y\"\n)\ndef Mesh \"M\" {{\n uniform token subdivisionScheme = \"none\"\n {orientation}\
+             point3f[] points = {points}\n {topology} {normals}\n}}\n"
+        ));
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let obscura_scene::Shape::Mesh(m) = &s.objects[0].shape else {
+            panic!()
+        };
+        m.clone()
+    };
+    let pts = [
+        [0., 0., 0.],
+        [1., 0., 0.],
+        [2., 0., 0.],
+        [0., 1., 0.],
+        [1., 1., 0.],
+        [2., 1., 0.],
+    ];
+    let fvi = [0usize, 1, 4, 3, 1, 2, 5, 4];
+    // Corner k's normal: (k, 1, 2)/|…|, distinct for every corner.
+    let corner_normal = |k: usize| glam::Vec3::new(k as f32, 1.0, 2.0).normalize();
+    let list = (0..8)
+        .map(|k| {
+            let n = corner_normal(k);
+            format!("({}, {}, {})", n.x, n.y, n.z)
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    for left in [false, true] {
+        let m = mesh_of(
+            &format!("normal3f[] normals = [{list}] (\n interpolation = \"faceVarying\"\n )"),
+            left,
+        );
+        let n = m.normals.as_ref().expect("normals");
+        assert_eq!(m.positions.len(), 8);
+        for face in 0..2 {
+            for j in 0..4 {
+                // Output corner j of the face is file corner j (or 3 − j when left-handed).
+                let k = face * 4 + if left { 3 - j } else { j };
+                let i = face * 4 + j;
+                assert_eq!(
+                    m.positions[i].to_array(),
+                    pts[fvi[k]].map(|v: f64| v as f32),
+                    "corner {i}"
+                );
+                assert!(
+                    (n[i] - corner_normal(k)).length() < 1e-6,
+                    "corner {i}: {:?}",
+                    n[i]
+                );
+            }
+        }
+    }
+    // Uniform, through an indexed primvar that wins over `normals`.
+    let m = mesh_of(
+        "normal3f[] primvars:normals = [(0, 0, 1), (1, 0, 0)] (\n interpolation = \"uniform\"\n )\n \
+         int[] primvars:normals:indices = [1, 0]\n normal3f[] normals = [(0,1,0), (0,1,0), (0,1,0), (0,1,0), (0,1,0), (0,1,0)]",
+        false,
+    );
+    let n = m.normals.unwrap();
+    assert!(
+        n[..4].iter().all(|v| *v == glam::Vec3::X) && n[4..].iter().all(|v| *v == glam::Vec3::Z),
+        "{n:?}"
+    );
+    // Per point (no interpolation stated: `normals` is vertex-interpolated).
+    let m = mesh_of(
+        "normal3f[] normals = [(0,0,1), (0,0,1), (0,0,1), (0,1,0), (0,1,0), (0,1,0)]",
+        false,
+    );
+    assert_eq!(m.positions.len(), 6);
+    assert_eq!(m.normals.unwrap()[4], glam::Vec3::Y);
+}
