@@ -22,6 +22,7 @@ fn data(name: &str) -> PathBuf {
 fn scene(file: &Path, camera: Option<&str>, w: u32, h: u32, frame: u32) -> Scene {
     let options = Options {
         camera: camera.map(str::to_string),
+        ..Options::default()
     };
     let source = open(file, CameraDesc::new(Format::new(w, h)), &options).unwrap();
     source.frame(frame).unwrap()
@@ -348,6 +349,7 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 fn error_of(path: &Path, camera: Option<&str>) -> String {
     let options = Options {
         camera: camera.map(str::to_string),
+        ..Options::default()
     };
     match open(path, CameraDesc::new(Format::new(16, 16)), &options) {
         Err(e) => e.to_string(),
@@ -588,7 +590,10 @@ fn hdprman_camera_attributes_and_lens_distortion_are_read_as_hdprman_reads_them(
 fn objects_of(text: &str) -> (Scene, tempfile::TempDir) {
     let dir = tempfile::tempdir().unwrap();
     let p = write(dir.path(), "stage.usda", text);
-    let options = Options { camera: None };
+    let options = Options {
+        camera: None,
+        ..Options::default()
+    };
     let source = open(&p, CameraDesc::new(Format::new(16, 16)), &options).unwrap();
     (source.frame(0).unwrap(), dir)
 }
@@ -650,7 +655,15 @@ fn a_dome_texture_is_openexrs_lat_long_as_usd_specifies() {
     .unwrap();
     let radiance = |stage: &str, dirs: &[([f32; 3], [f32; 2])]| {
         let p = write(dir.path(), "dome.usda", stage);
-        let source = open(&p, CameraDesc::new(Format::new(8, 8)), &Options { camera: None }).unwrap();
+        let source = open(
+            &p,
+            CameraDesc::new(Format::new(8, 8)),
+            &Options {
+                camera: None,
+                ..Options::default()
+            },
+        )
+        .unwrap();
         let s = source.frame(0).unwrap();
         assert!(s.warnings.is_empty(), "{:?}", s.warnings);
         let lights = obscura_shading::light::Lights::new(&s.lights, dir.path()).unwrap();
@@ -829,4 +842,60 @@ fn face_varying_and_uniform_normals_follow_their_corners() {
     );
     assert_eq!(m.positions.len(), 6);
     assert_eq!(m.normals.unwrap()[4], glam::Vec3::Y);
+}
+
+/// Without a size from the caller (`product_resolution`), the RenderSettings' first product's
+/// `resolution` and `pixelAspectRatio` are the image's (a product's value over the settings'), and
+/// the gate is fitted to that image; with the caller's size they are not read. A bad resolution is a
+/// located error.
+#[test]
+fn the_render_products_resolution_is_the_image_size_when_none_is_given() {
+    let stage = |resolution: &str| {
+        format!(
+            "#usda 1.0\n(\n    renderSettingsPrimPath = \"/Render/Settings\"\n)\n\
+             def Camera \"Cam\" {{\n float horizontalAperture = 36\n float verticalAperture = 24\n}}\n\
+             def Scope \"Render\" {{\n def RenderSettings \"Settings\" {{\n rel camera = </Cam>\n\
+             rel products = </Render/Product>\n uniform int2 resolution = (64, 64)\n\
+             uniform float pixelAspectRatio = 2\n }}\n\
+             def RenderProduct \"Product\" {{\n uniform int2 resolution = {resolution}\n }}\n}}\n"
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "product.usda", &stage("(320, 90)"));
+    let with = |product_resolution: bool| {
+        let options = Options {
+            camera: None,
+            product_resolution,
+        };
+        open(&p, CameraDesc::new(Format::new(16, 16)), &options)
+            .unwrap()
+            .frame(0)
+            .unwrap()
+    };
+    let s = with(true);
+    let f = s.camera.format;
+    assert_eq!((f.width, f.height, f.pixel_aspect), (320, 90, 2.0));
+    // The 36 × 24 gate expanded to the image's aspect 320·2/90 (wider): 24 high, 24·640/90 wide,
+    // over focal length 50.
+    let w = s.camera.screen_window();
+    let half_w = 24.0 * 640.0 / 90.0 / 2.0 / 50.0;
+    assert!(
+        (w.right - half_w).abs() < 1e-6 && (w.top - 0.24).abs() < 1e-6,
+        "{w:?}"
+    );
+    let s = with(false);
+    assert_eq!((s.camera.format.width, s.camera.format.height), (16, 16));
+    let bad = write(dir.path(), "bad.usda", &stage("(320, 0)"));
+    let options = Options {
+        camera: None,
+        product_resolution: true,
+    };
+    let e = open(&bad, CameraDesc::new(Format::new(16, 16)), &options)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("/Render/Product") && e.contains("resolution") && e.contains("bad.usda"),
+        "{e}"
+    );
 }
