@@ -837,20 +837,10 @@ fn normals_of(
         .iter()
         .map(|v| DVec3::new(v[0], v[1], v[2]).as_vec3())
         .collect();
-    let data = match values.ints_opt(path, &format!("{attr}:indices"), time)? {
-        Some(ix) if attr == "primvars:normals" => ix
-            .iter()
-            .map(|&i| {
-                flat.get(i as usize).copied().ok_or_else(|| {
-                    values.error(
-                        path,
-                        &format!("{attr}:indices"),
-                        format!("index {i} outside the {} values", flat.len()),
-                    )
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?,
-        _ => flat,
+    let data = if attr == "primvars:normals" {
+        indexed(values, path, attr, time, flat)?
+    } else {
+        flat
     };
     let corners = counts.iter().sum::<i64>() as usize;
     // `normals` is vertex-interpolated unless its metadata says otherwise (UsdGeomPointBased);
@@ -882,6 +872,37 @@ fn normals_of(
             None
         }
     })
+}
+
+/// A primvar's values `flat` expanded through its `<attr>:indices` when authored; an index outside
+/// the values is a located error.
+fn indexed<T: Copy>(
+    values: &Values<'_>,
+    path: &str,
+    attr: &str,
+    time: Time,
+    flat: Vec<T>,
+) -> Result<Vec<T>, UsdError> {
+    let name = format!("{attr}:indices");
+    match values.ints_opt(path, &name, time)? {
+        Some(ix) => ix
+            .iter()
+            .map(|&i| {
+                usize::try_from(i)
+                    .ok()
+                    .and_then(|i| flat.get(i))
+                    .copied()
+                    .ok_or_else(|| {
+                        values.error(
+                            path,
+                            &name,
+                            format!("index {i} outside the {} values", flat.len()),
+                        )
+                    })
+            })
+            .collect(),
+        None => Ok(flat),
+    }
 }
 
 /// Whether `prim.name` states its `interpolation`.
@@ -933,21 +954,7 @@ fn primvar2(
         .iter()
         .map(|v| glam::Vec2::new(v[0] as f32, 1.0 - v[1] as f32))
         .collect();
-    let data = match values.ints_opt(path, &format!("{attr}:indices"), time)? {
-        Some(ix) => ix
-            .iter()
-            .map(|&i| {
-                flat.get(i as usize).copied().ok_or_else(|| {
-                    values.error(
-                        path,
-                        &format!("{attr}:indices"),
-                        format!("index {i} outside the {} values", flat.len()),
-                    )
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?,
-        None => flat,
-    };
+    let data = indexed(values, path, &attr, time, flat)?;
     let interpolation = values.interpolation(path, &attr);
     Ok(match interpolation.as_str() {
         "faceVarying" if data.len() == corners => Some(Primvar::Corner(data)),
