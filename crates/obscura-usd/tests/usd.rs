@@ -899,3 +899,43 @@ fn the_render_products_resolution_is_the_image_size_when_none_is_given() {
         "{e}"
     );
 }
+
+/// `--export-usd` of a PxrCamera with distortion writes Hydra's `lensDistortion:*`, which read back
+/// give the same rays; a window hdPrman's normalisation cannot express is refused, not dropped.
+#[test]
+fn an_exported_pxrcamera_distortion_reads_back_as_the_same_rays() {
+    let file = data("ri_camera.usda");
+    // 20 × 16 is narrower than the 20.955 × 15.2908 gate: the gate keeps its width.
+    let s = scene(&file, Some("Centred"), 20, 16, 1);
+    let text = obscura_usd::export::camera_usda(
+        &[obscura_usd::export::Frame {
+            time_code: 1.0,
+            scene: &s,
+        }],
+        24.0,
+    )
+    .unwrap();
+    assert!(text.contains("float lensDistortion:k1 = 0.05"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "back.usda", &text);
+    let back = scene(&p, None, 20, 16, 1);
+    assert_eq!(back.projection, "PxrCamera");
+    let at = grid(20.0, 16.0, 5);
+    let worst = rays(&s, &at)
+        .into_iter()
+        .zip(rays(&back, &at))
+        .map(|(a, b)| angle(a, b))
+        .fold(0.0, f64::max);
+    assert!(worst <= RAY_TOLERANCE, "worst {worst:e} rad");
+    // The offset gate of /World/Warped is not centred on the distortion's axis of symmetry.
+    let w = scene(&file, Some("Warped"), 24, 16, 1);
+    let e = obscura_usd::export::camera_usda(
+        &[obscura_usd::export::Frame {
+            time_code: 1.0,
+            scene: &w,
+        }],
+        24.0,
+    )
+    .unwrap_err();
+    assert!(e.contains("lensDistortion"), "{e}");
+}
