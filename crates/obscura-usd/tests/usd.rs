@@ -688,6 +688,30 @@ fn a_dome_texture_is_openexrs_lat_long_as_usd_specifies() {
         "#usda 1.0\n(\n    upAxis = \"Z\"\n)\ndef DomeLight_1 \"Sky\" { asset inputs:texture:file = @sky.exr@ }\n",
         &[([1.0, 0.3, 1.0], [2.0, 1.0]), ([-1.0, -0.3, -1.0], [4.0, 2.0])],
     );
+    // A layout or a file PxrDomeLight cannot read: a warning naming the prim and the attribute,
+    // and the dome lights with its colour.
+    for (attrs, why) in [
+        (
+            "asset inputs:texture:file = @sky.exr@\n token inputs:texture:format = \"angular\"",
+            "angular",
+        ),
+        ("asset inputs:texture:file = @sky.hdr@", "OpenEXR"),
+        ("asset inputs:texture:file = @missing.exr@", "does not exist"),
+    ] {
+        let p = write(
+            dir.path(),
+            "dome.usda",
+            &format!("#usda 1.0\ndef DomeLight \"Sky\" {{\n {attrs}\n}}\n"),
+        );
+        let source = open(&p, CameraDesc::new(Format::new(8, 8)), &Options::default()).unwrap();
+        let s = source.frame(0).unwrap();
+        let w = s.warnings.join("\n");
+        assert!(w.contains("Sky>.inputs:texture:file") && w.contains(why), "{w}");
+        let obscura_scene::Light::Dome { map, .. } = &s.lights[0] else {
+            panic!()
+        };
+        assert!(map.is_none());
+    }
 }
 
 /// `GeomSubset`s of the `materialBind` family bind materials per face: the faces of a subset render
