@@ -1033,18 +1033,22 @@ fn round(values: &Values<'_>, path: &str, ty: &str, time: Time) -> Result<Mesh, 
         triangles.push([cb, b0, a0]);
         triangles.push([ct, a1, b1]);
     }
-    let to_axis = |p: Vec3| match axis.as_str() {
-        "X" => Vec3::new(p.z, p.x, p.y),
-        "Y" => Vec3::new(p.y, p.z, p.x),
-        _ => p,
-    };
     Ok(Mesh {
-        positions: positions.into_iter().map(to_axis).collect(),
+        positions: positions.into_iter().map(|p| to_axis(&axis, p)).collect(),
         normals: None,
         triangles,
         uvs: Vec::new(),
         colors: None,
     })
+}
+
+/// A point of a primitive built along +Z, turned so that +Z becomes its `axis` (`X`, `Y` or `Z`).
+fn to_axis(axis: &str, p: Vec3) -> Vec3 {
+    match axis {
+        "X" => Vec3::new(p.z, p.x, p.y),
+        "Y" => Vec3::new(p.y, p.z, p.x),
+        _ => p,
+    }
 }
 
 /// A constant `primvars:displayColor` as a PxrDiffuse material (0, the default, without one).
@@ -1256,13 +1260,8 @@ fn capsule(
             triangles.push([a0, b1, b0]);
         }
     }
-    let to_axis = |p: Vec3| match axis.as_str() {
-        "X" => Vec3::new(p.z, p.x, p.y),
-        "Y" => Vec3::new(p.y, p.z, p.x),
-        _ => p,
-    };
     Ok(Some(Mesh {
-        positions: positions.into_iter().map(to_axis).collect(),
+        positions: positions.into_iter().map(|p| to_axis(&axis, p)).collect(),
         normals: None,
         triangles,
         uvs: Vec::new(),
