@@ -130,7 +130,8 @@ struct RenderArgs {
     /// A projection parameter: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable.
     #[arg(long = "param", value_name = "PARAM")]
     params: Vec<String>,
-    /// Image size in pixels, WIDTHxHEIGHT.
+    /// Image size in pixels, WIDTHxHEIGHT (default: the scene's — RIB Format, a USD stage's
+    /// RenderProduct resolution — else 640x480).
     #[arg(long, value_parser = parse_format)]
     format: Option<(u32, u32)>,
     /// Samples per pixel (default: the scene's Hider maxsamples).

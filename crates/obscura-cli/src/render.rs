@@ -281,6 +281,8 @@ pub fn render(a: &RenderArgs, search: &PluginSearch) -> Result<(), String> {
     }
     let usd = obscura_usd::Options {
         camera: a.camera.clone().filter(|_| a.calibration.is_none()),
+        // Without --format (or a calibration's size) the stage's RenderProduct sets the image size.
+        product_resolution: a.format.is_none() && a.calibration.is_none(),
     };
     let source = job::open_scene_with(a.scene.as_deref(), Format::new(width, height), a.fps, &usd)
         .map_err(|e| e.to_string())?;

@@ -97,9 +97,11 @@ def compare_stage(pxr, obscura_bin, path):
     return checked
 
 
-@pytest.mark.parametrize("name", ["cameras.usda", "lenses.usda", "ri_projection.usda", "instancer.usda"])
-def test_our_stages_match_usd_core(pxr, obscura_bin, name):
-    assert compare_stage(pxr, obscura_bin, DATA / name) >= 0
+@pytest.mark.parametrize("path", [DATA / n for n in ("cameras.usda", "lenses.usda", "ri_projection.usda",
+                                                      "ri_camera.usda", "instancer.usda")]
+                         + [ROOT / "examples" / "usd" / "whip-pan.usda"], ids=lambda p: p.name)
+def test_our_stages_match_usd_core(pxr, obscura_bin, path):
+    assert compare_stage(pxr, obscura_bin, path) >= 0
 
 
 def corpus_stages():

@@ -33,6 +33,10 @@
 //! `fStop`, `focalLength = f/10` (scene units) and `focalDistance`. The exposure scale
 //! `2^exposure · (time · iso/100 · responsivity)/fStop²` is the image's gain.
 //!
+//! With Hydra's `lensDistortion:*` authored (see [`crate::ri::RiCamera`]) a perspective camera renders
+//! through `PxrCamera` as hdPrman sets it up: `fov = 2·atan(W/2f)` and the screen window above times
+//! `f/(W/2)`, so the same rays before distortion, with the distortion's `x = ±1` at the gate's sides.
+//!
 //! # Fitting the gate to the image (`aspectRatioConformPolicy`)
 //!
 //! The image's aspect `A = width·pixelAspect/height` and the gate's `a = W/H` are reconciled as

@@ -10,6 +10,9 @@
 //!   `horizontalApertureOffset = (r + l)/2·k` (likewise vertical) with `k = 50·tan(fov/2)`, so each
 //!   screen point keeps its ray; an orthographic window `×10` (tenths of a scene unit);
 //! - `clippingRange`, `shutter:open/close`, and `fStop`/`focusDistance` when the lens has depth of field;
+//! - for `PxrCamera` with distortion, Hydra's `lensDistortion:k1`, `k2`, `anaSq`, `asym` (the inverse of
+//!   [`crate::ri::LensDistortion`]) when its screen window spans `x ∈ [−1, 1]`, where hdPrman's
+//!   normalisation to half the horizontal aperture is the same; otherwise the export is refused;
 //! - for `CalibratedCamera` with `OPENCV_PINHOLE`, `KANNALA_BRANDT`/`OPENCV_FISHEYE` or `FTHETA`, the
 //!   matching `OmniLensDistortion*API` applied with every attribute (the inverse of [`crate::lens`]).
 //!
@@ -125,6 +128,35 @@ fn attributes(scene: &Scene) -> Result<Attributes, String> {
                 "float verticalApertureOffset = {}",
                 num((t + b) / 2.0 * k)
             ));
+            if scene.projection == "PxrCamera" {
+                // PxrCamera's distortion as Hydra's lensDistortion:*, the inverse of
+                // `ri::LensDistortion` (hdPrman normalises it to half the horizontal aperture).
+                let one = |n: &str, d: f64| floats(n).and_then(|v| v.first().copied()).unwrap_or(d);
+                let d = [
+                    one("radial1", 0.0),
+                    one("radial2", 0.0),
+                    one("squeeze", 1.0),
+                    one("assymX", 0.0),
+                    one("assymY", 0.0),
+                ];
+                if d != [0.0, 0.0, 1.0, 0.0, 0.0] {
+                    if (l + 1.0).abs() > 1e-6 || (r - 1.0).abs() > 1e-6 {
+                        return Err(format!(
+                            "PxrCamera's distortion (radial1, radial2, squeeze, assymX, assymY) is measured on its screen \
+                             window [{l}, {r}] across; USD's lensDistortion:* on half the horizontal aperture, so it \
+                             is exported only for a window spanning x from -1 to 1"
+                        ));
+                    }
+                    attr(format!("float lensDistortion:k1 = {}", num(d[0])));
+                    attr(format!("float lensDistortion:k2 = {}", num(d[1])));
+                    attr(format!("float lensDistortion:anaSq = {}", num(d[2])));
+                    attr(format!(
+                        "float2 lensDistortion:asym = ({}, {})",
+                        num(d[3]),
+                        num(d[4])
+                    ));
+                }
+            }
             let f_stop = floats("fStop").and_then(|v| v.first().copied());
             let distance = floats("focalDistance").and_then(|v| v.first().copied());
             if let (Some(f), Some(d)) = (f_stop, distance)

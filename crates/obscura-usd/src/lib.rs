@@ -89,6 +89,10 @@ pub fn is_usd(path: &Path) -> bool {
 pub struct Options {
     /// The camera prim to render through (`--camera PRIM`): a path, or a prim name found anywhere.
     pub camera: Option<String>,
+    /// Take the image size from the stage: the RenderSettings' first product's `resolution` and
+    /// `pixelAspectRatio` (else the RenderSettings' own), where authored. The command line sets it
+    /// when it is given no `--format`; otherwise the caller's size stands.
+    pub product_resolution: bool,
 }
 
 /// An opened stage: its metadata and cameras.
@@ -273,6 +277,55 @@ impl Stage {
         })
     }
 
+    /// Sets `format` from the RenderSettings' first product's `resolution` (int2) and
+    /// `pixelAspectRatio`, each where authored (a product's value over the settings'); the schema's
+    /// fallbacks (2048 × 1080, 1) are not applied, so a stage that states no size keeps `format`.
+    ///
+    /// # Errors
+    /// A located [`UsdError`]: a resolution that is not two whole numbers in 1…65536, a pixel aspect
+    /// that is not positive and finite.
+    pub fn product_format(&self, format: &mut obscura_sdk::Format) -> Result<(), UsdError> {
+        let Some(settings) = self.render_settings() else {
+            return Ok(());
+        };
+        let values = self.values();
+        let mut prims = values.targets(&settings, "products");
+        prims.truncate(1);
+        prims.push(settings);
+        for prim in &prims {
+            if let Some(r) = values.reals_opt(prim, "resolution", Time::Default, 2)? {
+                let whole = |v: f64| v.fract() == 0.0 && (1.0..=65536.0).contains(&v);
+                if !(whole(r[0]) && whole(r[1])) {
+                    return Err(values.error(
+                        prim,
+                        "resolution",
+                        format!(
+                            "expected two whole numbers of pixels in 1…65536, found ({}, {})",
+                            r[0], r[1]
+                        ),
+                    ));
+                }
+                format.width = r[0] as u32;
+                format.height = r[1] as u32;
+                break;
+            }
+        }
+        for prim in &prims {
+            if let Some(a) = values.real_opt(prim, "pixelAspectRatio", Time::Default)? {
+                if !(a.is_finite() && a > 0.0) {
+                    return Err(values.error(
+                        prim,
+                        "pixelAspectRatio",
+                        format!("expected a positive pixel aspect, found {a}"),
+                    ));
+                }
+                format.pixel_aspect = a as f32;
+                break;
+            }
+        }
+        Ok(())
+    }
+
     /// The camera to render through: `--camera` (a path, or a prim name), else the RenderSettings'
     /// `camera` (or its first product's), else a camera named `main_cam` (USD's primary camera
     /// name), else the first camera; `None` when the stage has none. The note says which was
@@ -376,6 +429,10 @@ impl UsdSource {
 /// A located [`UsdError`] (as a [`LoadError`]).
 pub fn open(path: &Path, camera: CameraDesc, options: &Options) -> Result<UsdSource, LoadError> {
     let stage = Stage::open(path)?;
+    let mut camera = camera;
+    if options.product_resolution {
+        stage.product_format(&mut camera.format)?;
+    }
     let (camera_prim, note) = stage.choose_camera(options.camera.as_deref())?;
     let mut notes = stage.warnings.clone();
     notes.extend(note);

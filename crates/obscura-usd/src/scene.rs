@@ -7,14 +7,24 @@
 //! - Motion: with `shutter:open < shutter:close`, every transform is sampled at the shutter's ends and
 //!   at each time sample in between (times relative to the frame's time code), the camera's too.
 //! - `Mesh`: `points`, `faceVertexCounts`/`Indices` (polygons fanned into triangles; `orientation =
-//!   leftHanded` reverses them), vertex `normals`; `subdivisionScheme = catmullClark` (the fallback)
+//!   leftHanded` reverses them), normals (`primvars:normals` with its indices, else `normals`) by point,
+//!   face corner or face; `subdivisionScheme = catmullClark` (the fallback)
 //!   is Obscura's own Catmull–Clark surface, `none` a polygon mesh. `Sphere` (radius), `Cube` (size),
-//!   `Cylinder` and `Cone` (radius, height, axis) are quadrics or meshes of the same shape.
+//!   `Cylinder` and `Cone` (radius, height, axis) are quadrics or meshes of the same shape; `Capsule`
+//!   (and `Capsule_1` with equal radii) a mesh of the cylinder of `height` between two hemispheres.
 //! - Visibility: `invisible` (inherited) and `purpose` `guide`/`proxy` prims are not rendered.
 //! - Material: the bound `UsdPreviewSurface`'s constant `diffuseColor`, `roughness` and
 //!   `specularColor`/`metallic` as PxrSurface, else `primvars:displayColor` (constant) as PxrDiffuse.
-//! - Lights: `DistantLight`, `DomeLight`, `SphereLight`, `RectLight` with `inputs:intensity`,
-//!   `inputs:exposure`, `inputs:color` (and `inputs:angle`, `inputs:radius`, `inputs:width/height`).
+//!   A mesh's `GeomSubset` children of the `materialBind` family (`elementType = face`) bind their
+//!   own material to their faces: the mesh becomes one object per material (as polygons, sharing the
+//!   points), the faces of no subset keeping the mesh's material (not yet inside PointInstancer
+//!   prototypes).
+//! - Lights: `DistantLight`, `DomeLight` (and `DomeLight_1`), `SphereLight`, `RectLight` with
+//!   `inputs:intensity`, `inputs:exposure`, `inputs:color` (and `inputs:angle`, `inputs:radius`,
+//!   `inputs:width/height`). A dome's `inputs:texture:file` (an EXR, `latlong` or `automatic`) is
+//!   PxrDomeLight's map in USD's orientation, OpenEXR's lat-long layout: for a light-space direction
+//!   `d`, `u = ½ − atan2(d.x, d.z)/2π`, `v = acos(d.y)/π` (Obscura's dome mirrored in x); a
+//!   `DomeLight_1` whose `poleAxis` is `Z` (or `scene` on a Z-up stage) is first turned by `R_x(90°)`.
 //! - IDs: each object's name and instance name are its prim path.
 
 use glam::{DMat4, DVec3, Mat4, Vec3};
@@ -83,8 +93,11 @@ pub fn build(
                 | "Cube"
                 | "Cylinder"
                 | "Cone"
+                | "Capsule"
+                | "Capsule_1"
                 | "DistantLight"
                 | "DomeLight"
+                | "DomeLight_1"
                 | "SphereLight"
                 | "RectLight"
         ) || !visible(&values, path, time)?
@@ -97,12 +110,19 @@ pub fn build(
         } else {
             crate::shading::bound_material(&values, &stage_dir, path, time, &mut scene, &mut materials)?
         };
+        let subsets = if ty == "Mesh" {
+            material_subsets(&values, &prims, path, time)?
+        } else {
+            Vec::new()
+        };
         let shape = match ty.as_str() {
             "Mesh" => mesh(
                 &values,
                 path,
                 time,
                 bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
+                !subsets.is_empty(),
+                &mut scene.warnings,
             )?,
             "Sphere" => {
                 let r = values.real(path, "radius", time, 1.0)? as f32;
@@ -115,10 +135,21 @@ pub fn build(
             }
             "Cube" => Some(Shape::Mesh(cube(values.real(path, "size", time, 2.0)? as f32))),
             "Cylinder" | "Cone" => Some(Shape::Mesh(round(&values, path, ty, time)?)),
+            "Capsule" | "Capsule_1" => {
+                capsule(&values, path, ty, time, &mut scene.warnings)?.map(Shape::Mesh)
+            }
             light_type => {
-                scene
-                    .lights
-                    .push(light(&values, path, light_type, time, motion.samples[0].1)?);
+                let transform = motion.samples[0].1;
+                let light = light(
+                    &values,
+                    path,
+                    light_type,
+                    time,
+                    transform,
+                    stage,
+                    &mut scene.warnings,
+                )?;
+                scene.lights.push(light);
                 continue;
             }
         };
@@ -130,19 +161,47 @@ pub fn build(
             Some(b) => b.material,
             None => display_color(&values, path, time, &mut scene),
         };
-        scene.objects.push(Object {
+        let object = |shape: Shape, material: u32, source: &str| Object {
             shape,
-            transform: motion,
+            transform: motion.clone(),
             material,
             micropolygon_length: 1.0,
-            source: format!("{}: <{path}>", stage.file),
+            source: format!("{}: <{source}>", stage.file),
             identity: Identity {
                 object: path.clone(),
                 instance: path.clone(),
             },
             sides: Sides::Both,
             visibility: Visibility::default(),
-        });
+        };
+        if let (false, Shape::Mesh(m)) = (subsets.is_empty(), &shape) {
+            // Per-face materials: one object per material, each with its faces' triangles.
+            let mut parts = Vec::new();
+            for (subset, _) in &subsets {
+                let b = crate::shading::bound_material(
+                    &values,
+                    &stage_dir,
+                    subset,
+                    time,
+                    &mut scene,
+                    &mut materials,
+                )?;
+                parts.push(b.map_or(material, |b| b.material));
+            }
+            for (which, triangles) in split_faces(&values, path, time, &subsets, &m.triangles)? {
+                let (material, source) = match which {
+                    Some(i) => (parts[i], subsets[i].0.as_str()),
+                    None => (material, path.as_str()),
+                };
+                let part = Mesh {
+                    triangles,
+                    ..m.clone()
+                };
+                scene.objects.push(object(Shape::Mesh(part), material, source));
+            }
+            continue;
+        }
+        scene.objects.push(object(shape, material, path));
     }
     let all_prims = if instancers.is_empty() {
         Vec::new()
@@ -237,6 +296,8 @@ fn instance(
                     path,
                     time,
                     bound.as_ref().and_then(|b| b.uv_primvar.as_deref()),
+                    false,
+                    &mut scene.warnings,
                 )?,
                 "Sphere" => {
                     let r = values.real(path, "radius", time, 1.0)? as f32;
@@ -382,25 +443,62 @@ fn set_camera(
             scene.warnings.push(e.to_string());
         }
     };
+    let ri_camera = crate::ri::RiCamera::read(stage, &cam.path, Time::Code(t))?;
+    ri_camera.apply(stage, &cam.path, &mut scene.camera)?;
+    let distortion_unused = |scene: &mut Scene, why: &str| {
+        if ri_camera.lens_distortion.is_some() {
+            scene.warnings.push(format!(
+                "{}: <{}>: lensDistortion:* is not applied: {why} (hdPrman gives it to the perspective PxrCamera only)",
+                stage.file, cam.path
+            ));
+        }
+    };
     if let Some(lens) = stage.lens(&cam.path, Time::Code(t))? {
         scene.projection = "CalibratedCamera".into();
         scene.projection_params = lens.param_list(&format!("{}: <{}> {}", stage.file, cam.path, lens.schema));
         scene.camera.screen_window = None;
+        distortion_unused(scene, &format!("the camera renders through {}", lens.schema));
         return Ok(());
     }
     if let Some(ri) = crate::ri::projection(stage, &cam.path, Time::Code(t))?
         && ri.name != "PxrPerspective"
     {
+        distortion_unused(
+            scene,
+            &format!("the camera renders through {} from <{}>", ri.name, ri.source),
+        );
         scene.projection = ri.name;
         scene.projection_params = ri.params;
         return Ok(());
     }
     if cam.projection == "orthographic" {
+        distortion_unused(scene, "the camera is orthographic");
         scene.projection = "PxrOrthographic".into();
         return Ok(());
     }
-    scene.projection = "PxrPerspective".into();
-    push(scene, "float fov", 90.0, "focalLength");
+    if let Some(d) = &ri_camera.lens_distortion {
+        // hdPrman's PxrCamera: fov = 2·atan(W/2f) over the screen window normalised by half the
+        // camera's own horizontal aperture, so the distortion's x is ±1 at the gate's sides.
+        scene.projection = "PxrCamera".into();
+        let half = cam.horizontal_aperture / 2.0;
+        let fov = 2.0 * (half / cam.focal_length).atan().to_degrees();
+        push(scene, "float fov", fov as f32, "focalLength");
+        let k = cam.focal_length / half;
+        scene.camera.screen_window = Some(ScreenWindow::new(
+            (l * k) as f32,
+            (r * k) as f32,
+            (b * k) as f32,
+            (top * k) as f32,
+        ));
+        let (params, warnings) = d.pxrcamera_params(&stage.file, &cam.path);
+        for (decl, v, attr) in params {
+            push(scene, decl, v, attr);
+        }
+        scene.warnings.extend(warnings);
+    } else {
+        scene.projection = "PxrPerspective".into();
+        push(scene, "float fov", 90.0, "focalLength");
+    }
     if cam.f_stop > 0.0 && cam.focus_distance > 0.0 {
         push(scene, "float fStop", cam.f_stop as f32, "fStop");
         push(
@@ -472,7 +570,93 @@ fn visible(values: &Values<'_>, path: &str, time: Time) -> Result<bool, UsdError
     Ok(true)
 }
 
-fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result<Option<Shape>, UsdError> {
+/// The `GeomSubset` children of mesh `path` in the `materialBind` family with `elementType` `face`:
+/// each subset's path and its face indices.
+fn material_subsets(
+    values: &Values<'_>,
+    prims: &[(String, String)],
+    path: &str,
+    time: Time,
+) -> Result<Vec<(String, Vec<i64>)>, UsdError> {
+    let mut out = Vec::new();
+    for (child, ty) in prims {
+        let is_child = child
+            .strip_prefix(path)
+            .and_then(|rest| rest.strip_prefix('/'))
+            .is_some_and(|name| !name.contains('/'));
+        if ty != "GeomSubset" || !is_child {
+            continue;
+        }
+        let family = values.token_opt(child, "familyName", Time::Default)?;
+        let element = values
+            .token_opt(child, "elementType", Time::Default)?
+            .unwrap_or_else(|| "face".into());
+        if family.as_deref() != Some("materialBind") || element != "face" {
+            continue;
+        }
+        let indices = values.ints_opt(child, "indices", time)?.unwrap_or_default();
+        out.push((child.clone(), indices));
+    }
+    Ok(out)
+}
+
+/// The triangles of the faces of one subset (its index), or of the faces in none (`None`).
+type FaceGroup = (Option<usize>, Vec<[u32; 3]>);
+
+/// The fanned `triangles` of mesh `path` (each face's `c − 2`, in face order, as [`mesh`] makes
+/// them) grouped by the subset each face belongs to (`None`: no subset); a face listed by two subsets belongs to the first (UsdGeomSubset's
+/// `materialBind` family must not overlap). A face index outside the mesh is a located error.
+fn split_faces(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    subsets: &[(String, Vec<i64>)],
+    triangles: &[[u32; 3]],
+) -> Result<Vec<FaceGroup>, UsdError> {
+    let counts = values
+        .ints_opt(path, "faceVertexCounts", time)?
+        .unwrap_or_default();
+    let mut owner: Vec<Option<usize>> = vec![None; counts.len()];
+    for (i, (subset, faces)) in subsets.iter().enumerate() {
+        for &f in faces {
+            let slot = usize::try_from(f)
+                .ok()
+                .and_then(|f| owner.get_mut(f))
+                .ok_or_else(|| {
+                    values.error(
+                        subset,
+                        "indices",
+                        format!("face {f} is outside the {} faces of <{path}>", counts.len()),
+                    )
+                })?;
+            slot.get_or_insert(i);
+        }
+    }
+    let mut groups: Vec<FaceGroup> = Vec::new();
+    let mut next = triangles.iter();
+    for (face, &c) in counts.iter().enumerate() {
+        let which = owner[face];
+        let tris: Vec<[u32; 3]> = next
+            .by_ref()
+            .take(c.saturating_sub(2) as usize)
+            .copied()
+            .collect();
+        match groups.iter_mut().find(|(w, _)| *w == which) {
+            Some((_, g)) => g.extend(tris),
+            None => groups.push((which, tris)),
+        }
+    }
+    Ok(groups)
+}
+
+fn mesh(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    uv: Option<&str>,
+    polygons: bool,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Shape>, UsdError> {
     let Some(points) = values.tuples_opt(path, "points", time, 3)? else {
         return Ok(None);
     };
@@ -532,6 +716,7 @@ fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result
         None => None,
     };
     if uvs.is_none()
+        && !polygons
         && scheme == "catmullClark"
         && counts.iter().all(|&c| c >= 3)
         && !counts.is_empty()
@@ -558,23 +743,29 @@ fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result
         }
         start += c;
     }
-    let normals = values
-        .tuples_opt(path, "normals", time, 3)
-        .ok()
-        .flatten()
-        .filter(|n| n.len() == positions.len())
-        .map(|n| n.iter().map(|v| DVec3::new(v[0], v[1], v[2]).as_vec3()).collect());
-    match uvs {
-        Some(Primvar::Vertex(uv)) => Ok(Some(Shape::Mesh(Mesh {
+    let normals = normals_of(values, path, time, positions.len(), &counts, warnings)?;
+    let vertex_normals = |n: &Option<Primvar3>| match n {
+        Some(Primvar3::Vertex(n)) => Some(n.clone()),
+        _ => None,
+    };
+    match (uvs, normals) {
+        (Some(Primvar::Vertex(uv)), n @ (None | Some(Primvar3::Vertex(_)))) => Ok(Some(Shape::Mesh(Mesh {
             positions,
-            normals,
+            normals: vertex_normals(&n),
             triangles,
             uvs: vec![uv],
             colors: None,
         }))),
-        Some(Primvar::Corner(uv)) => {
-            // Face-varying coordinates: one vertex per face corner (in the file's corner order,
-            // which `face_indices` kept unless left-handed reversed it).
+        (None, n @ (None | Some(Primvar3::Vertex(_)))) => Ok(Some(Shape::Mesh(Mesh {
+            positions,
+            normals: vertex_normals(&n),
+            triangles,
+            uvs: Vec::new(),
+            colors: None,
+        }))),
+        (uvs, normals) => {
+            // Face-varying coordinates or normals: one vertex per face corner (in the file's
+            // corner order, which `face_indices` kept unless left-handed reversed it).
             let mut corner_of = Vec::with_capacity(face_indices.len());
             let mut start = 0usize;
             for &c in &counts {
@@ -588,8 +779,16 @@ fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result
                 start += c;
             }
             let p: Vec<Vec3> = face_indices.iter().map(|&i| positions[i as usize]).collect();
-            let n = normals.map(|n: Vec<Vec3>| face_indices.iter().map(|&i| n[i as usize]).collect());
-            let uv = corner_of.iter().map(|&k| uv[k]).collect();
+            let n = match normals {
+                Some(Primvar3::Vertex(n)) => Some(face_indices.iter().map(|&i| n[i as usize]).collect()),
+                Some(Primvar3::Corner(n)) => Some(corner_of.iter().map(|&k| n[k]).collect()),
+                None => None,
+            };
+            let uv = match uvs {
+                Some(Primvar::Vertex(uv)) => vec![face_indices.iter().map(|&i| uv[i as usize]).collect()],
+                Some(Primvar::Corner(uv)) => vec![corner_of.iter().map(|&k| uv[k]).collect()],
+                None => Vec::new(),
+            };
             let mut tris = Vec::new();
             let mut start = 0u32;
             for &c in &counts {
@@ -603,18 +802,112 @@ fn mesh(values: &Values<'_>, path: &str, time: Time, uv: Option<&str>) -> Result
                 positions: p,
                 normals: n,
                 triangles: tris,
-                uvs: vec![uv],
+                uvs: uv,
                 colors: None,
             })))
         }
-        None => Ok(Some(Shape::Mesh(Mesh {
-            positions,
-            normals,
-            triangles,
-            uvs: Vec::new(),
-            colors: None,
-        }))),
     }
+}
+
+/// Normals by vertex or by face corner (a `uniform` normal repeated on its face's corners).
+enum Primvar3 {
+    Vertex(Vec<Vec3>),
+    Corner(Vec<Vec3>),
+}
+
+/// A polygon mesh's normals: `primvars:normals` (with its `:indices`) when authored, else
+/// `normals`, by their interpolation (`vertex`/`varying` per point, `faceVarying` per face corner,
+/// `uniform` per face; `constant` is none). A count that fits no interpolation is a located error.
+fn normals_of(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    points: usize,
+    counts: &[i64],
+    warnings: &mut Vec<String>,
+) -> Result<Option<Primvar3>, UsdError> {
+    let (attr, raw) = match values.tuples_opt(path, "primvars:normals", time, 3)? {
+        Some(n) => ("primvars:normals", n),
+        None => match values.tuples_opt(path, "normals", time, 3)? {
+            Some(n) => ("normals", n),
+            None => return Ok(None),
+        },
+    };
+    let flat: Vec<Vec3> = raw
+        .iter()
+        .map(|v| DVec3::new(v[0], v[1], v[2]).as_vec3())
+        .collect();
+    let data = if attr == "primvars:normals" {
+        indexed(values, path, attr, time, flat)?
+    } else {
+        flat
+    };
+    let corners = counts.iter().sum::<i64>() as usize;
+    // `normals` is vertex-interpolated unless its metadata says otherwise (UsdGeomPointBased);
+    // a primvar's fallback is constant.
+    let interpolation = match values.interpolation(path, attr).as_str() {
+        "constant" if attr == "normals" && !has_interpolation(values, path, attr) => "vertex".to_string(),
+        other => other.to_string(),
+    };
+    let uniform = |data: &[Vec3]| {
+        counts
+            .iter()
+            .zip(data)
+            .flat_map(|(&c, &n)| std::iter::repeat_n(n, c as usize))
+            .collect()
+    };
+    Ok(match interpolation.as_str() {
+        "constant" if data.len() <= 1 => None,
+        "faceVarying" if data.len() == corners => Some(Primvar3::Corner(data)),
+        "uniform" if data.len() == counts.len() => Some(Primvar3::Corner(uniform(&data))),
+        "vertex" | "varying" if data.len() == points => Some(Primvar3::Vertex(data)),
+        other => {
+            warnings.push(format!(
+                "{}: <{path}>.{attr}: {} normals with interpolation {other:?} fit neither the {points} points, \
+                 the {corners} face corners nor the {} faces; the mesh is shaded with its geometric normals",
+                values.file,
+                data.len(),
+                counts.len()
+            ));
+            None
+        }
+    })
+}
+
+/// A primvar's values `flat` expanded through its `<attr>:indices` when authored; an index outside
+/// the values is a located error.
+fn indexed<T: Copy>(
+    values: &Values<'_>,
+    path: &str,
+    attr: &str,
+    time: Time,
+    flat: Vec<T>,
+) -> Result<Vec<T>, UsdError> {
+    let name = format!("{attr}:indices");
+    match values.ints_opt(path, &name, time)? {
+        Some(ix) => ix
+            .iter()
+            .map(|&i| {
+                usize::try_from(i)
+                    .ok()
+                    .and_then(|i| flat.get(i))
+                    .copied()
+                    .ok_or_else(|| {
+                        values.error(
+                            path,
+                            &name,
+                            format!("index {i} outside the {} values", flat.len()),
+                        )
+                    })
+            })
+            .collect(),
+        None => Ok(flat),
+    }
+}
+
+/// Whether `prim.name` states its `interpolation`.
+fn has_interpolation(values: &Values<'_>, prim: &str, name: &str) -> bool {
+    values.states_metadata(prim, name, "interpolation")
 }
 
 /// True when no edge is shared by more than two faces: Catmull–Clark is defined there; a mesh
@@ -661,21 +954,7 @@ fn primvar2(
         .iter()
         .map(|v| glam::Vec2::new(v[0] as f32, 1.0 - v[1] as f32))
         .collect();
-    let data = match values.ints_opt(path, &format!("{attr}:indices"), time)? {
-        Some(ix) => ix
-            .iter()
-            .map(|&i| {
-                flat.get(i as usize).copied().ok_or_else(|| {
-                    values.error(
-                        path,
-                        &format!("{attr}:indices"),
-                        format!("index {i} outside the {} values", flat.len()),
-                    )
-                })
-            })
-            .collect::<Result<Vec<_>, _>>()?,
-        None => flat,
-    };
+    let data = indexed(values, path, &attr, time, flat)?;
     let interpolation = values.interpolation(path, &attr);
     Ok(match interpolation.as_str() {
         "faceVarying" if data.len() == corners => Some(Primvar::Corner(data)),
@@ -754,18 +1033,22 @@ fn round(values: &Values<'_>, path: &str, ty: &str, time: Time) -> Result<Mesh, 
         triangles.push([cb, b0, a0]);
         triangles.push([ct, a1, b1]);
     }
-    let to_axis = |p: Vec3| match axis.as_str() {
-        "X" => Vec3::new(p.z, p.x, p.y),
-        "Y" => Vec3::new(p.y, p.z, p.x),
-        _ => p,
-    };
     Ok(Mesh {
-        positions: positions.into_iter().map(to_axis).collect(),
+        positions: positions.into_iter().map(|p| to_axis(&axis, p)).collect(),
         normals: None,
         triangles,
         uvs: Vec::new(),
         colors: None,
     })
+}
+
+/// A point of a primitive built along +Z, turned so that +Z becomes its `axis` (`X`, `Y` or `Z`).
+fn to_axis(axis: &str, p: Vec3) -> Vec3 {
+    match axis {
+        "X" => Vec3::new(p.z, p.x, p.y),
+        "Y" => Vec3::new(p.y, p.z, p.x),
+        _ => p,
+    }
 }
 
 /// A constant `primvars:displayColor` as a PxrDiffuse material (0, the default, without one).
@@ -784,7 +1067,15 @@ fn display_color(values: &Values<'_>, path: &str, time: Time, scene: &mut Scene)
     (scene.materials.len() - 1) as u32
 }
 
-fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4) -> Result<Light, UsdError> {
+fn light(
+    values: &Values<'_>,
+    path: &str,
+    ty: &str,
+    time: Time,
+    transform: Mat4,
+    stage: &Stage,
+    warnings: &mut Vec<String>,
+) -> Result<Light, UsdError> {
     let intensity = values.real(path, "inputs:intensity", time, 1.0)? as f32;
     let exposure = values.real(path, "inputs:exposure", time, 0.0)? as f32;
     let c = values
@@ -802,13 +1093,28 @@ fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4)
             enable_shadows: true,
             transform: transform * flip,
         },
-        "DomeLight" => Light::Dome {
-            color,
-            intensity,
-            exposure,
-            map: None,
-            transform,
-        },
+        "DomeLight" | "DomeLight_1" => {
+            // USD's dome is OpenEXR's lat-long layout in the light's frame (longitude +π at the left
+            // edge, 0 toward +Z, π/2 toward +X); Obscura's dome is that layout mirrored in x.
+            let mut orient = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+            if ty == "DomeLight_1" {
+                let pole = values
+                    .token_opt(path, "poleAxis", Time::Default)?
+                    .unwrap_or_else(|| "scene".into());
+                // poleAxis Z (or "scene" on a Z-up stage): the pole is +Z and longitude 0 looks
+                // down −Y, R_x(+90°) applied to the dome alone.
+                if pole == "Z" || (pole == "scene" && stage.up_axis == "Z") {
+                    orient = Mat4::from_rotation_x(std::f32::consts::FRAC_PI_2) * orient;
+                }
+            }
+            Light::Dome {
+                color,
+                intensity,
+                exposure,
+                map: dome_map(values, path, time, stage, warnings)?,
+                transform: transform * orient,
+            }
+        }
         "SphereLight" => {
             let r = values.real(path, "inputs:radius", time, 0.5)? as f32;
             Light::Sphere {
@@ -829,4 +1135,136 @@ fn light(values: &Values<'_>, path: &str, ty: &str, time: Time, transform: Mat4)
             }
         }
     })
+}
+
+/// A dome's `inputs:texture:file` as the lat-long EXR PxrDomeLight reads; `None`, with a warning
+/// naming the prim and the attribute, for a layout or a file it cannot read (the dome then lights
+/// with its colour alone).
+fn dome_map(
+    values: &Values<'_>,
+    path: &str,
+    time: Time,
+    stage: &Stage,
+    warnings: &mut Vec<String>,
+) -> Result<Option<std::path::PathBuf>, UsdError> {
+    let Some(raw) = values.raw(path, "inputs:texture:file", time)? else {
+        return Ok(None);
+    };
+    let openusd::sdf::Value::AssetPath(asset) = raw else {
+        return Err(values.error(path, "inputs:texture:file", "expected an asset path"));
+    };
+    if asset.authored_path.is_empty() {
+        return Ok(None);
+    }
+    let format = values
+        .token_opt(path, "inputs:texture:format", time)?
+        .unwrap_or_else(|| "automatic".into());
+    let mut skip = |why: String| {
+        warnings.push(format!(
+            "{}: <{path}>.inputs:texture:file @{}@ is not applied: {why}; the dome lights with its colour alone",
+            stage.file, asset.authored_path
+        ));
+        Ok(None)
+    };
+    if !matches!(format.as_str(), "automatic" | "latlong") {
+        return skip(format!(
+            "inputs:texture:format {format:?} (only latlong maps are read)"
+        ));
+    }
+    let stage_dir = std::path::Path::new(&stage.file)
+        .parent()
+        .unwrap_or(std::path::Path::new(""));
+    match crate::shading::image_source(stage_dir, &asset, &stage.file, path)? {
+        obscura_scene::texture::ImageSource::File(file) => {
+            let exr = file
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+            if !exr {
+                return skip("PxrDomeLight reads OpenEXR lat-long maps only".into());
+            }
+            if !file.is_file() {
+                return skip(format!("{} does not exist", file.display()));
+            }
+            Ok(Some(file))
+        }
+        _ => skip("a map inside a .usdz package is not read for a dome".into()),
+    }
+}
+
+/// A `Capsule` (`radius`, `height` of the cylinder between the hemispherical caps, `axis`) or a
+/// `Capsule_1` with equal `radiusTop` and `radiusBottom`, as a mesh: 64 segments around, 16 rings on
+/// each cap, the whole `height + 2·radius` long. A `Capsule_1` with different radii is left out with
+/// a warning naming the prim (its tapered caps are not meshed).
+fn capsule(
+    values: &Values<'_>,
+    path: &str,
+    ty: &str,
+    time: Time,
+    warnings: &mut Vec<String>,
+) -> Result<Option<Mesh>, UsdError> {
+    let (r, h) = if ty == "Capsule_1" {
+        let top = values.real(path, "radiusTop", time, 0.5)?;
+        let bottom = values.real(path, "radiusBottom", time, 0.5)?;
+        if top != bottom {
+            warnings.push(format!(
+                "{}: <{path}>: a Capsule_1 with radiusTop {top} and radiusBottom {bottom} is not rendered \
+                 (tapered caps are not meshed; equal radii are)",
+                values.file
+            ));
+            return Ok(None);
+        }
+        (top, values.real(path, "height", time, 1.0)?)
+    } else {
+        (
+            values.real(path, "radius", time, 0.5)?,
+            values.real(path, "height", time, 1.0)?,
+        )
+    };
+    if !(r.is_finite() && h.is_finite() && r >= 0.0 && h >= 0.0) {
+        return Err(values.error(
+            path,
+            "radius",
+            format!("expected a non-negative radius and height, found {r} and {h}"),
+        ));
+    }
+    let (r, h) = (r as f32, h as f32);
+    let axis = values
+        .token_opt(path, "axis", Time::Default)?
+        .unwrap_or_else(|| "Z".into());
+    let (around, rings) = (64u32, 16u32);
+    // Rings from the bottom pole to the top pole: the bottom cap's, then the top cap's (the
+    // cylinder is the band between the two equators).
+    let mut profile = Vec::new();
+    for k in 0..=rings {
+        let a = -std::f32::consts::FRAC_PI_2 + k as f32 / rings as f32 * std::f32::consts::FRAC_PI_2;
+        profile.push((r * a.cos(), -h / 2.0 + r * a.sin()));
+    }
+    for k in 0..=rings {
+        let a = k as f32 / rings as f32 * std::f32::consts::FRAC_PI_2;
+        profile.push((r * a.cos(), h / 2.0 + r * a.sin()));
+    }
+    let mut positions = Vec::new();
+    for &(rad, z) in &profile {
+        for j in 0..around {
+            let a = j as f32 / around as f32 * std::f32::consts::TAU;
+            positions.push(Vec3::new(rad * a.cos(), rad * a.sin(), z));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..profile.len() as u32 - 1 {
+        for j in 0..around {
+            let (a0, a1) = (i * around + j, i * around + (j + 1) % around);
+            let (b0, b1) = (a0 + around, a1 + around);
+            triangles.push([a0, a1, b1]);
+            triangles.push([a0, b1, b0]);
+        }
+    }
+    Ok(Some(Mesh {
+        positions: positions.into_iter().map(|p| to_axis(&axis, p)).collect(),
+        normals: None,
+        triangles,
+        uvs: Vec::new(),
+        colors: None,
+    }))
 }

@@ -261,7 +261,7 @@ pub(crate) fn bound_material(
 }
 
 /// Where a texture's bytes are: a file, or an entry of a `.usdz` package (read out of it).
-fn image_source(
+pub(crate) fn image_source(
     stage_dir: &Path,
     asset: &openusd::sdf::AssetPath,
     file: &str,

@@ -155,6 +155,16 @@ impl Values<'_> {
         }
     }
 
+    /// Whether `prim.name` has metadata `key` authored.
+    pub fn states_metadata(&self, prim: &str, name: &str, key: &str) -> bool {
+        self.stage
+            .attribute(format!("{prim}.{name}").as_str())
+            .get_metadata::<sdf::Value>(key)
+            .ok()
+            .flatten()
+            .is_some()
+    }
+
     /// A primvar's `interpolation` metadata (`constant` unless authored).
     pub fn interpolation(&self, prim: &str, name: &str) -> String {
         self.stage

@@ -22,6 +22,7 @@ fn data(name: &str) -> PathBuf {
 fn scene(file: &Path, camera: Option<&str>, w: u32, h: u32, frame: u32) -> Scene {
     let options = Options {
         camera: camera.map(str::to_string),
+        ..Options::default()
     };
     let source = open(file, CameraDesc::new(Format::new(w, h)), &options).unwrap();
     source.frame(frame).unwrap()
@@ -348,6 +349,7 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
 fn error_of(path: &Path, camera: Option<&str>) -> String {
     let options = Options {
         camera: camera.map(str::to_string),
+        ..Options::default()
     };
     match open(path, CameraDesc::new(Format::new(16, 16)), &options) {
         Err(e) => e.to_string(),
@@ -507,4 +509,457 @@ fn a_point_instancer_places_its_prototypes_and_hides_invisible_ids() {
     let m = s.objects[1].transform.samples[0].1;
     assert!((m.transform_vector3(glam::Vec3::X) - glam::Vec3::Y).length() < 1e-3);
     assert!(matches!(s.objects[1].shape, obscura_scene::Shape::Sphere { radius, .. } if radius == 0.5));
+}
+
+/// hdPrman's camera attributes (`hdPrman/camera.cpp`, `cameraContext.cpp`): `ri:shutterOpenTime`,
+/// `ri:shutterCloseTime`, `ri:shutteropening` and the `ri:aperture*` shape go to the host's shutter
+/// opening and aperture; Hydra's `lensDistortion:k1/k2/anaSq/asym` make the camera PxrCamera with
+/// `fov = 2·atan(W/2f)` over the window normalised by half the gate width, so the rays are
+/// PxrCamera's division model on the gate: `s = film/(W/2)`, `q = (sx/anaSq)² + sy²`,
+/// `u = (sx/(1 + (k1 + asymX)q + k2q²), sy/(1 + (k1 + asymY)q + k2q²))`, direction `(u·W/2, f)`.
+#[test]
+fn hdprman_camera_attributes_and_lens_distortion_are_read_as_hdprman_reads_them() {
+    let file = data("ri_camera.usda");
+    let (w, h) = (120.0, 80.0);
+    let s = scene(&file, Some("Warped"), 120, 80, 1);
+    assert_eq!(s.projection, "PxrCamera");
+    let o = &s.camera.shutter_opening;
+    assert_eq!((o.open_time, o.close_time), (0.2, 0.7));
+    assert_eq!(o.opening, [0.1, 0.2, 0.3, 0.4, 0.6, 0.7, 0.8, 0.9]);
+    let a = &s.camera.aperture;
+    assert_eq!(
+        (a.n_sides, a.angle_deg, a.roundness, a.density),
+        (6, 15.0, 0.25, -0.5)
+    );
+    assert_eq!(
+        s.camera.shutter,
+        (-0.25, 0.25),
+        "USD's shutter:open/close stay the interval"
+    );
+    let (k1, k2, sq, ax, ay) = (-0.12, 0.03, 1.33, 0.02, -0.01);
+    let (gw, gh, ox, oy, f) = (36.0, 24.0, 2.0, -1.0, 35.0);
+    let at = grid(w, h, 9);
+    let mut worst: f64 = 0.0;
+    for (&(x, y), d) in at.iter().zip(rays(&s, &at)) {
+        let film = [(x / w - 0.5) * gw + ox, (0.5 - y / h) * gh + oy];
+        let (sx, sy) = (film[0] / (gw / 2.0), film[1] / (gw / 2.0));
+        let q = (sx / sq).powi(2) + sy * sy;
+        let ux = sx / (1.0 + (k1 + ax) * q + k2 * q * q);
+        let uy = sy / (1.0 + (k1 + ay) * q + k2 * q * q);
+        worst = worst.max(angle(d, [ux * gw / 2.0, uy * gw / 2.0, f]));
+    }
+    assert!(worst <= RAY_TOLERANCE, "worst {worst:e} rad");
+    // A distortion centre or scale PxrCamera cannot express is warned about, naming prim and
+    // attribute; the rest still applies.
+    let c = scene(&file, Some("Centred"), 16, 16, 1);
+    assert_eq!(c.projection, "PxrCamera");
+    let warnings = c.warnings.join("\n");
+    assert!(
+        warnings.contains("<Centred>.lensDistortion:center")
+            || warnings.contains("</World/Centred>.lensDistortion:center"),
+        "{warnings}"
+    );
+    assert!(warnings.contains("lensDistortion:scale = 1.1"), "{warnings}");
+    // hdPrman applies it to perspective cameras only: an orthographic one says it is not applied.
+    let ortho = scene(&file, Some("Ortho"), 16, 16, 1);
+    assert_eq!(ortho.projection, "PxrOrthographic");
+    assert!(
+        ortho
+            .warnings
+            .join("\n")
+            .contains("lensDistortion:* is not applied"),
+        "{:?}",
+        ortho.warnings
+    );
+    // Bad values are located errors naming the camera and the attribute.
+    for (camera, what) in [
+        ("BadBlades", "ri:apertureNSides"),
+        ("BadRoundness", "apertureRoundness"),
+        ("BadOpening", "ri:shutteropening"),
+        ("BadK1", "lensDistortion:k1"),
+    ] {
+        let e = error_of(&file, Some(camera));
+        assert!(
+            e.contains(camera) && e.contains(what) && e.contains("ri_camera.usda"),
+            "{camera}: {e}"
+        );
+    }
+}
+
+/// The mesh of the one object a stage of `text` renders through `camera`-less staging.
+fn objects_of(text: &str) -> (Scene, tempfile::TempDir) {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "stage.usda", text);
+    let options = Options {
+        camera: None,
+        ..Options::default()
+    };
+    let source = open(&p, CameraDesc::new(Format::new(16, 16)), &options).unwrap();
+    (source.frame(0).unwrap(), dir)
+}
+
+/// `Capsule`: a cylinder of `height` between two hemispheres of `radius` (UsdGeomCapsule), so it is
+/// `height + 2·radius` long along its axis and `radius` round; `Capsule_1` with equal radii the
+/// same; with different radii it is left out with a warning naming the prim.
+#[test]
+fn a_capsule_is_its_cylinder_between_two_hemispheres() {
+    let (s, _dir) = objects_of(
+        "#usda 1.0\n(\n    upAxis = \"Y\"\n)\n\
+         def Capsule \"A\" { double radius = 0.5\n double height = 2\n uniform token axis = \"Y\" }\n\
+         def Capsule_1 \"B\" { double radiusTop = 0.25\n double radiusBottom = 0.25\n double height = 1\n uniform token axis = \"X\" }\n\
+         def Capsule_1 \"C\" { double radiusTop = 0.25\n double radiusBottom = 0.5 }\n",
+    );
+    assert_eq!(s.objects.len(), 2, "{:?}", s.warnings);
+    let check = |i: usize, axis: usize, r: f32, h: f32| {
+        let obscura_scene::Shape::Mesh(m) = &s.objects[i].shape else {
+            panic!("not a mesh")
+        };
+        let (mut lo, mut hi, mut round) = (f32::MAX, f32::MIN, 0.0f32);
+        for p in &m.positions {
+            let p = p.to_array();
+            lo = lo.min(p[axis]);
+            hi = hi.max(p[axis]);
+            let radial = (0..3)
+                .filter(|&k| k != axis)
+                .map(|k| p[k] * p[k])
+                .sum::<f32>()
+                .sqrt();
+            round = round.max(radial);
+            // Every point lies on the capsule: distance r from the axis segment of length h.
+            let along = p[axis].clamp(-h / 2.0, h / 2.0);
+            let d = ((p[axis] - along).powi(2) + radial * radial).sqrt();
+            assert!((d - r).abs() < 1e-5, "point {p:?} is {d} from the segment");
+        }
+        assert!(
+            (lo + h / 2.0 + r).abs() < 1e-6 && (hi - h / 2.0 - r).abs() < 1e-6,
+            "{lo} {hi}"
+        );
+        assert!((round - r).abs() < 1e-6);
+    };
+    check(0, 1, 0.5, 2.0);
+    check(1, 0, 0.25, 1.0);
+    let w = s.warnings.join("\n");
+    assert!(w.contains("<C>") || w.contains("</C>"), "{w}");
+}
+
+/// A DomeLight's lat-long texture reads as USD specifies (OpenEXR's layout: longitude +π at the
+/// left edge, 0 toward +Z, +π/2 toward +X; the top row +Y), and a `DomeLight_1` on a Z-up stage
+/// with `poleAxis = "scene"` has its pole on +Z and longitude 0 toward −Y.
+#[test]
+fn a_dome_texture_is_openexrs_lat_long_as_usd_specifies() {
+    let dir = tempfile::tempdir().unwrap();
+    // Texel (column c, row r) = (c + 1, r + 1, 1).
+    exr::prelude::write_rgba_file(dir.path().join("sky.exr"), 4, 2, |x, y| {
+        ((x + 1) as f32, (y + 1) as f32, 1.0_f32, 1.0_f32)
+    })
+    .unwrap();
+    let radiance = |stage: &str, dirs: &[([f32; 3], [f32; 2])]| {
+        let p = write(dir.path(), "dome.usda", stage);
+        let source = open(
+            &p,
+            CameraDesc::new(Format::new(8, 8)),
+            &Options {
+                camera: None,
+                ..Options::default()
+            },
+        )
+        .unwrap();
+        let s = source.frame(0).unwrap();
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let lights = obscura_shading::light::Lights::new(&s.lights, dir.path()).unwrap();
+        for &(d, want) in dirs {
+            let (l, _) = lights.escaped(glam::Vec3A::from_array(d));
+            assert_eq!([l.x, l.y], want, "direction {d:?}");
+        }
+    };
+    // Longitude atan2(x, z): 45° → column 1, −45° → 2, 135° → 0, −135° → 3; y > 0 the top row.
+    radiance(
+        "#usda 1.0\n(\n    upAxis = \"Y\"\n)\ndef DomeLight \"Sky\" { asset inputs:texture:file = @sky.exr@ }\n",
+        &[
+            ([1.0, 0.3, 1.0], [2.0, 1.0]),
+            ([-1.0, 0.3, 1.0], [3.0, 1.0]),
+            ([1.0, -0.3, -1.0], [1.0, 2.0]),
+            ([-1.0, -0.3, -1.0], [4.0, 2.0]),
+        ],
+    );
+    // Z up, poleAxis "scene": USD (1, −1, 0.3) is longitude 45° above the horizon; Obscura's world
+    // is the stage turned by R_x(−90°): (x, y, z) ↦ (x, z, −y).
+    radiance(
+        "#usda 1.0\n(\n    upAxis = \"Z\"\n)\ndef DomeLight_1 \"Sky\" { asset inputs:texture:file = @sky.exr@ }\n",
+        &[([1.0, 0.3, 1.0], [2.0, 1.0]), ([-1.0, -0.3, -1.0], [4.0, 2.0])],
+    );
+    // A layout or a file PxrDomeLight cannot read: a warning naming the prim and the attribute,
+    // and the dome lights with its colour.
+    for (attrs, why) in [
+        (
+            "asset inputs:texture:file = @sky.exr@\n token inputs:texture:format = \"angular\"",
+            "angular",
+        ),
+        ("asset inputs:texture:file = @sky.hdr@", "OpenEXR"),
+        ("asset inputs:texture:file = @missing.exr@", "does not exist"),
+    ] {
+        let p = write(
+            dir.path(),
+            "dome.usda",
+            &format!("#usda 1.0\ndef DomeLight \"Sky\" {{\n {attrs}\n}}\n"),
+        );
+        let source = open(&p, CameraDesc::new(Format::new(8, 8)), &Options::default()).unwrap();
+        let s = source.frame(0).unwrap();
+        let w = s.warnings.join("\n");
+        assert!(w.contains("Sky>.inputs:texture:file") && w.contains(why), "{w}");
+        let obscura_scene::Light::Dome { map, .. } = &s.lights[0] else {
+            panic!()
+        };
+        assert!(map.is_none());
+    }
+}
+
+/// `GeomSubset`s of the `materialBind` family bind materials per face: the faces of a subset render
+/// with its material, the others with the mesh's; a subset of another family changes nothing; a
+/// subdivision mesh with subsets renders as its polygons; a face index outside the mesh is a located
+/// error naming the subset.
+#[test]
+fn geom_subsets_bind_materials_per_face() {
+    let material = |name: &str, c: &str| {
+        format!(
+            "def Material \"{name}\" {{\n token outputs:surface.connect = </Looks/{name}/S.outputs:surface>\n\
+             def Shader \"S\" {{\n uniform token info:id = \"UsdPreviewSurface\"\n color3f inputs:diffuseColor = {c}\n\
+             float inputs:metallic = 0\n token outputs:surface\n }}\n}}\n"
+        )
+    };
+    let stage = |indices: &str| {
+        format!(
+            "#usda 1.0\n(\n    upAxis = \"Y\"\n)\ndef Scope \"Looks\" {{\n{}{}}}\n\
+             def Mesh \"Strip\" (\n prepend apiSchemas = [\"MaterialBindingAPI\"]\n) {{\n\
+             point3f[] points = [(0,0,0), (1,0,0), (2,0,0), (3,0,0), (0,1,0), (1,1,0), (2,1,0), (3,1,0)]\n\
+             int[] faceVertexCounts = [4, 4, 4]\n int[] faceVertexIndices = [0, 1, 5, 4, 1, 2, 6, 5, 2, 3, 7, 6]\n\
+             rel material:binding = </Looks/Green>\n\
+             def GeomSubset \"Red\" (\n prepend apiSchemas = [\"MaterialBindingAPI\"]\n) {{\n\
+             uniform token elementType = \"face\"\n uniform token familyName = \"materialBind\"\n\
+             int[] indices = [{indices}]\n rel material:binding = </Looks/Red>\n }}\n\
+             def GeomSubset \"Other\" {{\n uniform token elementType = \"face\"\n uniform token familyName = \"parts\"\n\
+             int[] indices = [0]\n }}\n}}\n",
+            material("Green", "(0, 1, 0)"),
+            material("Red", "(1, 0, 0)")
+        )
+    };
+    let (s, _dir) = objects_of(&stage("2, 0"));
+    assert_eq!(s.objects.len(), 2, "{:?}", s.warnings);
+    let mut seen = Vec::new();
+    for o in &s.objects {
+        let obscura_scene::Shape::Mesh(m) = &o.shape else {
+            panic!("a mesh with subsets renders as its polygons")
+        };
+        let obscura_scene::Material::Surface { diffuse, .. } = &s.materials[o.material as usize] else {
+            panic!("{:?}", s.materials[o.material as usize])
+        };
+        // Which faces: each quad is two triangles whose centroid x is its face's x + ½.
+        let mut faces: Vec<u32> = m
+            .triangles
+            .iter()
+            .map(|t| (t.iter().map(|&i| m.positions[i as usize].x).sum::<f32>() / 3.0).floor() as u32)
+            .collect();
+        faces.dedup();
+        seen.push(((diffuse.r > 0.5, diffuse.g > 0.5), faces));
+    }
+    seen.sort();
+    assert_eq!(
+        seen,
+        vec![((false, true), vec![1]), ((true, false), vec![0, 2])],
+        "green on face 1, red on faces 0 and 2"
+    );
+    let e = objects_error(&stage("1, 7"));
+    assert!(
+        e.contains("/Strip/Red") && e.contains("indices") && e.contains("face 7"),
+        "{e}"
+    );
+}
+
+fn objects_error(text: &str) -> String {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "stage.usda", text);
+    error_of(&p, None)
+}
+
+/// Normals by face corner (`faceVarying`), by face (`uniform`) and by point: each corner of the
+/// rendered mesh carries its own point and the normal the file gives that corner (indexed
+/// `primvars:normals` win over `normals`); a left-handed mesh keeps each corner's pair while its
+/// faces turn round.
+#[test]
+fn face_varying_and_uniform_normals_follow_their_corners() {
+    let points = "[(0,0,0), (1,0,0), (2,0,0), (0,1,0), (1,1,0), (2,1,0)]";
+    let topology = "int[] faceVertexCounts = [4, 4]\n int[] faceVertexIndices = [0, 1, 4, 3, 1, 2, 5, 4]\n";
+    let mesh_of = |normals: &str, left: bool| {
+        let orientation = if left {
+            "uniform token orientation = \"leftHanded\"\n"
+        } else {
+            ""
+        };
+        let (s, _dir) = objects_of(&format!(
+            "#usda 1.0\n(\n    upAxis = \"Y\"\n)\ndef Mesh \"M\" {{\n uniform token subdivisionScheme = \"none\"\n {orientation}\
+             point3f[] points = {points}\n {topology} {normals}\n}}\n"
+        ));
+        assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+        let obscura_scene::Shape::Mesh(m) = &s.objects[0].shape else {
+            panic!()
+        };
+        m.clone()
+    };
+    let pts = [
+        [0., 0., 0.],
+        [1., 0., 0.],
+        [2., 0., 0.],
+        [0., 1., 0.],
+        [1., 1., 0.],
+        [2., 1., 0.],
+    ];
+    let fvi = [0usize, 1, 4, 3, 1, 2, 5, 4];
+    // Corner k's normal: (k, 1, 2)/|…|, distinct for every corner.
+    let corner_normal = |k: usize| glam::Vec3::new(k as f32, 1.0, 2.0).normalize();
+    let list = (0..8)
+        .map(|k| {
+            let n = corner_normal(k);
+            format!("({}, {}, {})", n.x, n.y, n.z)
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    for left in [false, true] {
+        let m = mesh_of(
+            &format!("normal3f[] normals = [{list}] (\n interpolation = \"faceVarying\"\n )"),
+            left,
+        );
+        let n = m.normals.as_ref().expect("normals");
+        assert_eq!(m.positions.len(), 8);
+        for face in 0..2 {
+            for j in 0..4 {
+                // Output corner j of the face is file corner j (or 3 − j when left-handed).
+                let k = face * 4 + if left { 3 - j } else { j };
+                let i = face * 4 + j;
+                assert_eq!(
+                    m.positions[i].to_array(),
+                    pts[fvi[k]].map(|v: f64| v as f32),
+                    "corner {i}"
+                );
+                assert!(
+                    (n[i] - corner_normal(k)).length() < 1e-6,
+                    "corner {i}: {:?}",
+                    n[i]
+                );
+            }
+        }
+    }
+    // Uniform, through an indexed primvar that wins over `normals`.
+    let m = mesh_of(
+        "normal3f[] primvars:normals = [(0, 0, 1), (1, 0, 0)] (\n interpolation = \"uniform\"\n )\n \
+         int[] primvars:normals:indices = [1, 0]\n normal3f[] normals = [(0,1,0), (0,1,0), (0,1,0), (0,1,0), (0,1,0), (0,1,0)]",
+        false,
+    );
+    let n = m.normals.unwrap();
+    assert!(
+        n[..4].iter().all(|v| *v == glam::Vec3::X) && n[4..].iter().all(|v| *v == glam::Vec3::Z),
+        "{n:?}"
+    );
+    // Per point (no interpolation stated: `normals` is vertex-interpolated).
+    let m = mesh_of(
+        "normal3f[] normals = [(0,0,1), (0,0,1), (0,0,1), (0,1,0), (0,1,0), (0,1,0)]",
+        false,
+    );
+    assert_eq!(m.positions.len(), 6);
+    assert_eq!(m.normals.unwrap()[4], glam::Vec3::Y);
+}
+
+/// Without a size from the caller (`product_resolution`), the RenderSettings' first product's
+/// `resolution` and `pixelAspectRatio` are the image's (a product's value over the settings'), and
+/// the gate is fitted to that image; with the caller's size they are not read. A bad resolution is a
+/// located error.
+#[test]
+fn the_render_products_resolution_is_the_image_size_when_none_is_given() {
+    let stage = |resolution: &str| {
+        format!(
+            "#usda 1.0\n(\n    renderSettingsPrimPath = \"/Render/Settings\"\n)\n\
+             def Camera \"Cam\" {{\n float horizontalAperture = 36\n float verticalAperture = 24\n}}\n\
+             def Scope \"Render\" {{\n def RenderSettings \"Settings\" {{\n rel camera = </Cam>\n\
+             rel products = </Render/Product>\n uniform int2 resolution = (64, 64)\n\
+             uniform float pixelAspectRatio = 2\n }}\n\
+             def RenderProduct \"Product\" {{\n uniform int2 resolution = {resolution}\n }}\n}}\n"
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "product.usda", &stage("(320, 90)"));
+    let with = |product_resolution: bool| {
+        let options = Options {
+            camera: None,
+            product_resolution,
+        };
+        open(&p, CameraDesc::new(Format::new(16, 16)), &options)
+            .unwrap()
+            .frame(0)
+            .unwrap()
+    };
+    let s = with(true);
+    let f = s.camera.format;
+    assert_eq!((f.width, f.height, f.pixel_aspect), (320, 90, 2.0));
+    // The 36 × 24 gate expanded to the image's aspect 320·2/90 (wider): 24 high, 24·640/90 wide,
+    // over focal length 50.
+    let w = s.camera.screen_window();
+    let half_w = 24.0 * 640.0 / 90.0 / 2.0 / 50.0;
+    assert!(
+        (w.right - half_w).abs() < 1e-6 && (w.top - 0.24).abs() < 1e-6,
+        "{w:?}"
+    );
+    let s = with(false);
+    assert_eq!((s.camera.format.width, s.camera.format.height), (16, 16));
+    let bad = write(dir.path(), "bad.usda", &stage("(320, 0)"));
+    let options = Options {
+        camera: None,
+        product_resolution: true,
+    };
+    let e = open(&bad, CameraDesc::new(Format::new(16, 16)), &options)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("/Render/Product") && e.contains("resolution") && e.contains("bad.usda"),
+        "{e}"
+    );
+}
+
+/// `--export-usd` of a PxrCamera with distortion writes Hydra's `lensDistortion:*`, which read back
+/// give the same rays; a window hdPrman's normalisation cannot express is refused, not dropped.
+#[test]
+fn an_exported_pxrcamera_distortion_reads_back_as_the_same_rays() {
+    let file = data("ri_camera.usda");
+    // 20 × 16 is narrower than the 20.955 × 15.2908 gate: the gate keeps its width.
+    let s = scene(&file, Some("Centred"), 20, 16, 1);
+    let text = obscura_usd::export::camera_usda(
+        &[obscura_usd::export::Frame {
+            time_code: 1.0,
+            scene: &s,
+        }],
+        24.0,
+    )
+    .unwrap();
+    assert!(text.contains("float lensDistortion:k1 = 0.05"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "back.usda", &text);
+    let back = scene(&p, None, 20, 16, 1);
+    assert_eq!(back.projection, "PxrCamera");
+    let at = grid(20.0, 16.0, 5);
+    let worst = rays(&s, &at)
+        .into_iter()
+        .zip(rays(&back, &at))
+        .map(|(a, b)| angle(a, b))
+        .fold(0.0, f64::max);
+    assert!(worst <= RAY_TOLERANCE, "worst {worst:e} rad");
+    // The offset gate of /World/Warped is not centred on the distortion's axis of symmetry.
+    let w = scene(&file, Some("Warped"), 24, 16, 1);
+    let e = obscura_usd::export::camera_usda(
+        &[obscura_usd::export::Frame {
+            time_code: 1.0,
+            scene: &w,
+        }],
+        24.0,
+    )
+    .unwrap_err();
+    assert!(e.contains("lensDistortion"), "{e}");
 }
