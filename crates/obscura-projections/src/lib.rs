@@ -89,6 +89,32 @@ macro_rules! spherical_projection {
     };
 }
 
+/// [`spherical_projection!`] for a camera with a branch-free `lane` (a
+/// [`panorama::CentredLane`] per screen sample) and a `clip` field: `project` runs the lanes in the
+/// structure-of-arrays loop of [`screen::map_centred_rays`].
+macro_rules! centred_projection {
+    ($camera:ty, $fov:expr $(,)?) => {
+        impl obscura_sdk::Projection for $camera {
+            fn property(
+                &self,
+                property: obscura_sdk::ProjectionProperty,
+            ) -> Option<obscura_sdk::PropertyValue> {
+                let fov: fn(&$camera) -> f32 = $fov;
+                crate::panorama::spherical_property(property, fov(self))
+            }
+
+            fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
+                crate::screen::map_centred_rays(ctx, self.clip, |s| self.lane(s));
+            }
+
+            fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {
+                let (x, y, z) = crate::panorama::finite_f64(point)?;
+                self.screen_of(x, y, z)
+            }
+        }
+    };
+}
+
 pub mod cubemap;
 pub mod cylinder;
 pub mod dof;

@@ -100,7 +100,11 @@ fn outside_the_image_circle_the_direction_is_exactly_zero() {
             Point2::new(0.0, -1.01),
             Point2::new(0.8, 0.61),
         ] {
-            assert_eq!(ray_at(p.as_ref(), s), RayGeometry::CULLED, "{mapping} at {s:?}");
+            assert_eq!(
+                ray_at(p.as_ref(), s),
+                obscura_sdk::RayGeometry::CULLED,
+                "{mapping} at {s:?}"
+            );
         }
         // The rim itself is seen, at 90°.
         let rim = ray_at(p.as_ref(), Point2::new(0.0, 1.0));
