@@ -114,3 +114,213 @@ pub fn map_rays_with_aperture(ctx: &mut ProjectionContext<'_>, ray: impl Fn(Poin
         },
     );
 }
+
+#[cfg(test)]
+mod tests {
+    use obscura_sdk::simd::{Level, with_level};
+    use obscura_sdk::{Format, Point2, ProjectionFactory, RayGeometry, ScreenWindow};
+    use proptest::prelude::*;
+
+    use crate::testing::{angle, make, project_points};
+
+    /// The panoramas whose batch runs [`super::map_centred_rays`], one configuration per branch of
+    /// their lanes (360° and narrower sweeps, every fisheye law with and without a ring, both mirror-ball
+    /// orientations).
+    /// A panorama of the tests: label, factory, parameters.
+    type Panorama = (
+        &'static str,
+        Box<dyn ProjectionFactory>,
+        Vec<(&'static str, &'static str)>,
+    );
+
+    fn panoramas() -> Vec<Panorama> {
+        use crate::{
+            cubemap::CubemapFaceFactory, cylinder::CylinderCameraFactory, fisheye::FisheyeFactory,
+            mirrorball::MirrorBallFactory, octahedral::OctahedralFactory, sphere::SphereCameraFactory,
+        };
+        let fisheye = |m: &'static str, fov: &'static str| vec![("string mapping", m), ("float fov", fov)];
+        vec![
+            ("sphere 360x180", Box::new(SphereCameraFactory), vec![]),
+            (
+                "sphere 120x90",
+                Box::new(SphereCameraFactory),
+                vec![("float hsweep", "120"), ("float vsweep", "90")],
+            ),
+            ("cylinder", Box::new(CylinderCameraFactory), vec![]),
+            (
+                "fisheye equidistant 360",
+                Box::new(FisheyeFactory),
+                fisheye("equidistant", "360"),
+            ),
+            (
+                "fisheye equidistant 180",
+                Box::new(FisheyeFactory),
+                fisheye("equidistant", "180"),
+            ),
+            (
+                "fisheye equisolid",
+                Box::new(FisheyeFactory),
+                fisheye("equisolid", "180"),
+            ),
+            (
+                "fisheye stereographic",
+                Box::new(FisheyeFactory),
+                fisheye("stereographic", "220"),
+            ),
+            (
+                "fisheye orthographic",
+                Box::new(FisheyeFactory),
+                fisheye("orthographic", "180"),
+            ),
+            (
+                "fisheye polynomial",
+                Box::new(FisheyeFactory),
+                vec![("string mapping", "polynomial")],
+            ),
+            ("mirror ball", Box::new(MirrorBallFactory), vec![]),
+            (
+                "mirror ball, light probe",
+                Box::new(MirrorBallFactory),
+                vec![("string orientation", "lightprobe")],
+            ),
+            ("cube face", Box::new(CubemapFaceFactory), vec![]),
+            ("octahedral", Box::new(OctahedralFactory), vec![]),
+        ]
+    }
+
+    /// Screen samples over the whole window of `format` and three window sizes around it (beyond
+    /// every fisheye circle, the mirror ball's rim, the cube face's cut-off and the octahedral fold),
+    /// plus far-away, infinite and NaN samples; 1003 of them, so the batch ends in a partial chunk.
+    fn samples(format: Format) -> Vec<Point2> {
+        let w = ScreenWindow::default_for(format);
+        let (fw, fh) = (f64::from(format.width), f64::from(format.height));
+        let mut s: Vec<Point2> = (0..990)
+            .map(|i| {
+                let fx = (i as f64 * 0.618_033_988_75).fract();
+                let fy = (i as f64 * 0.754_877_666_25).fract();
+                w.raster_to_screen(format, (7.0 * fx - 3.0) * fw, (7.0 * fy - 3.0) * fh)
+            })
+            .collect();
+        s.extend([
+            Point2::ZERO,
+            Point2::new(w.left, 0.0),
+            Point2::new(w.right, w.top),
+            Point2::new(0.0, w.bottom),
+            Point2::new(1e30, -1e30),
+            Point2::new(f32::INFINITY, 0.0),
+            Point2::new(0.0, f32::NEG_INFINITY),
+            Point2::new(f32::NAN, 0.0),
+            Point2::new(0.3, f32::NAN),
+            Point2::new(1e-30, -1e-30),
+            Point2::new(-0.0, 0.0),
+            Point2::new(0.5 * w.right, 0.25 * w.top),
+            Point2::new(-0.999 * w.right, 0.999 * w.bottom),
+        ]);
+        s
+    }
+
+    fn bits(rays: &[RayGeometry]) -> Vec<[u32; 10]> {
+        rays.iter()
+            .map(|r| {
+                [
+                    r.origin.x,
+                    r.origin.y,
+                    r.origin.z,
+                    r.origin_radius,
+                    r.direction.x,
+                    r.direction.y,
+                    r.direction.z,
+                    r.ray_spread,
+                    r.min_dist,
+                    r.max_dist,
+                ]
+                .map(f32::to_bits)
+            })
+            .collect()
+    }
+
+    /// The rays of `screen` at tier `level` (capped to what the CPU has).
+    fn rays_at(level: Level, p: &dyn obscura_sdk::Projection, screen: &[Point2]) -> Vec<RayGeometry> {
+        let n = screen.len();
+        with_level(level, || {
+            project_points(p, screen, &vec![Point2::ZERO; n], &vec![0.0; n])
+        })
+    }
+
+    /// Every SIMD tier gives the portable tier's rays bit for bit (the lanes use IEEE operations only,
+    /// never contracted into fused multiply-adds), the chunked loop gives what the one-sample tail gives,
+    /// and culled samples are exactly the culled ray. Tiers above the CPU's run as the widest it has
+    /// ([`Level::detected`] says which ran; the project's machines have all three).
+    #[test]
+    fn tiers_panoramas_every_tier_is_the_portable_tier_bit_for_bit() {
+        let format = Format::new(320, 160);
+        let screen = samples(format);
+        for (label, factory, params) in panoramas() {
+            let p = make(factory.as_ref(), &params, format);
+            let portable = rays_at(Level::Portable, p.as_ref(), &screen);
+            for level in Level::ALL {
+                let wide = rays_at(level, p.as_ref(), &screen);
+                assert_eq!(bits(&wide), bits(&portable), "{label}: tier {level}");
+                // One sample per batch: the scalar tail of the loop.
+                for (i, s) in screen.iter().enumerate().step_by(7) {
+                    let one = rays_at(level, p.as_ref(), &[*s]);
+                    assert_eq!(
+                        bits(&one),
+                        bits(&portable[i..=i]),
+                        "{label}: tier {level}, tail at {s:?}"
+                    );
+                }
+            }
+            let culled = portable.iter().filter(|r| r.is_culled()).count();
+            assert!(
+                portable
+                    .iter()
+                    .all(|r| !r.is_culled() || bits(&[*r]) == bits(&[RayGeometry::CULLED])),
+                "{label}: a culled ray that is not RayGeometry::CULLED"
+            );
+            assert!(culled < screen.len(), "{label}: everything culled");
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+
+        /// Over the whole screen (and far beyond it), at every tier: the ray is the portable tier's
+        /// bit for bit, unit where valid, and comes back to its screen point through `unproject`
+        /// within 10⁻³ of a pixel wherever the camera's inverse claims the point.
+        #[test]
+        fn tiers_panoramas_random_points_match_and_round_trip(fx in -3.0f64..4.0, fy in -3.0f64..4.0) {
+            let format = Format::new(320, 160);
+            let w = ScreenWindow::default_for(format);
+            let s = w.raster_to_screen(format, fx * 320.0, fy * 160.0);
+            let (px, py) = w.pixel_size(format);
+            for (label, factory, params) in panoramas() {
+                let p = make(factory.as_ref(), &params, format);
+                let portable = rays_at(Level::Portable, p.as_ref(), &[s]);
+                for level in Level::ALL {
+                    prop_assert_eq!(bits(&rays_at(level, p.as_ref(), &[s; 17])[16..]), bits(&portable), "{} tier {}", label, level);
+                }
+                let r = portable[0];
+                if r.is_culled() {
+                    continue;
+                }
+                prop_assert!((r.direction.length() - 1.0).abs() < 1e-6, "{}: {:?}", label, r);
+                let inside = (0.0..=1.0).contains(&fx) && (0.0..=1.0).contains(&fy);
+                if let Some(back) = p.unproject(r.direction * 2.5, 0.0) {
+                    // A panorama's inverse answers inside its window; samples outside it that it maps
+                    // back land on the point the same direction has inside (the seam, a pole, a fold).
+                    if inside {
+                        let err = f64::from((back.x - s.x) / px).hypot(f64::from((back.y - s.y) / py));
+                        prop_assert!(err < 1e-3,
+                            "{}: {:?} came back as {:?} ({} px)", label, s, back, err);
+                    }
+                    let again = rays_at(Level::Portable, p.as_ref(), &[back])[0];
+                    prop_assert!(angle(again.direction, r.direction) < 1e-5,
+                        "{}: {:?} → {:?} → {:?}", label, r.direction, back, again.direction);
+                } else {
+                    prop_assert!(!inside || label.starts_with("fisheye"), "{}: {:?} inside the window does not unproject", label, s);
+                }
+            }
+        }
+    }
+}
