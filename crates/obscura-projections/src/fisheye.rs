@@ -485,15 +485,36 @@ impl Projection for Fisheye {
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
         let clip = self.clip;
         match self.law {
-            Law::Equidistant { h } => screen::map_centred_rays(ctx, clip, |s| self.equidistant(s, h)),
-            Law::Stereographic { k } => screen::map_centred_rays(ctx, clip, |s| self.stereographic(s, k)),
-            Law::Orthographic { m, cos_floor } => {
-                screen::map_centred_rays(ctx, clip, |s| self.orthographic(s, m, cos_floor))
-            }
-            Law::Equisolid { q, cos_floor } => {
-                screen::map_centred_rays(ctx, clip, |s| self.equisolid(s, q, cos_floor))
-            }
-            Law::Polynomial { p, dp } => screen::map_centred_rays(ctx, clip, |s| self.polynomial(s, &p, &dp)),
+            Law::Equidistant { h } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.equidistant(s, h),
+            ),
+            Law::Stereographic { k } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.stereographic(s, k),
+            ),
+            Law::Orthographic { m, cos_floor } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.orthographic(s, m, cos_floor),
+            ),
+            Law::Equisolid { q, cos_floor } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.equisolid(s, q, cos_floor),
+            ),
+            Law::Polynomial { p, dp } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.polynomial(s, &p, &dp),
+            ),
         }
     }
 

@@ -104,7 +104,12 @@ macro_rules! centred_projection {
             }
 
             fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
-                crate::screen::map_centred_rays(ctx, self.clip, |s| self.lane(s));
+                crate::screen::map_centred_rays(
+                    ctx,
+                    self.clip,
+                    #[inline(always)]
+                    |s| self.lane(s),
+                );
             }
 
             fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {

@@ -6,7 +6,7 @@
 //! Window coordinates `u, v ∈ [−1, 1]`, the panoramas' normalised form of `s`, are
 //! [`crate::panorama::SweepWindow`]'s.
 
-use obscura_sdk::{Point2, ProjectionContext, ProjectionEnvironment, RayGeometry, Vec3};
+use obscura_sdk::{Point2, ProjectionContext, ProjectionEnvironment, RayGeometry};
 
 use crate::panorama::{CentredLane, SphericalClip};
 
@@ -75,26 +75,86 @@ fn centred_lanes(
     let (rays, screen) = (&mut rays[..n], &screen[..n]);
     let mut out_chunks = rays.chunks_exact_mut(LANES);
     let mut in_chunks = screen.chunks_exact(LANES);
-    let (mut valid, mut d) = ([false; LANES], [[0.0f32; LANES]; 4]);
+    // Direction and spread, then the clipping distances, of every lane: the culled ray's values where
+    // the lane is not valid (so the write-out only moves data).
+    let mut d = [[0.0f32; LANES]; 4];
+    let mut clipping = [[0.0f32; LANES]; 2];
+    let culled = RayGeometry::CULLED;
     for (out, s) in (&mut out_chunks).zip(&mut in_chunks) {
         let sx: [f32; LANES] = std::array::from_fn(|i| s[i].x);
         let sy: [f32; LANES] = std::array::from_fn(|i| s[i].y);
         for i in 0..LANES {
             let l = lane(Point2::new(sx[i], sy[i]));
-            valid[i] = l.valid;
-            (d[0][i], d[1][i], d[2][i], d[3][i]) =
-                (l.direction.x, l.direction.y, l.direction.z, l.ray_spread);
+            let v = l.valid;
+            d[0][i] = if v { l.direction.x } else { culled.direction.x };
+            d[1][i] = if v { l.direction.y } else { culled.direction.y };
+            d[2][i] = if v { l.direction.z } else { culled.direction.z };
+            d[3][i] = if v { l.ray_spread } else { culled.ray_spread };
+            clipping[0][i] = if v { clip.near } else { culled.min_dist };
+            clipping[1][i] = if v { clip.far } else { culled.max_dist };
         }
-        for (i, r) in out.iter_mut().enumerate() {
-            *r = clip.lane_ray(CentredLane {
-                valid: valid[i],
-                direction: Vec3::new(d[0][i], d[1][i], d[2][i]),
-                ray_spread: d[3][i],
-            });
-        }
+        write_centred(out, &d, &clipping);
     }
     for (r, s) in out_chunks.into_remainder().iter_mut().zip(in_chunks.remainder()) {
         *r = clip.lane_ray(lane(*s));
+    }
+}
+
+/// Writes [`LANES`] records from structure-of-arrays lanes: origin and origin radius zero, direction and
+/// spread from `d`, the clipping distances from `clipping`.
+#[inline(always)]
+fn write_centred(out: &mut [RayGeometry], d: &[[f32; LANES]; 4], clipping: &[[f32; LANES]; 2]) {
+    assert_eq!(out.len(), LANES);
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{
+            _MM_TRANSPOSE4_PS, _mm_castps_si128, _mm_loadu_ps, _mm_setzero_ps, _mm_storeu_ps,
+            _mm_storeu_si64, _mm_unpackhi_epi64, _mm_unpackhi_ps, _mm_unpacklo_ps,
+        };
+        // Four lanes at a time: a 4×4 transpose turns the four arrays of direction and spread into four
+        // records' middle 16 bytes; interleaving the two clipping arrays gives their last 8. Three stores
+        // per record (SSE2, part of the x86-64 baseline, so every tier runs it), moving bits unchanged.
+        let base = out.as_mut_ptr().cast::<f32>();
+        for g in (0..LANES).step_by(4) {
+            // SAFETY: `g + 4 ≤ LANES`, the length of every lane array, so the unaligned 16-byte loads
+            // stay inside them. `out` holds LANES records of ten `f32`s (`RayGeometry` is `repr(C)`,
+            // 40 bytes, no padding): record `g + k` occupies floats `10(g + k) … 10(g + k) + 9` of
+            // `base`, and the stores below write floats 0–3, 4–7 and 8–9 of it, inside `out`, which
+            // is borrowed mutably here; unaligned stores need no alignment.
+            unsafe {
+                let mut r0 = _mm_loadu_ps(d[0].as_ptr().add(g));
+                let mut r1 = _mm_loadu_ps(d[1].as_ptr().add(g));
+                let mut r2 = _mm_loadu_ps(d[2].as_ptr().add(g));
+                let mut r3 = _mm_loadu_ps(d[3].as_ptr().add(g));
+                _MM_TRANSPOSE4_PS(&mut r0, &mut r1, &mut r2, &mut r3);
+                let near = _mm_loadu_ps(clipping[0].as_ptr().add(g));
+                let far = _mm_loadu_ps(clipping[1].as_ptr().add(g));
+                // [near, far] of lanes g, g + 1 in `lo`, of g + 2, g + 3 in `hi`.
+                let lo = _mm_castps_si128(_mm_unpacklo_ps(near, far));
+                let hi = _mm_castps_si128(_mm_unpackhi_ps(near, far));
+                let zero = _mm_setzero_ps();
+                let record = |k: usize| base.add(10 * (g + k));
+                for (k, middle) in [r0, r1, r2, r3].into_iter().enumerate() {
+                    _mm_storeu_ps(record(k), zero);
+                    _mm_storeu_ps(record(k).add(4), middle);
+                }
+                _mm_storeu_si64(record(0).add(8).cast::<u8>(), lo);
+                _mm_storeu_si64(record(1).add(8).cast::<u8>(), _mm_unpackhi_epi64(lo, lo));
+                _mm_storeu_si64(record(2).add(8).cast::<u8>(), hi);
+                _mm_storeu_si64(record(3).add(8).cast::<u8>(), _mm_unpackhi_epi64(hi, hi));
+            }
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    for (i, r) in out.iter_mut().enumerate() {
+        *r = RayGeometry {
+            origin: obscura_sdk::Vec3::ZERO,
+            origin_radius: 0.0,
+            direction: obscura_sdk::Vec3::new(d[0][i], d[1][i], d[2][i]),
+            ray_spread: d[3][i],
+            min_dist: clipping[0][i],
+            max_dist: clipping[1][i],
+        };
     }
 }
 
