@@ -42,8 +42,7 @@ pub(crate) trait Sink {
 pub(crate) struct Aos<'a>(pub &'a mut [RayGeometry]);
 
 impl Sink for Aos<'_> {
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
+    #[inline(always)]
     unsafe fn put(&mut self, i: usize, n: usize, rays: &Lanes) {
         if n == 16 {
             // SAFETY: 16 records from `i` are in the slice (the caller's promise).
@@ -60,66 +59,81 @@ impl Sink for Aos<'_> {
 /// Sixteen 40-byte records `[O.x, O.y, O.z, r, D.x, D.y, D.z, spread, min, max]` at `out`.
 ///
 /// Within each 128-bit lane `j` of the registers, unpacks gather ray `4j + k`'s `(O.x, O.y, 0, 0)`,
-/// `(D, spread)` and `(min, max)`; each ray is then three 16-byte stores taken straight from the lanes
-/// (`vextractf32x4` to memory uses no shuffle port): bytes 0–15, 16–31, and a masked store of the
-/// `(min, max)` pair to bytes 32–39.
-#[inline]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
+/// `(D, spread)` and `(min, max)`; one two-source permute per pair of rays joins origin and direction
+/// into a 32-byte store (bytes 0–31), and a masked 16-byte store puts the `(min, max)` pair at bytes
+/// 32–39: two stores per ray (the store port, not the arithmetic, bounded the three-store version).
+#[inline(always)]
 unsafe fn store_records(out: *mut f32, r: &Lanes) {
-    let zero = _mm512_setzero_ps();
-    let dxy_lo = _mm512_unpacklo_ps(r.dx, r.dy);
-    let dxy_hi = _mm512_unpackhi_ps(r.dx, r.dy);
-    let zs_lo = _mm512_unpacklo_ps(r.dz, r.spread);
-    let zs_hi = _mm512_unpackhi_ps(r.dz, r.spread);
-    let dir = [
-        _mm512_castpd_ps(_mm512_unpacklo_pd(
-            _mm512_castps_pd(dxy_lo),
-            _mm512_castps_pd(zs_lo),
-        )),
-        _mm512_castpd_ps(_mm512_unpackhi_pd(
-            _mm512_castps_pd(dxy_lo),
-            _mm512_castps_pd(zs_lo),
-        )),
-        _mm512_castpd_ps(_mm512_unpacklo_pd(
-            _mm512_castps_pd(dxy_hi),
-            _mm512_castps_pd(zs_hi),
-        )),
-        _mm512_castpd_ps(_mm512_unpackhi_pd(
-            _mm512_castps_pd(dxy_hi),
-            _mm512_castps_pd(zs_hi),
-        )),
-    ];
-    let oxy_lo = _mm512_unpacklo_ps(r.ox, r.oy);
-    let oxy_hi = _mm512_unpackhi_ps(r.ox, r.oy);
-    let origin = [
-        _mm512_castpd_ps(_mm512_unpacklo_pd(
-            _mm512_castps_pd(oxy_lo),
-            _mm512_castps_pd(zero),
-        )),
-        _mm512_castpd_ps(_mm512_unpackhi_pd(
-            _mm512_castps_pd(oxy_lo),
-            _mm512_castps_pd(zero),
-        )),
-        _mm512_castpd_ps(_mm512_unpacklo_pd(
-            _mm512_castps_pd(oxy_hi),
-            _mm512_castps_pd(zero),
-        )),
-        _mm512_castpd_ps(_mm512_unpackhi_pd(
-            _mm512_castps_pd(oxy_hi),
-            _mm512_castps_pd(zero),
-        )),
-    ];
-    // Lane j, element pairs: rays 4j, 4j+1 in `clip[0]`, rays 4j+2, 4j+3 in `clip[1]`.
-    let clip = [_mm512_unpacklo_ps(r.min, r.max), _mm512_unpackhi_ps(r.min, r.max)];
-    macro_rules! lane {
-        ($j:literal) => {
-            for k in 0..4 {
-                // SAFETY: record 4j + k is among the 16 at `out`; the masked store of lanes 2–3 at byte 24
-                // writes bytes 32–39 only.
-                unsafe {
+    // SAFETY: only inlined into the kernels, which have AVX-512 F/VL; the stores are the caller's.
+    unsafe {
+        let zero = _mm512_setzero_ps();
+        let dxy_lo = _mm512_unpacklo_ps(r.dx, r.dy);
+        let dxy_hi = _mm512_unpackhi_ps(r.dx, r.dy);
+        let zs_lo = _mm512_unpacklo_ps(r.dz, r.spread);
+        let zs_hi = _mm512_unpackhi_ps(r.dz, r.spread);
+        let dir = [
+            _mm512_castpd_ps(_mm512_unpacklo_pd(
+                _mm512_castps_pd(dxy_lo),
+                _mm512_castps_pd(zs_lo),
+            )),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(
+                _mm512_castps_pd(dxy_lo),
+                _mm512_castps_pd(zs_lo),
+            )),
+            _mm512_castpd_ps(_mm512_unpacklo_pd(
+                _mm512_castps_pd(dxy_hi),
+                _mm512_castps_pd(zs_hi),
+            )),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(
+                _mm512_castps_pd(dxy_hi),
+                _mm512_castps_pd(zs_hi),
+            )),
+        ];
+        let oxy_lo = _mm512_unpacklo_ps(r.ox, r.oy);
+        let oxy_hi = _mm512_unpackhi_ps(r.ox, r.oy);
+        let origin = [
+            _mm512_castpd_ps(_mm512_unpacklo_pd(
+                _mm512_castps_pd(oxy_lo),
+                _mm512_castps_pd(zero),
+            )),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(
+                _mm512_castps_pd(oxy_lo),
+                _mm512_castps_pd(zero),
+            )),
+            _mm512_castpd_ps(_mm512_unpacklo_pd(
+                _mm512_castps_pd(oxy_hi),
+                _mm512_castps_pd(zero),
+            )),
+            _mm512_castpd_ps(_mm512_unpackhi_pd(
+                _mm512_castps_pd(oxy_hi),
+                _mm512_castps_pd(zero),
+            )),
+        ];
+        // Lane j, element pairs: rays 4j, 4j+1 in `clip[0]`, rays 4j+2, 4j+3 in `clip[1]`.
+        let clip = [_mm512_unpacklo_ps(r.min, r.max), _mm512_unpackhi_ps(r.min, r.max)];
+        // `[O, D]` of rays k and 4 + k (lanes 0 and 1 of `origin[k]`, `dir[k]`), and of 8 + k and
+        // 12 + k (lanes 2 and 3): one two-source permute per pair of rays, then a 32-byte store each.
+        const LO: [i32; 16] = [0, 1, 2, 3, 16, 17, 18, 19, 4, 5, 6, 7, 20, 21, 22, 23];
+        const HI: [i32; 16] = [8, 9, 10, 11, 24, 25, 26, 27, 12, 13, 14, 15, 28, 29, 30, 31];
+        let (lo, hi) = (
+            _mm512_loadu_si512(LO.as_ptr().cast()),
+            _mm512_loadu_si512(HI.as_ptr().cast()),
+        );
+        for k in 0..4 {
+            let rec = |ray: usize| out.add(10 * ray);
+            let p = _mm512_permutex2var_ps(origin[k], lo, dir[k]);
+            let q = _mm512_permutex2var_ps(origin[k], hi, dir[k]);
+            _mm256_storeu_ps(rec(k), _mm512_castps512_ps256(p));
+            _mm256_storeu_ps(rec(4 + k), _mm512_extractf32x8_ps::<1>(p));
+            _mm256_storeu_ps(rec(8 + k), _mm512_castps512_ps256(q));
+            _mm256_storeu_ps(rec(12 + k), _mm512_extractf32x8_ps::<1>(q));
+        }
+        // `(min, max)` of ray 4j + k: lane j of `clip[k / 2]`, elements 0–1 (k even) or 2–3 (k odd),
+        // a masked store that writes floats 8–9 of the record only.
+        macro_rules! lane {
+            ($j:literal) => {
+                for k in 0..4 {
                     let rec = out.add(10 * (4 * $j + k));
-                    _mm_storeu_ps(rec, _mm512_extractf32x4_ps::<$j>(origin[k]));
-                    _mm_storeu_ps(rec.add(4), _mm512_extractf32x4_ps::<$j>(dir[k]));
                     let c = _mm512_extractf32x4_ps::<$j>(clip[k / 2]);
                     if k % 2 == 0 {
                         _mm_mask_storeu_ps(rec.add(8), 0b0011, c);
@@ -127,13 +141,13 @@ unsafe fn store_records(out: *mut f32, r: &Lanes) {
                         _mm_mask_storeu_ps(rec.add(6), 0b1100, c);
                     }
                 }
-            }
-        };
+            };
+        }
+        lane!(0);
+        lane!(1);
+        lane!(2);
+        lane!(3);
     }
-    lane!(0);
-    lane!(1);
-    lane!(2);
-    lane!(3);
 }
 
 /// One array per field, as numpy holds them: `origin` and `direction` N×3, the others N.
@@ -154,8 +168,7 @@ pub(crate) struct Soa<'a> {
 }
 
 impl Sink for Soa<'_> {
-    #[inline]
-    #[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
+    #[inline(always)]
     unsafe fn put(&mut self, i: usize, n: usize, r: &Lanes) {
         let m = mask(n);
         // SAFETY: each array has room for rays i .. i + n (the caller's promise; checked in `soa`).
@@ -178,8 +191,7 @@ impl Sink for Soa<'_> {
 
 /// Interleaves 16 lanes of `x`, `y`, `z` into `xyz` triples (48 floats, three two-source permutes
 /// per register of output) and stores the first `3n`.
-#[inline]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
+#[inline(always)]
 #[cfg_attr(not(test), allow(dead_code))]
 unsafe fn store_xyz(out: *mut f32, n: usize, x: __m512, y: __m512, z: __m512) {
     // Output float `o` is component `o % 3` of ray `o / 3`. First interleave x and y by a permute of
@@ -241,8 +253,7 @@ fn mask(n: usize) -> __mmask16 {
 }
 
 /// Loads up to 16 points (`n` of them) as x and y lanes; missing lanes are 0.
-#[inline]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
+#[inline(always)]
 unsafe fn load_points(p: *const Point2, n: usize) -> (__m512, __m512) {
     const EVEN: [i32; 16] = [0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30];
     const ODD: [i32; 16] = [1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31];
@@ -265,37 +276,41 @@ unsafe fn load_points(p: *const Point2, n: usize) -> (__m512, __m512) {
 }
 
 /// [`obscura_sdk::optics::quarter_root`] in sixteen lanes, the same operations in the same order.
-#[inline]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
-fn quarter_root(w: __m512) -> __m512 {
-    let seed = _mm512_set1_epi32(obscura_sdk::optics::QUARTER_ROOT_SEED as i32);
-    let quarter_w = _mm512_mul_ps(_mm512_set1_ps(0.25), w);
-    let mut r = _mm512_castsi512_ps(_mm512_sub_epi32(
-        seed,
-        _mm512_srli_epi32::<2>(_mm512_castps_si512(w)),
-    ));
-    let five_quarters = _mm512_set1_ps(1.25);
-    for _ in 0..3 {
-        let r2 = _mm512_mul_ps(r, r);
-        r = _mm512_mul_ps(
-            r,
-            _mm512_sub_ps(five_quarters, _mm512_mul_ps(_mm512_mul_ps(quarter_w, r2), r2)),
-        );
+#[inline(always)]
+unsafe fn quarter_root(w: __m512) -> __m512 {
+    // SAFETY: only inlined into the kernels, which have AVX-512 F.
+    unsafe {
+        let seed = _mm512_set1_epi32(obscura_sdk::optics::QUARTER_ROOT_SEED as i32);
+        let quarter_w = _mm512_mul_ps(_mm512_set1_ps(0.25), w);
+        let mut r = _mm512_castsi512_ps(_mm512_sub_epi32(
+            seed,
+            _mm512_srli_epi32::<2>(_mm512_castps_si512(w)),
+        ));
+        let five_quarters = _mm512_set1_ps(1.25);
+        for _ in 0..3 {
+            let r2 = _mm512_mul_ps(r, r);
+            r = _mm512_mul_ps(
+                r,
+                _mm512_sub_ps(five_quarters, _mm512_mul_ps(_mm512_mul_ps(quarter_w, r2), r2)),
+            );
+        }
+        _mm512_mul_ps(w, _mm512_mul_ps(_mm512_mul_ps(r, r), r))
     }
-    _mm512_mul_ps(w, _mm512_mul_ps(_mm512_mul_ps(r, r), r))
 }
 
-/// `w = ((sx² + d²)·m)·((sy² + d²)·m)` with `m = 1/L²`, and `L² = sx² + sy² + d²`.
-#[inline]
-#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
-fn squares(x: __m512, y: __m512, d2: __m512) -> (__m512, __m512, __m512) {
-    let sx2 = _mm512_mul_ps(x, x);
-    let sy2 = _mm512_mul_ps(y, y);
-    (
-        _mm512_add_ps(sx2, d2),
-        _mm512_add_ps(sy2, d2),
-        _mm512_add_ps(_mm512_add_ps(sx2, sy2), d2),
-    )
+/// `(sx² + d², sy² + d², L²)` with `L² = (sx² + sy²) + d²`, in that order of additions.
+#[inline(always)]
+unsafe fn squares(x: __m512, y: __m512, d2: __m512) -> (__m512, __m512, __m512) {
+    // SAFETY: only inlined into the kernels, which have AVX-512 F.
+    unsafe {
+        let sx2 = _mm512_mul_ps(x, x);
+        let sy2 = _mm512_mul_ps(y, y);
+        (
+            _mm512_add_ps(sx2, d2),
+            _mm512_add_ps(sy2, d2),
+            _mm512_add_ps(_mm512_add_ps(sx2, sy2), d2),
+        )
+    }
 }
 
 /// [`PerspectiveRays::pinhole`] over a batch, into `sink`.
@@ -317,7 +332,8 @@ pub(crate) unsafe fn pinhole(rays: &PerspectiveRays, screen: &[Point2], d: f32, 
         let n = (screen.len() - i).min(16);
         // SAFETY: points i .. i + n exist.
         let (x, y) = unsafe { load_points(screen.as_ptr().add(i), n) };
-        let (a, b, l2) = squares(x, y, d2);
+        // SAFETY: this kernel has the features the helper's intrinsics need.
+        let (a, b, l2) = unsafe { squares(x, y, d2) };
         let l = _mm512_sqrt_ps(l2);
         let inv_l = _mm512_div_ps(one, l);
         let inv_l2 = _mm512_mul_ps(inv_l, inv_l);
@@ -328,7 +344,8 @@ pub(crate) unsafe fn pinhole(rays: &PerspectiveRays, screen: &[Point2], d: f32, 
             dx: _mm512_mul_ps(x, inv_l),
             dy: _mm512_mul_ps(y, inv_l),
             dz: _mm512_mul_ps(vd, inv_l),
-            spread: _mm512_mul_ps(_mm512_mul_ps(half, quarter_root(w)), inv_l),
+            // SAFETY: as for `squares`.
+            spread: _mm512_mul_ps(_mm512_mul_ps(half, unsafe { quarter_root(w) }), inv_l),
             min: _mm512_mul_ps(near, l),
             max: _mm512_mul_ps(far, l),
         };
@@ -376,7 +393,8 @@ pub(crate) unsafe fn thin_lens(
                 load_points(aperture.as_ptr().add(i), n),
             )
         };
-        let (a, b, l2) = squares(x, y, d2);
+        // SAFETY: this kernel has the features the helper's intrinsics need.
+        let (a, b, l2) = unsafe { squares(x, y, d2) };
         let inv_l2 = _mm512_div_ps(one, l2);
         let w = _mm512_mul_ps(_mm512_mul_ps(a, inv_l2), _mm512_mul_ps(b, inv_l2));
         let (ox, oy) = (_mm512_mul_ps(radius, ax), _mm512_mul_ps(radius, ay));
@@ -391,7 +409,8 @@ pub(crate) unsafe fn thin_lens(
             dx: _mm512_mul_ps(tx, inv_t),
             dy: _mm512_mul_ps(ty, inv_t),
             dz: _mm512_mul_ps(vf, inv_t),
-            spread: _mm512_mul_ps(_mm512_mul_ps(half_k, quarter_root(w)), inv_t),
+            // SAFETY: as for `squares`.
+            spread: _mm512_mul_ps(_mm512_mul_ps(half_k, unsafe { quarter_root(w) }), inv_t),
             min: _mm512_mul_ps(near, t),
             max: _mm512_mul_ps(far, t),
         };
