@@ -225,9 +225,9 @@ impl Projection for Perspective {
     }
 }
 
-/// Pinhole rays for a batch at the dispatch tier ([`simd::level`]): the AVX-512 kernel, else the
-/// portable loop (vectorised 8 wide in the AVX2 trampoline). Every tier gives bit-identical rays: the
-/// kernel is [`PerspectiveRays::pinhole`] operation for operation.
+/// Pinhole rays for a batch at the dispatch tier ([`simd::level`]): the AVX-512 or the AVX2 kernel,
+/// else the portable loop. Every tier gives bit-identical rays: the kernels are
+/// [`PerspectiveRays::pinhole`] operation for operation.
 fn pinhole_batch(rays: &PerspectiveRays, screen: &[Point2], d: f32, out: &mut [RayGeometry]) {
     let n = screen.len().min(out.len());
     match simd::level() {
@@ -236,6 +236,9 @@ fn pinhole_batch(rays: &PerspectiveRays, screen: &[Point2], d: f32, out: &mut [R
         simd::Level::Avx512 => unsafe {
             avx512::pinhole(rays, &screen[..n], d, &mut avx512::Aos(&mut out[..n]))
         },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx2Fma when the CPU has AVX2 and FMA.
+        simd::Level::Avx2Fma => unsafe { avx2::pinhole(rays, &screen[..n], d, &mut out[..n]) },
         level => simd::run_at(
             level,
             #[inline(always)]
@@ -277,6 +280,8 @@ fn thin_lens_batch(
     }
 }
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
 #[cfg(target_arch = "x86_64")]
 mod avx512;
 
