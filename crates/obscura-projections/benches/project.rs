@@ -2,7 +2,7 @@
 //! size, per SIMD tier for the perspective kernels, beside same-run references: a scalar per-ray loop
 //! (one non-inlined call per ray, baseline instruction set) and two rooflines for the 40 bytes each
 //! ray stores — the *store roofline* (the same buffer, in cache, written with the widest aligned
-//! stores the CPU has, computing nothing) and the *streaming roofline* (a batch of 4M rays, 160 MB, far
+//! stores the CPU has, computing nothing) and the *streaming roofline* (a batch of 16M rays, 640 MB, far
 //! beyond L2 and L3, written with non-temporal stores, and with ordinary stores).
 //!
 //! divan reports items/s: each item is one ray.
@@ -249,10 +249,10 @@ fn reference_store_roofline(bencher: Bencher, n: usize) {
     });
 }
 
-/// Rays in the streaming benches: 4M, 160 MB of rays, far beyond L2 and L3.
-const STREAM: usize = 1 << 22;
+/// Rays in the streaming benches: 16M, 640 MB of rays, beyond L2 and the L3 this machine reports.
+const STREAM: usize = 1 << 24;
 
-/// Reference: the streaming roofline. 4M rays (160 MB) written to memory with 64-byte non-temporal
+/// Reference: the streaming roofline. 16M rays (640 MB) written to memory with 64-byte non-temporal
 /// stores (`vmovntps`), which skip the read-for-ownership of ordinary stores.
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn reference_stream_roofline_nontemporal(bencher: Bencher) {
@@ -263,7 +263,7 @@ fn reference_stream_roofline_nontemporal(bencher: Bencher) {
     });
 }
 
-/// Reference: 4M rays written to memory with ordinary 64-byte stores (the read-for-ownership
+/// Reference: 16M rays written to memory with ordinary 64-byte stores (the read-for-ownership
 /// included): the ceiling of any kernel that writes a batch that large with ordinary stores.
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn reference_stream_roofline_ordinary(bencher: Bencher) {
@@ -274,7 +274,7 @@ fn reference_stream_roofline_ordinary(bencher: Bencher) {
     });
 }
 
-/// The pinhole and thin lens over one batch of 4M rays: what `project` makes of the streaming roofline.
+/// The pinhole and thin lens over one batch of 16M rays: what `project` makes of the streaming roofline.
 #[divan::bench(args = ["pinhole", "thin_lens"], sample_count = 10, sample_size = 1)]
 fn perspective_stream(bencher: Bencher, model: &str) {
     let params = PERSPECTIVE.iter().find(|p| p.0 == model).expect("a model").1;
