@@ -43,6 +43,14 @@
 //! at radius `1/k`), the cosine is held at its value a hundredth of a pixel inside the rim,
 //! [`rim_cos_floor`]`(k·ε) = sqrt(k·ε·(2 − k·ε))`.
 //!
+//! # Batch lanes
+//!
+//! A camera whose rays leave its centre states its ray as a branch-free [`CentredLane`] (valid,
+//! direction, spread; [`radial_lane`] for the radial maps); [`crate::screen::map_centred_rays`] runs a
+//! batch of them structure-of-arrays at the widest SIMD tier, and [`SphericalClip::lane_ray`] turns one
+//! into its ray. Sines and cosines come from [`sin_cos`], a polynomial that vectorises (libm's does
+//! not).
+//!
 //! # Properties and clipping
 //!
 //! The panoramic cameras answer DicingHint Spherical and DeepMetric RayLength ([`spherical_property`];
