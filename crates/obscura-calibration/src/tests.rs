@@ -1137,23 +1137,7 @@ fn tier_cases() -> Vec<Case> {
 }
 
 fn ray_bits(rays: &[RayGeometry]) -> Vec<[u32; 10]> {
-    rays.iter()
-        .map(|r| {
-            [
-                r.origin.x,
-                r.origin.y,
-                r.origin.z,
-                r.origin_radius,
-                r.direction.x,
-                r.direction.y,
-                r.direction.z,
-                r.ray_spread,
-                r.min_dist,
-                r.max_dist,
-            ]
-            .map(f32::to_bits)
-        })
-        .collect()
+    rays.iter().map(RayGeometry::to_bits).collect()
 }
 
 /// Every SIMD tier ([`obscura_sdk::simd::Level`]: portable, AVX2 + FMA, AVX-512; a tier the CPU lacks

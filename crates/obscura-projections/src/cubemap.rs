@@ -200,7 +200,7 @@ fn tan_quarter_turn(t: f32) -> f32 {
     (if far { 1.0 / tan } else { tan }).copysign(t)
 }
 
-centred_projection!(CubemapFace, |_: &CubemapFace| 90.0);
+spherical_projection!(CubemapFace, |_: &CubemapFace| 90.0, lanes);
 
 impl CubemapFace {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

@@ -111,7 +111,7 @@ impl CylinderCamera {
     }
 }
 
-centred_projection!(CylinderCamera, |camera: &CylinderCamera| camera.fov);
+spherical_projection!(CylinderCamera, |camera: &CylinderCamera| camera.fov, lanes);
 
 impl CylinderCamera {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

@@ -63,37 +63,30 @@ macro_rules! projection_factory {
 
 /// Implements `Projection` for `$camera`, a panoramic camera whose rays leave its centre: DicingHint
 /// Spherical, DeepMetric RayLength and the FieldOfView `$fov` reads off the camera
-/// (`crate::panorama::spherical_property`); each ray from its screen sample by the camera's
-/// `ray(&self, Point2) -> RayGeometry`; the inverse by its `screen_of(&self, x, y, z) -> Option<Point2>`
-/// once the point's components are finite.
+/// (`crate::panorama::spherical_property`); the inverse by its `screen_of(&self, x, y, z) ->
+/// Option<Point2>` once the point's components are finite. Each ray from its screen sample by the
+/// camera's `ray(&self, Point2) -> RayGeometry`, or — with `lanes` after the field of view — by its
+/// branch-free `lane(&self, Point2) -> panorama::CentredLane` and its `clip` field, in the
+/// structure-of-arrays loop of `crate::screen::map_centred_rays`.
 macro_rules! spherical_projection {
     ($camera:ty, $fov:expr $(,)?) => {
-        impl obscura_sdk::Projection for $camera {
-            fn property(
-                &self,
-                property: obscura_sdk::ProjectionProperty,
-            ) -> Option<obscura_sdk::PropertyValue> {
-                let fov: fn(&$camera) -> f32 = $fov;
-                crate::panorama::spherical_property(property, fov(self))
-            }
-
-            fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
-                crate::screen::map_rays(ctx, |s| self.ray(s));
-            }
-
-            fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {
-                let (x, y, z) = crate::panorama::finite_f64(point)?;
-                self.screen_of(x, y, z)
-            }
-        }
+        spherical_projection!(@impl $camera, $fov, ray);
     };
-}
-
-/// [`spherical_projection!`] for a camera with a branch-free `lane` (a
-/// [`panorama::CentredLane`] per screen sample) and a `clip` field: `project` runs the lanes in the
-/// structure-of-arrays loop of [`screen::map_centred_rays`].
-macro_rules! centred_projection {
-    ($camera:ty, $fov:expr $(,)?) => {
+    ($camera:ty, $fov:expr, lanes $(,)?) => {
+        spherical_projection!(@impl $camera, $fov, lane);
+    };
+    (@project $this:ident, $ctx:ident, ray) => {
+        crate::screen::map_rays($ctx, |s| $this.ray(s))
+    };
+    (@project $this:ident, $ctx:ident, lane) => {
+        crate::screen::map_centred_rays(
+            $ctx,
+            $this.clip,
+            #[inline(always)]
+            |s| $this.lane(s),
+        )
+    };
+    (@impl $camera:ty, $fov:expr, $how:ident) => {
         impl obscura_sdk::Projection for $camera {
             fn property(
                 &self,
@@ -104,12 +97,7 @@ macro_rules! centred_projection {
             }
 
             fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
-                crate::screen::map_centred_rays(
-                    ctx,
-                    self.clip,
-                    #[inline(always)]
-                    |s| self.lane(s),
-                );
+                spherical_projection!(@project self, ctx, $how);
             }
 
             fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {

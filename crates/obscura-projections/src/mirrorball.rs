@@ -177,7 +177,7 @@ impl MirrorBall {
     }
 }
 
-centred_projection!(MirrorBall, |_: &MirrorBall| 360.0);
+spherical_projection!(MirrorBall, |_: &MirrorBall| 360.0, lanes);
 
 impl MirrorBall {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

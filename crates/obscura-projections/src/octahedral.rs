@@ -151,7 +151,7 @@ impl Octahedral {
     }
 }
 
-centred_projection!(Octahedral, |_: &Octahedral| 360.0);
+spherical_projection!(Octahedral, |_: &Octahedral| 360.0, lanes);
 
 impl Octahedral {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

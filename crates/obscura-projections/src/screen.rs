@@ -280,23 +280,7 @@ mod tests {
     }
 
     fn bits(rays: &[RayGeometry]) -> Vec<[u32; 10]> {
-        rays.iter()
-            .map(|r| {
-                [
-                    r.origin.x,
-                    r.origin.y,
-                    r.origin.z,
-                    r.origin_radius,
-                    r.direction.x,
-                    r.direction.y,
-                    r.direction.z,
-                    r.ray_spread,
-                    r.min_dist,
-                    r.max_dist,
-                ]
-                .map(f32::to_bits)
-            })
-            .collect()
+        rays.iter().map(RayGeometry::to_bits).collect()
     }
 
     /// The rays of `screen` at tier `level` (capped to what the CPU has).

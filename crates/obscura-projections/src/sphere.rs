@@ -109,7 +109,7 @@ impl SphereCamera {
     }
 }
 
-centred_projection!(SphereCamera, |camera: &SphereCamera| camera.fov);
+spherical_projection!(SphereCamera, |camera: &SphereCamera| camera.fov, lanes);
 
 impl SphereCamera {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
