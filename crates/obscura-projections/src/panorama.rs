@@ -38,7 +38,7 @@
 //! αx = Δx·sqrt(A²·sx² + B²·sy²)/r,   αy = Δy·sqrt(A²·sy² + B²·sx²)/r,   ray_spread = ½·sqrt(αx·αy)
 //! ```
 //!
-//! (`αx = Δx·A`, `αy = Δy·A` at `r = 0`), computed by [`radial_ray`] with `Δx = Δy = sqrt(Δx·Δy)` taken
+//! (`αx = Δx·A`, `αy = Δy·A` at `r = 0`), computed by [`radial_lane`] with `Δx = Δy = sqrt(Δx·Δy)` taken
 //! out as the half-pixel factor. Where `A` is infinite at a rim (`A = k/cos` with the cosine reaching 0
 //! at radius `1/k`), the cosine is held at its value a hundredth of a pixel inside the rim,
 //! [`rim_cos_floor`]`(k·ε) = sqrt(k·ε·(2 − k·ε))`.
