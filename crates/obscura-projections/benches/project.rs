@@ -16,7 +16,7 @@ use obscura_sdk::simd::{self, Level};
 use obscura_sdk::{Point2, RayGeometry, Vec3};
 
 mod common;
-use common::{Aperture, Batch, projection};
+use common::{Aperture, Batch, PERSPECTIVE, projection};
 
 const BATCHES: [usize; 3] = [64, 256, 4096];
 
@@ -203,20 +203,6 @@ fn reference_store_bandwidth(bencher: Bencher, n: usize) {
         black_box(&batch.rays);
     });
 }
-
-/// The perspective parameters of the tier benches: pinhole and thin lens.
-const PERSPECTIVE: [(&str, &[(&str, &str)]); 2] = [
-    ("pinhole", &[("float fov", "60")]),
-    (
-        "thin_lens",
-        &[
-            ("float fov", "60"),
-            ("float fStop", "2.8"),
-            ("float focalLength", "0.05"),
-            ("float focalDistance", "4"),
-        ],
-    ),
-];
 
 /// `PxrPerspective` pinhole and thin lens at batch 4096 at each dispatch tier (`simd::with_level`);
 /// a tier the CPU lacks reports nothing.

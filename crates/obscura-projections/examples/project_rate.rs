@@ -11,6 +11,9 @@
 //! one such pass, and the figure is the best round within `--seconds` (at least three rounds). Prints
 //! one line per model: `<model> batch=<b> total=<n> tier=<tier> mrays_per_s=<x>`.
 
+#[path = "../benches/common/mod.rs"]
+mod common;
+
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 
@@ -83,19 +86,7 @@ fn run() -> Result<(), String> {
         .iter()
         .map(|l| Point2::new(2.0 * l.x - 1.0, 2.0 * l.y - 1.0))
         .collect();
-    let models: [(&str, &[(&str, &str)]); 2] = [
-        ("pinhole", &[("float fov", "60")]),
-        (
-            "thin_lens",
-            &[
-                ("float fov", "60"),
-                ("float fStop", "2.8"),
-                ("float focalLength", "0.05"),
-                ("float focalDistance", "4"),
-            ],
-        ),
-    ];
-    for (model, params) in models {
+    for (model, params) in common::PERSPECTIVE {
         let p = projection(format, params)?;
         let mut rays = vec![RayGeometry::CULLED; batch];
         let mut tint = vec![Rgb::WHITE; batch];

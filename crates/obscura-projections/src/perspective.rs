@@ -484,57 +484,6 @@ mod tests {
         }
     }
 
-    /// The structure-of-arrays sink writes exactly the fields of the array-of-records one.
-    #[test]
-    #[cfg(target_arch = "x86_64")]
-    fn the_soa_sink_holds_the_aos_rays() {
-        if !simd::Level::Avx512.is_available() {
-            eprintln!("skipped: this CPU lacks AVX-512");
-            return;
-        }
-        let env = ProjectionEnvironment::for_format(Format::new(640, 480));
-        let rays = PerspectiveRays::new(env.pixel_size(), (0.1, 1000.0), 0.03, 2.5);
-        let (screen, aperture) = samples();
-        for n in [0, 1, 5, 16, 17, 31, 48, 1037] {
-            let mut aos = vec![RayGeometry::CULLED; n];
-            let (mut o, mut dir) = (vec![f32::NAN; 3 * n], vec![f32::NAN; 3 * n]);
-            let mut f: Vec<Vec<f32>> = vec![vec![f32::NAN; n]; 4];
-            let [r, s, mn, mx] = &mut f[..] else {
-                unreachable!()
-            };
-            let mut soa = avx512::Soa {
-                origin: &mut o,
-                direction: &mut dir,
-                origin_radius: r,
-                ray_spread: s,
-                min_dist: mn,
-                max_dist: mx,
-            };
-            // SAFETY: the CPU has AVX-512 (checked above); every output holds n rays.
-            unsafe {
-                avx512::thin_lens(&rays, &screen[..n], &aperture[..n], 1.7, &mut soa);
-                avx512::thin_lens(
-                    &rays,
-                    &screen[..n],
-                    &aperture[..n],
-                    1.7,
-                    &mut avx512::Aos(&mut aos),
-                );
-            }
-            let back: Vec<RayGeometry> = (0..n)
-                .map(|i| RayGeometry {
-                    origin: Vec3::new(o[3 * i], o[3 * i + 1], o[3 * i + 2]),
-                    origin_radius: f[0][i],
-                    direction: Vec3::new(dir[3 * i], dir[3 * i + 1], dir[3 * i + 2]),
-                    ray_spread: f[1][i],
-                    min_dist: f[2][i],
-                    max_dist: f[3][i],
-                })
-                .collect();
-            assert_eq!(bits(&back), bits(&aos), "n {n}");
-        }
-    }
-
     #[test]
     fn twenty_degrees_puts_the_screen_plane_at_5_6713() {
         let p = make(&[("float fov", &["20"])], Format::new(100, 100));

@@ -6,9 +6,9 @@
 //! floats at a time and split into x and y lanes with one two-source permute each; a batch whose length
 //! is not a multiple of 16 ends with masked loads.
 //!
-//! The rays go to a [`Sink`]: [`Aos`] writes RenderMan's 40-byte `RtRayGeometry` records (three
-//! 16-byte stores per ray from 128-bit lanes shuffled into record order; see [`Aos`]), [`Soa`] one
-//! array per field (what numpy wants: the Python binding's `project`).
+//! The rays go to a [`Sink`]: [`Aos`] writes RenderMan's 40-byte `RtRayGeometry` records (two stores
+//! per ray from 128-bit lanes shuffled into record order; see `store_records`). A sink writing one
+//! array per field (numpy's layout) fits the same trait; the Python binding does not use one yet.
 //!
 //! [`quarter_root`]: obscura_sdk::optics::quarter_root
 
@@ -147,102 +147,6 @@ unsafe fn store_records(out: *mut f32, r: &Lanes) {
         lane!(1);
         lane!(2);
         lane!(3);
-    }
-}
-
-/// One array per field, as numpy holds them: `origin` and `direction` N×3, the others N.
-#[cfg_attr(not(test), allow(dead_code))]
-pub(crate) struct Soa<'a> {
-    /// `N×3` origins.
-    pub origin: &'a mut [f32],
-    /// `N×3` unit directions.
-    pub direction: &'a mut [f32],
-    /// `origin_radius`.
-    pub origin_radius: &'a mut [f32],
-    /// `ray_spread`.
-    pub ray_spread: &'a mut [f32],
-    /// `min_dist`.
-    pub min_dist: &'a mut [f32],
-    /// `max_dist`.
-    pub max_dist: &'a mut [f32],
-}
-
-impl Sink for Soa<'_> {
-    #[inline(always)]
-    unsafe fn put(&mut self, i: usize, n: usize, r: &Lanes) {
-        let m = mask(n);
-        // SAFETY: each array has room for rays i .. i + n (the caller's promise; checked in `soa`).
-        unsafe {
-            _mm512_mask_storeu_ps(self.origin_radius.as_mut_ptr().add(i), m, _mm512_setzero_ps());
-            _mm512_mask_storeu_ps(self.ray_spread.as_mut_ptr().add(i), m, r.spread);
-            _mm512_mask_storeu_ps(self.min_dist.as_mut_ptr().add(i), m, r.min);
-            _mm512_mask_storeu_ps(self.max_dist.as_mut_ptr().add(i), m, r.max);
-            store_xyz(
-                self.origin.as_mut_ptr().add(3 * i),
-                n,
-                r.ox,
-                r.oy,
-                _mm512_setzero_ps(),
-            );
-            store_xyz(self.direction.as_mut_ptr().add(3 * i), n, r.dx, r.dy, r.dz);
-        }
-    }
-}
-
-/// Interleaves 16 lanes of `x`, `y`, `z` into `xyz` triples (48 floats, three two-source permutes
-/// per register of output) and stores the first `3n`.
-#[inline(always)]
-#[cfg_attr(not(test), allow(dead_code))]
-unsafe fn store_xyz(out: *mut f32, n: usize, x: __m512, y: __m512, z: __m512) {
-    // Output float `o` is component `o % 3` of ray `o / 3`. First interleave x and y by a permute of
-    // the pair, then put z in with a masked permute.
-    const fn idx(reg: usize, which: usize) -> [i32; 16] {
-        let mut a = [0i32; 16];
-        let mut e = 0;
-        while e < 16 {
-            let o = 16 * reg + e;
-            let (ray, comp) = ((o / 3) as i32, o % 3);
-            a[e] = match (which, comp) {
-                (0, 0) => ray,
-                (0, 1) => 16 + ray,
-                (1, 2) => ray,
-                _ => 0,
-            };
-            e += 1;
-        }
-        a
-    }
-    const fn zmask(reg: usize) -> u16 {
-        let mut m = 0u16;
-        let mut e = 0;
-        while e < 16 {
-            if (16 * reg + e) % 3 == 2 {
-                m |= 1 << e;
-            }
-            e += 1;
-        }
-        m
-    }
-    const IDX: [[[i32; 16]; 2]; 3] = [
-        [idx(0, 0), idx(0, 1)],
-        [idx(1, 0), idx(1, 1)],
-        [idx(2, 0), idx(2, 1)],
-    ];
-    const ZMASK: [u16; 3] = [zmask(0), zmask(1), zmask(2)];
-    let left = 3 * n;
-    for reg in 0..3 {
-        // SAFETY: the index tables are 16 i32; the store is masked to the `3n` floats asked for.
-        unsafe {
-            let xy = _mm512_permutex2var_ps(x, _mm512_loadu_si512(IDX[reg][0].as_ptr().cast()), y);
-            let v = _mm512_mask_permutexvar_ps(
-                xy,
-                ZMASK[reg],
-                _mm512_loadu_si512(IDX[reg][1].as_ptr().cast()),
-                z,
-            );
-            let count = left.saturating_sub(16 * reg).min(16);
-            _mm512_mask_storeu_ps(out.add(16 * reg), mask(count), v);
-        }
     }
 }
 
