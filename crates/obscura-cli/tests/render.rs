@@ -247,18 +247,21 @@ fn an_obj_scene_renders_with_the_projection_from_the_command_line() {
 }
 
 /// Issue 29: a render is byte-identical whichever SIMD tier generated its camera rays. The same frame
-/// (pinhole, then thin lens) at `OBSCURA_SIMD=portable`, `avx2` and `avx512`; the image files compared
-/// byte for byte. Tiers the CPU lacks fall back to the widest it has (and say so on stderr), so the
+/// (pinhole, thin lens, then two panoramas with structure-of-arrays lane loops: an equidistant 360°
+/// fisheye, which culls outside its circle, and the spherical panorama) at `OBSCURA_SIMD=portable`,
+/// `avx2` and `avx512`; the image files compared byte for byte. Tiers the CPU lacks fall back to the widest it has (and say so on stderr), so the
 /// comparison never passes by skipping on a machine that has them.
 #[test]
 fn renders_are_byte_identical_at_every_simd_tier() {
     let dir = tempfile::tempdir().unwrap();
-    for (name, lens) in [
-        ("pinhole", ""),
+    for (name, projection) in [
+        ("pinhole", r#"Projection "PxrPerspective" "float fov" [50]"#),
         (
             "thin_lens",
-            r#" "float fStop" [2] "float focalLength" [0.1] "float focalDistance" [5]"#,
+            r#"Projection "PxrPerspective" "float fov" [50] "float fStop" [2] "float focalLength" [0.1] "float focalDistance" [5]"#,
         ),
+        ("fisheye", r#"Projection "Fisheye" "float fov" [360]"#),
+        ("sphere", r#"Projection "PxrSphereCamera""#),
     ] {
         let rib = format!(
             r#"##RenderMan RIB
@@ -266,7 +269,7 @@ version 3.04
 Format 64 48 1
 Hider "raytrace" "int maxsamples" [4]
 Display "{name}.exr" "openexr" "rgba,z"
-Projection "PxrPerspective" "float fov" [50]{lens}
+{projection}
 Translate 0 -0.5 5
 WorldBegin
   Light "PxrDistantLight" "sun" "float intensity" [2]
