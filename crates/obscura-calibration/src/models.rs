@@ -936,18 +936,22 @@ impl CameraModel {
         let scalar = |px| self.pixel_to_ray(px);
         match d.shape() {
             (false, false) => visitor.visit_chunks(
+                #[inline(always)]
                 |px, o| self.distortion_chunk::<false, false>(d, lift, px, o),
                 scalar,
             ),
             (true, false) => visitor.visit_chunks(
+                #[inline(always)]
                 |px, o| self.distortion_chunk::<true, false>(d, lift, px, o),
                 scalar,
             ),
             (false, true) => visitor.visit_chunks(
+                #[inline(always)]
                 |px, o| self.distortion_chunk::<false, true>(d, lift, px, o),
                 scalar,
             ),
             (true, true) => visitor.visit_chunks(
+                #[inline(always)]
                 |px, o| self.distortion_chunk::<true, true>(d, lift, px, o),
                 scalar,
             ),
@@ -974,9 +978,18 @@ impl CameraModel {
         }
         if self.tilt.is_some() || self.distortion.is_some() {
             match &self.lift {
-                Lift::Perspective => visitor.visit(|px| self.pixel_to_ray_with(px, lift::perspective)),
-                Lift::Equidistant => visitor.visit(|px| self.pixel_to_ray_with(px, lift::equidistant)),
-                _ => visitor.visit(|px| self.pixel_to_ray_with(px, |m| self.lift.lift(m))),
+                Lift::Perspective => visitor.visit(
+                    #[inline(always)]
+                    |px| self.pixel_to_ray_with(px, lift::perspective),
+                ),
+                Lift::Equidistant => visitor.visit(
+                    #[inline(always)]
+                    |px| self.pixel_to_ray_with(px, lift::equidistant),
+                ),
+                _ => visitor.visit(
+                    #[inline(always)]
+                    |px| self.pixel_to_ray_with(px, |m| self.lift.lift(m)),
+                ),
             }
             return;
         }
@@ -1042,12 +1055,16 @@ impl CameraModel {
                 rho_max,
                 theta_max,
             } => visitor.visit_chunks(
+                #[inline(always)]
                 |px, out| forward_ftheta_chunk(fw, rho_max, theta_max, ai, c, px, out),
                 scalar,
             ),
-            Lift::FTheta { .. } | Lift::Lens3de(_) => {
-                visitor.visit(closed_form(ai, c, |m| self.lift.lift(m)))
-            }
+            Lift::FTheta { .. } | Lift::Lens3de(_) => visitor.visit(closed_form(
+                ai,
+                c,
+                #[inline(always)]
+                |m| self.lift.lift(m),
+            )),
         }
     }
 

@@ -1,6 +1,9 @@
-//! `cargo bench -p obscura-projections`: rays/s of `project` per projection and batch size, beside two
-//! same-run references: a scalar per-ray loop (one non-inlined call per ray, baseline instruction set)
-//! and a store-bandwidth kernel that writes the same 40 bytes per ray and computes nothing.
+//! `cargo bench -p obscura-projections --bench project`: rays/s of `project` per projection and batch
+//! size, per SIMD tier for the perspective kernels, beside same-run references: a scalar per-ray loop
+//! (one non-inlined call per ray, baseline instruction set) and two rooflines for the 40 bytes each
+//! ray stores — the *store roofline* (the same buffer, in cache, written with the widest aligned
+//! stores the CPU has, computing nothing) and the *streaming roofline* (a batch of 16M rays, 640 MB, far
+//! beyond L2 and L3, written with non-temporal stores, and with ordinary stores).
 //!
 //! divan reports items/s: each item is one ray.
 
@@ -9,10 +12,11 @@ use std::hint::black_box;
 use divan::{Bencher, counter::ItemsCount};
 use obscura_projections::panorama::SphericalClip;
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
+use obscura_sdk::simd::{self, Level};
 use obscura_sdk::{Point2, RayGeometry, Vec3};
 
 mod common;
-use common::{Aperture, Batch, projection};
+use common::{Aperture, Batch, PERSPECTIVE, projection};
 
 const BATCHES: [usize; 3] = [64, 256, 4096];
 
@@ -198,4 +202,123 @@ fn reference_store_bandwidth(bencher: Bencher, n: usize) {
         batch.rays.fill(black_box(ray));
         black_box(&batch.rays);
     });
+}
+
+/// `PxrPerspective` pinhole and thin lens at batch 4096 at each dispatch tier (`simd::with_level`);
+/// a tier the CPU lacks reports nothing.
+#[divan::bench(args = ["pinhole/portable", "pinhole/avx2", "pinhole/avx512", "thin_lens/portable", "thin_lens/avx2", "thin_lens/avx512"])]
+fn perspective_tier(bencher: Bencher, case: &str) {
+    let (model, tier) = case.split_once('/').expect("model/tier");
+    let level = Level::parse(tier).expect("a tier name");
+    if !level.is_available() {
+        return;
+    }
+    let params = PERSPECTIVE.iter().find(|p| p.0 == model).expect("a model").1;
+    let p = projection("PxrPerspective", params);
+    let mut batch = Batch::new(4096, Aperture::Square);
+    bencher.counter(ItemsCount::new(4096usize)).bench_local(|| {
+        simd::with_level(level, || batch.run(black_box(p.as_ref())));
+        black_box(&batch.rays);
+    });
+}
+
+/// Reference: the store roofline. The batch's own 40 bytes per ray written with the widest aligned
+/// stores the CPU has (64-byte `vmovaps` with AVX-512, masked at the unaligned ends), ordinary
+/// (not non-temporal) stores into a buffer that stays in cache: what a kernel that computed nothing
+/// could reach.
+#[divan::bench(args = BATCHES)]
+fn reference_store_roofline(bencher: Bencher, n: usize) {
+    let mut batch = Batch::new(n, Aperture::Square);
+    bencher.counter(ItemsCount::new(n)).bench_local(|| {
+        roofline::store(black_box(&mut batch.rays), false);
+        black_box(&batch.rays);
+    });
+}
+
+/// Rays in the streaming benches: 16M, 640 MB of rays, beyond L2 and the L3 this machine reports.
+const STREAM: usize = 1 << 24;
+
+/// Reference: the streaming roofline. 16M rays (640 MB) written to memory with 64-byte non-temporal
+/// stores (`vmovntps`), which skip the read-for-ownership of ordinary stores.
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn reference_stream_roofline_nontemporal(bencher: Bencher) {
+    let mut rays = vec![RayGeometry::CULLED; STREAM];
+    bencher.counter(ItemsCount::new(STREAM)).bench_local(|| {
+        roofline::store(black_box(&mut rays), true);
+        black_box(&rays);
+    });
+}
+
+/// Reference: 16M rays written to memory with ordinary 64-byte stores (the read-for-ownership
+/// included): the ceiling of any kernel that writes a batch that large with ordinary stores.
+#[divan::bench(sample_count = 10, sample_size = 1)]
+fn reference_stream_roofline_ordinary(bencher: Bencher) {
+    let mut rays = vec![RayGeometry::CULLED; STREAM];
+    bencher.counter(ItemsCount::new(STREAM)).bench_local(|| {
+        roofline::store(black_box(&mut rays), false);
+        black_box(&rays);
+    });
+}
+
+/// The pinhole and thin lens over one batch of 16M rays: what `project` makes of the streaming roofline.
+#[divan::bench(args = ["pinhole", "thin_lens"], sample_count = 10, sample_size = 1)]
+fn perspective_stream(bencher: Bencher, model: &str) {
+    let params = PERSPECTIVE.iter().find(|p| p.0 == model).expect("a model").1;
+    let p = projection("PxrPerspective", params);
+    let mut batch = Batch::new(STREAM, Aperture::Square);
+    bencher.counter(ItemsCount::new(STREAM)).bench_local(|| {
+        batch.run(black_box(p.as_ref()));
+        black_box(&batch.rays);
+    });
+}
+
+/// The store kernels of the rooflines.
+mod roofline {
+    use obscura_sdk::RayGeometry;
+
+    /// Writes every byte of `rays` (a constant pattern), non-temporally when `nt`.
+    pub fn store(rays: &mut [RayGeometry], nt: bool) {
+        let len = std::mem::size_of_val(rays) / 4;
+        // SAFETY: `RayGeometry` is ten `f32` (`repr(C)`, checked by the SDK's layout test); the
+        // slice covers exactly the records.
+        let floats = unsafe { std::slice::from_raw_parts_mut(rays.as_mut_ptr().cast::<f32>(), len) };
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512 F, checked just above.
+                unsafe { avx512(floats, nt) };
+                return;
+            }
+        }
+        floats.fill(1.0);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn avx512(f: &mut [f32], nt: bool) {
+        use std::arch::x86_64::*;
+        let v = _mm512_set1_ps(1.0);
+        let p = f.as_mut_ptr();
+        let head = (p.align_offset(64)).min(f.len());
+        // SAFETY: every store is within `f`: a masked head up to the first 64-byte boundary, aligned
+        // 16-float blocks, a masked tail.
+        unsafe {
+            _mm512_mask_storeu_ps(p, ((1u32 << head) - 1) as u16, v);
+            let body = (f.len() - head) / 16;
+            let mut q = p.add(head);
+            for _ in 0..body {
+                if nt {
+                    _mm512_stream_ps(q, v);
+                } else {
+                    _mm512_store_ps(q, v);
+                }
+                q = q.add(16);
+            }
+            let tail = f.len() - head - 16 * body;
+            _mm512_mask_storeu_ps(q, ((1u32 << tail) - 1) as u16, v);
+            if nt {
+                _mm_sfence();
+            }
+        }
+    }
 }

@@ -52,9 +52,9 @@
 use std::f32::consts::FRAC_PI_4;
 use std::sync::LazyLock;
 
-use obscura_sdk::{DeepMetric, ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
+use obscura_sdk::{DeepMetric, ParamDecl, Point2, ProjectionEnvironment, Vec3};
 
-use crate::panorama::{SphericalClip, SweepWindow};
+use crate::panorama::{CentredLane, SphericalClip, SweepWindow};
 
 /// The name scenes use.
 pub const NAME: &str = "EquiangularCubemapFace";
@@ -162,12 +162,11 @@ impl CubemapFace {
         self.face
     }
 
+    /// The ray of screen point `s` as a branch-free lane (culled where `valid` is false), for the
+    /// batch loop of [`crate::screen::map_centred_rays`].
     #[inline(always)]
-    fn ray(&self, s: Point2) -> RayGeometry {
+    fn lane(&self, s: Point2) -> CentredLane {
         let (u, v) = self.window.uv_unclamped(s);
-        if !(u.abs() < 2.0 && v.abs() < 2.0) {
-            return RayGeometry::CULLED;
-        }
         let a = tan_quarter_turn(u);
         let b = tan_quarter_turn(v);
         let (a2, b2) = (a * a, b * b);
@@ -177,8 +176,11 @@ impl CubemapFace {
         let d = (f + r * a + up * b) * inv;
         // αx·αy ∝ (1 + a²)(1 + b²)·sqrt((1 + a²)(1 + b²))/|N|⁴
         let q = (1.0 + a2) * (1.0 + b2);
-        self.clip
-            .centred_ray(d, self.spread_scale * (q * q.sqrt()).sqrt() / n2)
+        CentredLane {
+            valid: (u.abs() < 2.0) & (v.abs() < 2.0),
+            direction: d,
+            ray_spread: self.spread_scale * (q * q.sqrt()).sqrt() / n2,
+        }
     }
 }
 
@@ -198,7 +200,7 @@ fn tan_quarter_turn(t: f32) -> f32 {
     (if far { 1.0 / tan } else { tan }).copysign(t)
 }
 
-spherical_projection!(CubemapFace, |_: &CubemapFace| 90.0);
+spherical_projection!(CubemapFace, |_: &CubemapFace| 90.0, lanes);
 
 impl CubemapFace {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

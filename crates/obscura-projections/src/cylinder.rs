@@ -33,7 +33,7 @@ use std::sync::LazyLock;
 use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, ValueRange, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_sweep, hsweep_param, sin_cos, spherical_field_of_view,
+    AzimuthSweep, CentredLane, SphericalClip, boxed_sweep, hsweep_param, sin_cos, spherical_field_of_view,
 };
 
 /// The name scenes use.
@@ -93,20 +93,25 @@ impl CylinderCamera {
     #[inline(always)]
     #[must_use]
     pub fn ray(&self, s: Point2) -> RayGeometry {
-        let Some((phi, v)) = self.sweep.azimuth_and_v(s) else {
-            return RayGeometry::CULLED;
-        };
-        let (sp, cp) = sin_cos(phi);
+        self.clip.lane_ray(self.lane(s))
+    }
+
+    /// [`CylinderCamera::ray`] without branches, for the batch loop.
+    #[inline(always)]
+    fn lane(&self, s: Point2) -> CentredLane {
+        let (u, v) = self.sweep.window.uv(s);
+        let (sp, cp) = sin_cos(u * self.sweep.half_h);
         let y = v * self.tan_v;
         let inv_l = 1.0 / (1.0 + y * y).sqrt();
-        self.clip.centred_ray(
-            Vec3::new(sp * inv_l, y * inv_l, cp * inv_l),
-            self.spread * inv_l * inv_l.sqrt(),
-        )
+        CentredLane {
+            valid: !u.is_nan() & !v.is_nan(),
+            direction: Vec3::new(sp * inv_l, y * inv_l, cp * inv_l),
+            ray_spread: self.spread * inv_l * inv_l.sqrt(),
+        }
     }
 }
 
-spherical_projection!(CylinderCamera, |camera: &CylinderCamera| camera.fov);
+spherical_projection!(CylinderCamera, |camera: &CylinderCamera| camera.fov, lanes);
 
 impl CylinderCamera {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

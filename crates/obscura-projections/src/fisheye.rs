@@ -75,10 +75,12 @@ use std::sync::LazyLock;
 
 use obscura_sdk::{
     DeepMetric, ParamDecl, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
+    ProjectionProperty, PropertyValue, ValueRange, Vec3,
 };
 
-use crate::panorama::{SphericalClip, finite_f64, radial_ray, rim_cos_floor, spherical_property};
+use crate::panorama::{
+    CentredLane, SphericalClip, finite_f64, radial_lane, rim_cos_floor, sin_cos, spherical_property,
+};
 use crate::screen;
 
 /// The name scenes use.
@@ -410,82 +412,68 @@ impl Fisheye {
         (r, 100)
     }
 
+    /// The lane of a radial law at `s` (`r2 = |s|²`), valid inside the image circle (or ring).
     #[inline(always)]
-    fn ray(&self, s: Point2, r2: f32, b: f32, cos_theta: f32, a: f32) -> RayGeometry {
-        radial_ray(self.clip, self.half_pixel, s, r2, (b, cos_theta, a))
-    }
-
-    #[inline(always)]
-    fn inside(&self, r2: f32) -> bool {
-        r2 <= self.r_hi2 && r2 >= self.r_lo2
-    }
-
-    #[inline(always)]
-    fn equidistant(&self, s: Point2, h: f32) -> RayGeometry {
-        let r2 = s.x * s.x + s.y * s.y;
-        if !self.inside(r2) {
-            return RayGeometry::CULLED;
+    fn lane(&self, s: Point2, r2: f32, b: f32, cos_theta: f32, a: f32) -> CentredLane {
+        CentredLane {
+            valid: (r2 <= self.r_hi2) & (r2 >= self.r_lo2),
+            ..radial_lane(self.half_pixel, s, r2, (b, cos_theta, a))
         }
+    }
+
+    /// `θ = h·r`; the sine and cosine by [`sin_cos`] (θ ≤ π here, where it is within 1.2e-7 of the
+    /// exact values), so the batch loop vectorises.
+    #[inline(always)]
+    fn equidistant(&self, s: Point2, h: f32) -> CentredLane {
+        let r2 = s.x * s.x + s.y * s.y;
         let r = r2.sqrt();
         let theta = h * r;
-        let (sin, cos) = theta.sin_cos();
+        let (sin, cos) = sin_cos(theta);
         // sin θ/r, never negative: at a 360° rim θ rounds past π.
         let b = if r > 0.0 { sin.max(0.0) / r } else { h };
-        self.ray(s, r2, b, cos, h)
+        self.lane(s, r2, b, cos, h)
     }
 
     #[inline(always)]
-    fn stereographic(&self, s: Point2, k: f32) -> RayGeometry {
+    fn stereographic(&self, s: Point2, k: f32) -> CentredLane {
         let r2 = s.x * s.x + s.y * s.y;
-        if !self.inside(r2) {
-            return RayGeometry::CULLED;
-        }
         let t2 = k * k * r2;
         let inv = 1.0 / (1.0 + t2);
         let b = 2.0 * k * inv;
-        self.ray(s, r2, b, (1.0 - t2) * inv, b)
+        self.lane(s, r2, b, (1.0 - t2) * inv, b)
     }
 
     #[inline(always)]
-    fn orthographic(&self, s: Point2, m: f32, cos_floor: f32) -> RayGeometry {
+    fn orthographic(&self, s: Point2, m: f32, cos_floor: f32) -> CentredLane {
         let r2 = s.x * s.x + s.y * s.y;
-        if !self.inside(r2) {
-            return RayGeometry::CULLED;
-        }
         let cos = (1.0 - m * m * r2).max(0.0).sqrt();
-        self.ray(s, r2, m, cos, m / cos.max(cos_floor))
+        self.lane(s, r2, m, cos, m / cos.max(cos_floor))
     }
 
     #[inline(always)]
-    fn equisolid(&self, s: Point2, q: f32, cos_floor: f32) -> RayGeometry {
+    fn equisolid(&self, s: Point2, q: f32, cos_floor: f32) -> CentredLane {
         let r2 = s.x * s.x + s.y * s.y;
-        if !self.inside(r2) {
-            return RayGeometry::CULLED;
-        }
         let sin_half2 = q * q * r2;
         let cos_half = (1.0 - sin_half2).max(0.0).sqrt();
         let b = 2.0 * q * cos_half;
-        self.ray(s, r2, b, 1.0 - 2.0 * sin_half2, 2.0 * q / cos_half.max(cos_floor))
+        self.lane(s, r2, b, 1.0 - 2.0 * sin_half2, 2.0 * q / cos_half.max(cos_floor))
     }
 
+    /// Cycles' polynomial; the sine and cosine of θ by [`sin_cos`], as for the equidistant law.
     #[inline(always)]
-    fn polynomial(&self, s: Point2, p: &[f32; 5], dp: &[f32; 4]) -> RayGeometry {
+    fn polynomial(&self, s: Point2, p: &[f32; 5], dp: &[f32; 4]) -> CentredLane {
         let r2 = s.x * s.x + s.y * s.y;
-        if !self.inside(r2) {
-            return RayGeometry::CULLED;
-        }
         let r = r2.sqrt();
         let theta = p[0] + r * (p[1] + r * (p[2] + r * (p[3] + r * p[4])));
         let a = dp[0] + r * (dp[1] + r * (dp[2] + r * dp[3]));
-        let (sin, cos) = theta.sin_cos();
-        if r > 0.0 {
-            self.ray(s, r2, sin.max(0.0) / r, cos, a)
-        } else {
-            // The centre of a lens with k0 ≠ 0 looks θ(0) off axis; its azimuth is taken as +X.
-            let mut ray = self.ray(s, r2, a, cos, a);
-            ray.direction = Vec3::new(sin, 0.0, cos);
-            ray
-        }
+        let (sin, cos) = sin_cos(theta);
+        let off_centre = self.lane(s, r2, sin.max(0.0) / r, cos, a);
+        // The centre of a lens with k0 ≠ 0 looks θ(0) off axis; its azimuth is taken as +X.
+        let centre = CentredLane {
+            direction: Vec3::new(sin, 0.0, cos),
+            ..self.lane(s, r2, a, cos, a)
+        };
+        if r > 0.0 { off_centre } else { centre }
     }
 }
 
@@ -495,14 +483,38 @@ impl Projection for Fisheye {
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
+        let clip = self.clip;
         match self.law {
-            Law::Equidistant { h } => screen::map_rays(ctx, |s| self.equidistant(s, h)),
-            Law::Stereographic { k } => screen::map_rays(ctx, |s| self.stereographic(s, k)),
-            Law::Orthographic { m, cos_floor } => {
-                screen::map_rays(ctx, |s| self.orthographic(s, m, cos_floor))
-            }
-            Law::Equisolid { q, cos_floor } => screen::map_rays(ctx, |s| self.equisolid(s, q, cos_floor)),
-            Law::Polynomial { p, dp } => screen::map_rays(ctx, |s| self.polynomial(s, &p, &dp)),
+            Law::Equidistant { h } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.equidistant(s, h),
+            ),
+            Law::Stereographic { k } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.stereographic(s, k),
+            ),
+            Law::Orthographic { m, cos_floor } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.orthographic(s, m, cos_floor),
+            ),
+            Law::Equisolid { q, cos_floor } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.equisolid(s, q, cos_floor),
+            ),
+            Law::Polynomial { p, dp } => screen::map_centred_rays(
+                ctx,
+                clip,
+                #[inline(always)]
+                |s| self.polynomial(s, &p, &dp),
+            ),
         }
     }
 

@@ -63,11 +63,30 @@ macro_rules! projection_factory {
 
 /// Implements `Projection` for `$camera`, a panoramic camera whose rays leave its centre: DicingHint
 /// Spherical, DeepMetric RayLength and the FieldOfView `$fov` reads off the camera
-/// (`crate::panorama::spherical_property`); each ray from its screen sample by the camera's
-/// `ray(&self, Point2) -> RayGeometry`; the inverse by its `screen_of(&self, x, y, z) -> Option<Point2>`
-/// once the point's components are finite.
+/// (`crate::panorama::spherical_property`); the inverse by its `screen_of(&self, x, y, z) ->
+/// Option<Point2>` once the point's components are finite. Each ray from its screen sample by the
+/// camera's `ray(&self, Point2) -> RayGeometry`, or — with `lanes` after the field of view — by its
+/// branch-free `lane(&self, Point2) -> panorama::CentredLane` and its `clip` field, in the
+/// structure-of-arrays loop of `crate::screen::map_centred_rays`.
 macro_rules! spherical_projection {
     ($camera:ty, $fov:expr $(,)?) => {
+        spherical_projection!(@impl $camera, $fov, ray);
+    };
+    ($camera:ty, $fov:expr, lanes $(,)?) => {
+        spherical_projection!(@impl $camera, $fov, lane);
+    };
+    (@project $this:ident, $ctx:ident, ray) => {
+        crate::screen::map_rays($ctx, |s| $this.ray(s))
+    };
+    (@project $this:ident, $ctx:ident, lane) => {
+        crate::screen::map_centred_rays(
+            $ctx,
+            $this.clip,
+            #[inline(always)]
+            |s| $this.lane(s),
+        )
+    };
+    (@impl $camera:ty, $fov:expr, $how:ident) => {
         impl obscura_sdk::Projection for $camera {
             fn property(
                 &self,
@@ -78,7 +97,7 @@ macro_rules! spherical_projection {
             }
 
             fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
-                crate::screen::map_rays(ctx, |s| self.ray(s));
+                spherical_projection!(@project self, ctx, $how);
             }
 
             fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {

@@ -56,9 +56,9 @@
 
 use std::sync::LazyLock;
 
-use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry};
+use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment};
 
-use crate::panorama::{SphericalClip, boxed_spherical, radial_ray, rim_cos_floor};
+use crate::panorama::{CentredLane, SphericalClip, boxed_spherical, radial_lane, rim_cos_floor};
 use crate::screen;
 
 /// The name scenes use.
@@ -157,25 +157,27 @@ impl MirrorBall {
         self.orientation
     }
 
+    /// The ray of screen point `s` as a branch-free lane (culled where `valid` is false), for the
+    /// batch loop of [`crate::screen::map_centred_rays`].
     #[inline(always)]
-    fn ray(&self, s: Point2) -> RayGeometry {
+    fn lane(&self, s: Point2) -> CentredLane {
         let r2 = s.x * s.x + s.y * s.y;
-        if r2.is_nan() || r2 >= 1.0 {
-            return RayGeometry::CULLED;
-        }
         let c = (1.0 - r2).sqrt();
         let along_centre = self.sign * (1.0 - 2.0 * r2);
-        radial_ray(
-            self.clip,
+        let lane = radial_lane(
             self.half_pixel,
             s,
             r2,
             (2.0 * c, along_centre, 2.0 / c.max(self.c_floor)),
-        )
+        );
+        CentredLane {
+            valid: r2 < 1.0,
+            ..lane
+        }
     }
 }
 
-spherical_projection!(MirrorBall, |_: &MirrorBall| 360.0);
+spherical_projection!(MirrorBall, |_: &MirrorBall| 360.0, lanes);
 
 impl MirrorBall {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.
@@ -369,7 +371,10 @@ mod tests {
         // The rim, which Cycles keeps, collapses onto −Z, straight behind the camera; we cull it.
         let rim = cycles_mirror_ball(1.0, 0.5).unwrap();
         assert!((rim[2] + 1.0).abs() < 1e-12, "{rim:?}");
-        assert_eq!(ray_at(p.as_ref(), Point2::new(1.0, 0.0)), RayGeometry::CULLED);
+        assert_eq!(
+            ray_at(p.as_ref(), Point2::new(1.0, 0.0)),
+            obscura_sdk::RayGeometry::CULLED
+        );
         // And the light probe is not Cycles' orientation: off the centre's axis its z has the other sign.
         let (probe, _) = make_oriented(Orientation::LightProbe, Format::new(64, 64));
         let d = ray_at(probe.as_ref(), Point2::new(0.5, 0.0)).direction;
@@ -401,7 +406,7 @@ mod tests {
             Point2::new(0.8, 0.7),
             Point2::new(-1.5, 1.0),
         ] {
-            assert_eq!(ray_at(p.as_ref(), s), RayGeometry::CULLED, "{s:?}");
+            assert_eq!(ray_at(p.as_ref(), s), obscura_sdk::RayGeometry::CULLED, "{s:?}");
         }
         assert_eq!(p.unproject(Vec3::new(0.0, 0.0, -5.0 * sigma), 0.0), None);
         assert_eq!(p.unproject(Vec3::ZERO, 0.0), None);

@@ -56,9 +56,9 @@
 
 use std::f32::consts::{FRAC_PI_2, FRAC_PI_4};
 
-use obscura_sdk::{DeepMetric, ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
+use obscura_sdk::{DeepMetric, ParamDecl, Point2, ProjectionEnvironment, Vec3};
 
-use crate::panorama::{SphericalClip, SweepWindow};
+use crate::panorama::{CentredLane, SphericalClip, SweepWindow, sin_cos};
 
 /// The name scenes use.
 pub const NAME: &str = "Octahedral";
@@ -117,7 +117,7 @@ impl Octahedral {
         } else {
             (FRAC_PI_4, 0.0, 0.0)
         };
-        let (sin, cos) = phi.sin_cos();
+        let (sin, cos) = sin_cos(phi);
         let w = 2.0 - r2;
         let rho = r * w.sqrt();
         let z = (1.0 - r2).copysign(d);
@@ -127,8 +127,10 @@ impl Octahedral {
         (dir, radial + tangential * ku * ku, radial + tangential * kv * kv)
     }
 
+    /// The ray of screen point `s` as a branch-free lane (culled where `valid` is false), for the
+    /// batch loop of [`crate::screen::map_centred_rays`].
     #[inline(always)]
-    fn ray(&self, s: Point2) -> RayGeometry {
+    fn lane(&self, s: Point2) -> CentredLane {
         let (mut u, mut v) = self.window.uv_unclamped(s);
         if u > 1.0 {
             (u, v) = (2.0 - u, -v);
@@ -140,16 +142,16 @@ impl Octahedral {
         } else if v < -1.0 {
             (u, v) = (-u, -2.0 - v);
         }
-        if !(u.abs() <= 1.0 && v.abs() <= 1.0) {
-            return RayGeometry::CULLED;
-        }
         let (dir, gu2, gv2) = Self::square_to_sphere(u, v);
-        self.clip
-            .centred_ray(dir, self.half_pixel_uv * (gu2 * gv2).sqrt().sqrt())
+        CentredLane {
+            valid: (u.abs() <= 1.0) & (v.abs() <= 1.0),
+            direction: dir,
+            ray_spread: self.half_pixel_uv * (gu2 * gv2).sqrt().sqrt(),
+        }
     }
 }
 
-spherical_projection!(Octahedral, |_: &Octahedral| 360.0);
+spherical_projection!(Octahedral, |_: &Octahedral| 360.0, lanes);
 
 impl Octahedral {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

@@ -38,10 +38,18 @@
 //! αx = Δx·sqrt(A²·sx² + B²·sy²)/r,   αy = Δy·sqrt(A²·sy² + B²·sx²)/r,   ray_spread = ½·sqrt(αx·αy)
 //! ```
 //!
-//! (`αx = Δx·A`, `αy = Δy·A` at `r = 0`), computed by [`radial_ray`] with `Δx = Δy = sqrt(Δx·Δy)` taken
+//! (`αx = Δx·A`, `αy = Δy·A` at `r = 0`), computed by [`radial_lane`] with `Δx = Δy = sqrt(Δx·Δy)` taken
 //! out as the half-pixel factor. Where `A` is infinite at a rim (`A = k/cos` with the cosine reaching 0
 //! at radius `1/k`), the cosine is held at its value a hundredth of a pixel inside the rim,
 //! [`rim_cos_floor`]`(k·ε) = sqrt(k·ε·(2 − k·ε))`.
+//!
+//! # Batch lanes
+//!
+//! A camera whose rays leave its centre states its ray as a branch-free [`CentredLane`] (valid,
+//! direction, spread; [`radial_lane`] for the radial maps); [`crate::screen::map_centred_rays`] runs a
+//! batch of them structure-of-arrays at the widest SIMD tier, and [`SphericalClip::lane_ray`] turns one
+//! into its ray. Sines and cosines come from [`sin_cos`], a polynomial that vectorises (libm's does
+//! not).
 //!
 //! # Properties and clipping
 //!
@@ -321,30 +329,51 @@ impl SphericalClip {
     }
 }
 
-/// The ray of a radial map (see the module documentation) at screen point `s`, `r2 = |s|²`:
-/// `D = (b·sx, b·sy, cos_theta)` with `b = B = sin θ/r`, `a = A = dθ/dr`, and the footprint
-/// `ray_spread = half_pixel·(αx·αy/Δ²)^¼` with `half_pixel = ½·sqrt(Δx·Δy)`.
+/// One lane of a centred camera's batch ([`crate::screen::map_centred_rays`]): the ray from the camera's
+/// centre computed without branches, whether it exists, its unit direction and its spread (meaningless
+/// where `valid` is false).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CentredLane {
+    /// The screen sample has a ray (else it is culled).
+    pub valid: bool,
+    /// The unit direction.
+    pub direction: Vec3,
+    /// The ray spread.
+    pub ray_spread: f32,
+}
+
+impl SphericalClip {
+    /// The ray of `lane`: [`SphericalClip::centred_ray`] where it is valid, else the culled ray.
+    #[inline(always)]
+    #[must_use]
+    pub fn lane_ray(self, lane: CentredLane) -> RayGeometry {
+        if lane.valid {
+            self.centred_ray(lane.direction, lane.ray_spread)
+        } else {
+            RayGeometry::CULLED
+        }
+    }
+}
+
+/// The ray of a radial map (see the module documentation) at screen point `s`, `r2 = |s|²`, as a
+/// valid [`CentredLane`]: `D = (b·sx, b·sy, cos_theta)` with `b = B = sin θ/r`, `a = A = dθ/dr`, and
+/// the footprint `ray_spread = half_pixel·(αx·αy/Δ²)^¼` with `half_pixel = ½·sqrt(Δx·Δy)`.
 #[inline(always)]
 #[must_use]
-pub fn radial_ray(
-    clip: SphericalClip,
-    half_pixel: f32,
-    s: Point2,
-    r2: f32,
-    (b, cos_theta, a): (f32, f32, f32),
-) -> RayGeometry {
+pub fn radial_lane(half_pixel: f32, s: Point2, r2: f32, (b, cos_theta, a): (f32, f32, f32)) -> CentredLane {
     let (x2, y2) = (s.x * s.x, s.y * s.y);
     let (a2, b2) = (a * a, b * b);
+    let inv = 1.0 / r2;
     let (ax2, ay2) = if r2 > 0.0 {
-        let inv = 1.0 / r2;
         ((a2 * x2 + b2 * y2) * inv, (a2 * y2 + b2 * x2) * inv)
     } else {
         (a2, a2)
     };
-    clip.centred_ray(
-        Vec3::new(b * s.x, b * s.y, cos_theta),
-        half_pixel * (ax2 * ay2).sqrt().sqrt(),
-    )
+    CentredLane {
+        valid: true,
+        direction: Vec3::new(b * s.x, b * s.y, cos_theta),
+        ray_spread: half_pixel * (ax2 * ay2).sqrt().sqrt(),
+    }
 }
 
 /// The cosine a radial map reaches `step` (in units of the rim's radius) inside a rim where it falls

@@ -30,7 +30,6 @@ use obscura_sdk::{
 };
 
 use crate::dof::{self, DepthOfField};
-use crate::screen;
 use crate::simd;
 
 /// The name scenes use.
@@ -201,7 +200,10 @@ impl Projection for Perspective {
                 let c = ctx.parts_mut();
                 pinhole_batch(&rays, c.screen, d, c.rays);
             }
-            (false, true) => screen::map_rays_with_aperture(ctx, |s, a| rays.thin_lens(s, a, d)),
+            (false, true) => {
+                let c = ctx.parts_mut();
+                thin_lens_batch(&rays, c.screen, c.aperture, d, c.rays);
+            }
             (true, _) => {
                 let c = ctx.parts_mut();
                 simd::run(|| {
@@ -223,83 +225,65 @@ impl Projection for Perspective {
     }
 }
 
-/// Pinhole rays for a batch: the AVX2 kernel where the CPU has it, else the portable loop. Both give
-/// bit-identical rays (IEEE square roots and divisions, no approximations, no fused multiply-adds).
+/// Pinhole rays for a batch at the dispatch tier ([`simd::level`]): the AVX-512 or the AVX2 kernel,
+/// else the portable loop. Every tier gives bit-identical rays: the kernels are
+/// [`PerspectiveRays::pinhole`] operation for operation.
 fn pinhole_batch(rays: &PerspectiveRays, screen: &[Point2], d: f32, out: &mut [RayGeometry]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if simd::has_avx2_fma() {
-            // SAFETY: AVX2 is present, checked just above.
-            unsafe { avx2::pinhole_batch(rays, screen, d, out) };
-            return;
-        }
+    let n = screen.len().min(out.len());
+    match simd::level() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx512 when the CPU has it; `out` holds `n` rays.
+        simd::Level::Avx512 => unsafe {
+            avx512::pinhole(rays, &screen[..n], d, &mut avx512::Aos(&mut out[..n]))
+        },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx2Fma when the CPU has AVX2 and FMA.
+        simd::Level::Avx2Fma => unsafe { avx2::pinhole(rays, &screen[..n], d, &mut out[..n]) },
+        level => simd::run_at(
+            level,
+            #[inline(always)]
+            || rays.pinhole_batch(screen, d, out),
+        ),
     }
-    rays.pinhole_batch(screen, d, out);
+}
+
+/// Thin-lens rays for a batch at the dispatch tier, as [`pinhole_batch`].
+fn thin_lens_batch(
+    rays: &PerspectiveRays,
+    screen: &[Point2],
+    aperture: &[Point2],
+    d: f32,
+    out: &mut [RayGeometry],
+) {
+    let n = screen.len().min(aperture.len()).min(out.len());
+    match simd::level() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx512 when the CPU has it; every slice holds `n` items.
+        simd::Level::Avx512 => unsafe {
+            avx512::thin_lens(
+                rays,
+                &screen[..n],
+                &aperture[..n],
+                d,
+                &mut avx512::Aos(&mut out[..n]),
+            );
+        },
+        level => simd::run_at(
+            level,
+            #[inline(always)]
+            move || {
+                for ((r, s), a) in out.iter_mut().zip(screen).zip(aperture) {
+                    *r = rays.thin_lens(*s, *a, d);
+                }
+            },
+        ),
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use std::arch::x86_64::*;
-
-    use obscura_sdk::optics::PerspectiveRays;
-    use obscura_sdk::{Point2, RayGeometry, Vec3};
-
-    /// [`PerspectiveRays::pinhole`] eight rays at a time: the arithmetic in 256-bit registers, then one
-    /// 40-byte record per ray.
-    #[target_feature(enable = "avx2")]
-    pub(super) fn pinhole_batch(rays: &PerspectiveRays, screen: &[Point2], d: f32, out: &mut [RayGeometry]) {
-        let n = screen.len().min(out.len());
-        let blocks = n / 8;
-        let (vd, vd2) = (_mm256_set1_ps(d), _mm256_set1_ps(d * d));
-        let (half, near, far, one) = (
-            _mm256_set1_ps(rays.half_pixel),
-            _mm256_set1_ps(rays.near),
-            _mm256_set1_ps(rays.far),
-            _mm256_set1_ps(1.0),
-        );
-        let mut lanes = [[0.0f32; 8]; 6];
-        for b in 0..blocks {
-            let s = &screen[b * 8..b * 8 + 8];
-            let mut xs = [0.0f32; 8];
-            let mut ys = [0.0f32; 8];
-            for i in 0..8 {
-                xs[i] = s[i].x;
-                ys[i] = s[i].y;
-            }
-            // SAFETY: unaligned loads and stores of eight f32 from and to local arrays of eight.
-            unsafe {
-                let x = _mm256_loadu_ps(xs.as_ptr());
-                let y = _mm256_loadu_ps(ys.as_ptr());
-                let sx2 = _mm256_mul_ps(x, x);
-                let sy2 = _mm256_mul_ps(y, y);
-                let l2 = _mm256_add_ps(_mm256_add_ps(sx2, sy2), vd2);
-                let inv_l = _mm256_div_ps(one, _mm256_sqrt_ps(l2));
-                let dz = _mm256_mul_ps(vd, inv_l);
-                let q = _mm256_mul_ps(_mm256_add_ps(sx2, vd2), _mm256_add_ps(sy2, vd2));
-                let spread = _mm256_div_ps(_mm256_mul_ps(half, _mm256_sqrt_ps(_mm256_sqrt_ps(q))), l2);
-                _mm256_storeu_ps(lanes[0].as_mut_ptr(), _mm256_mul_ps(x, inv_l));
-                _mm256_storeu_ps(lanes[1].as_mut_ptr(), _mm256_mul_ps(y, inv_l));
-                _mm256_storeu_ps(lanes[2].as_mut_ptr(), dz);
-                _mm256_storeu_ps(lanes[3].as_mut_ptr(), spread);
-                _mm256_storeu_ps(lanes[4].as_mut_ptr(), _mm256_div_ps(near, dz));
-                _mm256_storeu_ps(lanes[5].as_mut_ptr(), _mm256_div_ps(far, dz));
-            }
-            for (i, o) in out[b * 8..b * 8 + 8].iter_mut().enumerate() {
-                *o = RayGeometry {
-                    origin: Vec3::ZERO,
-                    origin_radius: 0.0,
-                    direction: Vec3::new(lanes[0][i], lanes[1][i], lanes[2][i]),
-                    ray_spread: lanes[3][i],
-                    min_dist: lanes[4][i],
-                    max_dist: lanes[5][i],
-                };
-            }
-        }
-        for i in blocks * 8..n {
-            out[i] = rays.pinhole(screen[i], d);
-        }
-    }
-}
+mod avx2;
+#[cfg(target_arch = "x86_64")]
+mod avx512;
 
 #[cfg(test)]
 mod tests {
@@ -390,11 +374,10 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_simd_pinhole_kernel_is_bit_identical_to_the_per_ray_formula() {
-        let env = ProjectionEnvironment::for_format(Format::new(640, 480));
-        let rays = PerspectiveRays::new(env.pixel_size(), (0.1, 1000.0), 0.0, 1.0);
-        let screen: Vec<Point2> = (0..1037)
+    /// Screen and aperture samples over and beyond the frame, 1037 of them (not a multiple of 16 or 8,
+    /// so the masked tails run), with the axis, huge and tiny coordinates among them.
+    fn samples() -> (Vec<Point2>, Vec<Point2>) {
+        let mut screen: Vec<Point2> = (0..1037)
             .map(|i| {
                 Point2::new(
                     (i as f32 * 0.618).fract() * 2.6 - 1.3,
@@ -402,10 +385,102 @@ mod tests {
                 )
             })
             .collect();
-        let mut out = vec![RayGeometry::CULLED; screen.len()];
-        pinhole_batch(&rays, &screen, 1.3, &mut out);
-        for (s, r) in screen.iter().zip(&out) {
-            assert_eq!(*r, rays.pinhole(*s, 1.3), "at {s:?}");
+        screen[..6].copy_from_slice(&[
+            Point2::ZERO,
+            Point2::new(1e-30, -1e-30),
+            Point2::new(1e6, 3.0),
+            Point2::new(-40.0, 1e-7),
+            Point2::new(f32::MIN_POSITIVE, 0.5),
+            Point2::new(0.0, -1e4),
+        ]);
+        let aperture = (0..1037)
+            .map(|i| {
+                Point2::new(
+                    (i as f32 * 0.123).fract() * 2.0 - 1.0,
+                    (i as f32 * 0.871).fract() * 2.0 - 1.0,
+                )
+            })
+            .collect();
+        (screen, aperture)
+    }
+
+    fn bits(rays: &[RayGeometry]) -> Vec<[u32; 10]> {
+        rays.iter()
+            .map(|r| {
+                [
+                    r.origin.x,
+                    r.origin.y,
+                    r.origin.z,
+                    r.origin_radius,
+                    r.direction.x,
+                    r.direction.y,
+                    r.direction.z,
+                    r.ray_spread,
+                    r.min_dist,
+                    r.max_dist,
+                ]
+                .map(f32::to_bits)
+            })
+            .collect()
+    }
+
+    /// Every dispatch tier this CPU has against the portable one, through `project`: pinhole, thin lens
+    /// and zoom rays bit for bit, every field (the kernels use exact `div`/`sqrt` and no FMA). Tiers
+    /// the CPU lacks are skipped, and only then.
+    #[test]
+    fn tiers_give_bit_identical_perspective_rays() {
+        let (screen, aperture) = samples();
+        let configs: [&[(&str, &[&str])]; 3] = [
+            &[("float fov", &["60"])],
+            &[
+                ("float fov", &["40"]),
+                ("float fStop", &["2.8"]),
+                ("float focalLength", &["0.05"]),
+                ("float focalDistance", &["4"]),
+            ],
+            &[("float fov", &["60"]), ("float fovEnd", &["30"])],
+        ];
+        for params in configs {
+            let p = make(params, Format::new(640, 480));
+            let time: Vec<f32> = (0..screen.len())
+                .map(|i| i as f32 / screen.len() as f32)
+                .collect();
+            let at =
+                |level| simd::with_level(level, || project_points(p.as_ref(), &screen, &aperture, &time));
+            let portable = at(simd::Level::Portable);
+            for level in simd::Level::ALL {
+                if !level.is_available() {
+                    eprintln!("tier {level} skipped: this CPU lacks it");
+                    continue;
+                }
+                assert_eq!(bits(&at(level)), bits(&portable), "tier {level}, {params:?}");
+            }
+        }
+    }
+
+    /// The kernels at every tier against the per-ray formulas, straight (no host in between), every
+    /// batch length 0..40 so each tail length runs.
+    #[test]
+    fn tiers_match_the_per_ray_formulas_at_every_tail_length() {
+        let env = ProjectionEnvironment::for_format(Format::new(640, 480));
+        let rays = PerspectiveRays::new(env.pixel_size(), (0.1, 1000.0), 0.03, 2.5);
+        let (screen, aperture) = samples();
+        for level in simd::Level::ALL.into_iter().filter(|l| l.is_available()) {
+            for n in (0..40).chain([1037]) {
+                let mut out = vec![RayGeometry::CULLED; n];
+                simd::with_level(level, || pinhole_batch(&rays, &screen[..n], 1.3, &mut out));
+                let want: Vec<_> = screen[..n].iter().map(|s| rays.pinhole(*s, 1.3)).collect();
+                assert_eq!(bits(&out), bits(&want), "pinhole, tier {level}, n {n}");
+                simd::with_level(level, || {
+                    thin_lens_batch(&rays, &screen[..n], &aperture[..n], 1.3, &mut out)
+                });
+                let want: Vec<_> = screen[..n]
+                    .iter()
+                    .zip(&aperture)
+                    .map(|(s, a)| rays.thin_lens(*s, *a, 1.3))
+                    .collect();
+                assert_eq!(bits(&out), bits(&want), "thin lens, tier {level}, n {n}");
+            }
         }
     }
 

@@ -41,8 +41,8 @@ use std::sync::LazyLock;
 use obscura_sdk::{ParamDecl, Point2, ProjectionEnvironment, RayGeometry, Vec3};
 
 use crate::panorama::{
-    AzimuthSweep, SphericalClip, boxed_sweep, direction_angles, hsweep_param, lat_long_field_of_view,
-    radians_toward_zero, sin_cos, vsweep_param,
+    AzimuthSweep, CentredLane, SphericalClip, boxed_sweep, direction_angles, hsweep_param,
+    lat_long_field_of_view, radians_toward_zero, sin_cos, vsweep_param,
 };
 
 /// The name scenes use.
@@ -92,17 +92,24 @@ impl SphereCamera {
     #[inline(always)]
     #[must_use]
     pub fn ray(&self, s: Point2) -> RayGeometry {
-        let Some((phi, v)) = self.sweep.azimuth_and_v(s) else {
-            return RayGeometry::CULLED;
-        };
-        let (sp, cp) = sin_cos(phi);
+        self.clip.lane_ray(self.lane(s))
+    }
+
+    /// [`SphereCamera::ray`] without branches, for the batch loop.
+    #[inline(always)]
+    fn lane(&self, s: Point2) -> CentredLane {
+        let (u, v) = self.sweep.window.uv(s);
+        let (sp, cp) = sin_cos(u * self.sweep.half_h);
         let (st, ct) = sin_cos(v * self.half_v);
-        self.clip
-            .centred_ray(Vec3::new(sp * ct, st, cp * ct), self.spread * ct.abs().sqrt())
+        CentredLane {
+            valid: !u.is_nan() & !v.is_nan(),
+            direction: Vec3::new(sp * ct, st, cp * ct),
+            ray_spread: self.spread * ct.abs().sqrt(),
+        }
     }
 }
 
-spherical_projection!(SphereCamera, |camera: &SphereCamera| camera.fov);
+spherical_projection!(SphereCamera, |camera: &SphereCamera| camera.fov, lanes);
 
 impl SphereCamera {
     /// The screen point that sees the camera-space point `(x, y, z)`, finite: the inverse.

@@ -51,6 +51,25 @@ impl RayGeometry {
     pub fn is_culled(&self) -> bool {
         self.direction == Vec3::ZERO
     }
+
+    /// The bit patterns of the ten fields in memory order: what "bit-identical rays" compares (`==` on
+    /// the floats would equate 0 and −0 and never NaN with itself).
+    #[must_use]
+    pub fn to_bits(&self) -> [u32; 10] {
+        [
+            self.origin.x,
+            self.origin.y,
+            self.origin.z,
+            self.origin_radius,
+            self.direction.x,
+            self.direction.y,
+            self.direction.z,
+            self.ray_spread,
+            self.min_dist,
+            self.max_dist,
+        ]
+        .map(f32::to_bits)
+    }
 }
 
 impl Default for RayGeometry {

@@ -105,3 +105,18 @@ pub fn projection(name: &str, params: &[(&str, &str)]) -> Box<dyn Projection> {
         .create(name, &mut env, &list)
         .expect("valid bench projection")
 }
+
+/// `PxrPerspective`'s pinhole and thin lens as the tier benches and `examples/project_rate.rs` set
+/// them up: fov 60, and f/2.8, 50 mm, focused at 4.
+pub const PERSPECTIVE: [(&str, &[(&str, &str)]); 2] = [
+    ("pinhole", &[("float fov", "60")]),
+    (
+        "thin_lens",
+        &[
+            ("float fov", "60"),
+            ("float fStop", "2.8"),
+            ("float focalLength", "0.05"),
+            ("float focalDistance", "4"),
+        ],
+    ),
+];
