@@ -10,12 +10,26 @@ use rayon::prelude::*;
 use super::avx2;
 use super::build::{PARALLEL_BUILD_MIN, build_tree};
 use super::traverse::{BoxKernel, LeafVisitor, ScalarKernel, traverse};
+use super::wide;
 use super::tree::{Aabb, Tree};
 use super::triangle::{TriRay, triangle_vertices};
+use super::wide::{WideKernel, WideTree, collapse};
 use crate::ray::{Ray, TriangleMesh};
 
 /// Most triangles in a mesh leaf.
 const MESH_LEAF_SIZE: usize = 4;
+
+/// How a [`MeshBvh`] stores its hierarchy. Both give the same hits, bit for bit (see the
+/// [module docs](super)); they differ in speed and memory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BvhLayout {
+    /// Four children per node, their boxes tested together (the default: the faster one).
+    #[default]
+    Wide4,
+    /// The binary tree the builder makes, two children per cache line. Kept as the reference the
+    /// benchmarks and tests compare the wide layout against.
+    Binary,
+}
 
 /// A binned-SAH BVH over one mesh's triangles, in object space.
 ///
@@ -23,9 +37,14 @@ const MESH_LEAF_SIZE: usize = 4;
 /// vertices) are left out and never hit.
 pub struct MeshBvh {
     mesh: TriangleMesh,
+    layout: BvhLayout,
+    bounds: Aabb,
+    /// The binary tree; only its root is kept in the [`BvhLayout::Wide4`] layout.
     pub(super) tree: Tree,
+    /// The four-wide tree; empty in the [`BvhLayout::Binary`] layout.
+    pub(super) wide: WideTree,
     /// Triangle vertices in leaf order.
-    tris: Vec<[Vec3A; 3]>,
+    pub(super) tris: Vec<[Vec3A; 3]>,
     /// Mesh triangle index of each entry of `tris`.
     tri_ids: Vec<u32>,
 }
@@ -36,6 +55,12 @@ impl MeshBvh {
     /// rayon's thread pool; the tree does not depend on the number of threads.
     #[must_use]
     pub fn build(mesh: TriangleMesh) -> Self {
+        Self::build_with_layout(mesh, BvhLayout::default())
+    }
+
+    /// [`MeshBvh::build`] with the hierarchy stored in `layout`.
+    #[must_use]
+    pub fn build_with_layout(mesh: TriangleMesh, layout: BvhLayout) -> Self {
         let n = mesh.triangles.len().min(u32::MAX as usize);
         let bound = |i: usize| match triangle_vertices(&mesh, mesh.triangles[i]) {
             Some([a, b, c]) => Aabb {
@@ -53,7 +78,16 @@ impl MeshBvh {
         let mut refs: Vec<u32> = (0..n as u32)
             .filter(|&i| boxes[i as usize].lo.x <= boxes[i as usize].hi.x)
             .collect();
-        let tree = build_tree(&boxes, &mut refs, MESH_LEAF_SIZE);
+        let mut tree = build_tree(&boxes, &mut refs, MESH_LEAF_SIZE);
+        let bounds = tree.root_bounds();
+        let wide = match layout {
+            BvhLayout::Wide4 => {
+                let wide = collapse(&tree);
+                tree.pairs = Vec::new();
+                wide
+            }
+            BvhLayout::Binary => WideTree::default(),
+        };
         // Every ref passed this same check, so none is dropped and `tris` stays aligned with `tri_ids`.
         let tris = refs
             .iter()
@@ -61,18 +95,42 @@ impl MeshBvh {
             .collect();
         Self {
             mesh,
+            layout,
+            bounds,
             tree,
+            wide,
             tris,
             tri_ids: refs,
         }
+    }
+
+    /// The layout the hierarchy is stored in.
+    #[must_use]
+    pub fn layout(&self) -> BvhLayout {
+        self.layout
+    }
+
+    /// Bytes the hierarchy takes beyond the mesh itself: nodes, triangles copied into leaf order
+    /// and their indices.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        size_of::<Tree>()
+            + self.tree.pairs.len() * size_of::<super::tree::NodePair>()
+            + self.wide.node_bytes()
+            + self.tris.len() * size_of::<[Vec3A; 3]>()
+            + self.tri_ids.len() * size_of::<u32>()
+    }
+
+    /// The object-space box of the hittable triangles (empty for none).
+    pub(super) fn root_bounds(&self) -> Aabb {
+        self.bounds
     }
 
     /// The object-space bounding box `(min, max)` of the triangles that can be hit. An empty mesh
     /// gives an empty box: `min = +∞`, `max = −∞`.
     #[must_use]
     pub fn bounds(&self) -> (Vec3A, Vec3A) {
-        let b = self.tree.root_bounds();
-        (b.lo, b.hi)
+        (self.bounds.lo, self.bounds.hi)
     }
 
     /// The number of triangles that can be hit (skipped triangles are not counted).
@@ -168,7 +226,6 @@ impl MeshBvh {
         t_lim: f32,
         accept: F,
     ) -> Option<(f32, u32, f32, f32)> {
-        let box_ray = kernel.prepare(origin, direction, t_min);
         let mut visitor = MeshClosest {
             bvh: self,
             ray: TriRay::new(origin, direction),
@@ -177,7 +234,7 @@ impl MeshBvh {
             best: None,
             accept,
         };
-        traverse(&self.tree, kernel, &box_ray, t_lim, &mut visitor);
+        self.walk(kernel, origin, direction, t_min, t_lim, &mut visitor);
         visitor.best
     }
 
@@ -191,7 +248,6 @@ impl MeshBvh {
         t_min: f32,
         t_max: f32,
     ) -> bool {
-        let box_ray = kernel.prepare(origin, direction, t_min);
         let mut visitor = MeshAny {
             bvh: self,
             ray: TriRay::new(origin, direction),
@@ -199,8 +255,33 @@ impl MeshBvh {
             t_max,
             found: false,
         };
-        traverse(&self.tree, kernel, &box_ray, t_max, &mut visitor);
+        self.walk(kernel, origin, direction, t_min, t_max, &mut visitor);
         visitor.found
+    }
+
+    /// Runs `visitor` over the leaves the ray `[t_min, t_far]` reaches, in this BVH's layout
+    /// (with `kernel`'s tier of box test).
+    #[inline(always)]
+    fn walk<K: BoxKernel, L: LeafVisitor>(
+        &self,
+        kernel: K,
+        origin: Vec3A,
+        direction: Vec3A,
+        t_min: f32,
+        t_far: f32,
+        visitor: &mut L,
+    ) {
+        match self.layout {
+            BvhLayout::Wide4 => {
+                let k = kernel.wide();
+                let ray = k.prepare(origin, direction, t_min);
+                wide::traverse(&self.wide, k, &ray, t_far, visitor);
+            }
+            BvhLayout::Binary => {
+                let ray = kernel.prepare(origin, direction, t_min);
+                traverse(&self.tree, kernel, &ray, t_far, visitor);
+            }
+        }
     }
 }
 
@@ -258,7 +339,14 @@ impl fmt::Debug for MeshBvh {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("MeshBvh")
             .field("triangles", &self.tris.len())
-            .field("nodes", &self.tree.node_count())
+            .field("layout", &self.layout)
+            .field(
+                "nodes",
+                &match self.layout {
+                    BvhLayout::Wide4 => self.wide.nodes.len(),
+                    BvhLayout::Binary => self.tree.node_count(),
+                },
+            )
             .field("bounds", &self.bounds())
             .finish()
     }

@@ -52,6 +52,7 @@ mod tests;
 mod traverse;
 mod tree;
 mod triangle;
+mod wide;
 
-pub use mesh::MeshBvh;
+pub use mesh::{BvhLayout, MeshBvh};
 pub use scene::{Instance, SceneAccel};

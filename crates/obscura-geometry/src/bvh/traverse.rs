@@ -4,6 +4,7 @@
 use glam::Vec3A;
 
 use super::tree::{Node, NodePair, Tree};
+use super::wide::{PortableWide, WideKernel};
 
 /// Traversal stack entries. A node at depth `d` has at most `d` pending siblings on the stack; median
 /// splits from the builder's `SAH_DEPTH_LIMIT` (40) on halve the primitive count (at most
@@ -29,6 +30,10 @@ pub(super) trait BoxKernel: Copy {
     /// Tests both boxes of `pair` against `[t_min, t_far]`. Returns a mask (bit 0: first child, bit 1:
     /// second) and the entry distances.
     fn test_pair(self, ray: &Self::Ray, pair: &NodePair, t_far: f32) -> (u32, f32, f32);
+    /// The four-wide kernel of the same tier, for mesh hierarchies.
+    type Wide: WideKernel;
+    /// That kernel's token.
+    fn wide(self) -> Self::Wide;
 }
 
 /// The portable kernel: Williams et al.'s slab test, one box at a time.
@@ -68,6 +73,12 @@ impl ScalarKernel {
 
 impl BoxKernel for ScalarKernel {
     type Ray = ScalarBoxRay;
+    type Wide = PortableWide;
+
+    #[inline(always)]
+    fn wide(self) -> PortableWide {
+        PortableWide
+    }
 
     #[inline(always)]
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> ScalarBoxRay {

@@ -1,0 +1,366 @@
+//! The four-wide mesh hierarchy: [`WideNode`] (four children's boxes in structure-of-arrays form,
+//! 128 bytes, two cache lines), [`collapse`] from the binary SAH tree, the [`WideKernel`] box tests
+//! (portable here, SSE in [`SseWide`] on x86-64) and the front-to-back stack traversal [`traverse`].
+//!
+//! A binary tree's traversal fetches one 64-byte node pair and tests two boxes per step; the
+//! four-wide tree tests four boxes per step with one instruction per operation and has about half as
+//! many levels, so an incoherent ray takes fewer steps and fewer dependent cache misses. The boxes
+//! are exactly the binary tree's (collapsing only removes levels), the box test performs the same
+//! operations in the same order as [`ScalarKernel`](super::traverse::ScalarKernel)'s, and leaves are
+//! the same triangle ranges, so a ray tests a subset of the same triangles with the same test and
+//! gets the same hit, bit for bit (ties in `t` are broken by triangle index, not by order).
+
+use glam::Vec3A;
+
+use super::traverse::{FAR_PAD, LeafVisitor};
+use super::tree::{Aabb, Node, Tree};
+
+/// Children per node.
+pub(super) const WIDTH: usize = 4;
+/// Marks a leaf child in [`WideNode::meta`]; the low bits hold its primitive count.
+pub(super) const LEAF: u32 = 1 << 31;
+/// Traversal stack entries: each level leaves at most `WIDTH − 1` siblings pending, and the wide
+/// tree is no deeper than the binary one (at most 73 levels, see
+/// [`STACK_SIZE`](super::traverse::STACK_SIZE)): `3·73 + 1 < 224`.
+const WIDE_STACK: usize = 224;
+
+/// One node of the four-wide tree: the boxes of up to four children, coordinate by coordinate
+/// (`lo[axis][child]`), then what each child is. 128 bytes, aligned to a cache line.
+///
+/// A child is interior when `meta == 0` (then `child` is its node index) or a leaf when `meta`
+/// has [`LEAF`] set (then `child` is its first primitive in leaf order and `meta & !LEAF` the
+/// count). An unused slot is an empty leaf (`LEAF | 0`) with an empty box (`lo = +∞`, `hi = −∞`),
+/// which no ray with a finite origin enters.
+#[repr(C, align(64))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct WideNode {
+    pub(super) lo: [[f32; WIDTH]; 3],
+    pub(super) hi: [[f32; WIDTH]; 3],
+    pub(super) child: [u32; WIDTH],
+    pub(super) meta: [u32; WIDTH],
+}
+
+const _: () = assert!(size_of::<WideNode>() == 128 && align_of::<WideNode>() == 64);
+
+impl WideNode {
+    /// A node with every slot unused.
+    const EMPTY: Self = Self {
+        lo: [[f32::INFINITY; WIDTH]; 3],
+        hi: [[f32::NEG_INFINITY; WIDTH]; 3],
+        child: [0; WIDTH],
+        meta: [LEAF; WIDTH],
+    };
+}
+
+/// A four-wide tree: the root is `nodes[0]`; empty when `nodes` is.
+#[derive(Debug, Clone, Default)]
+pub(super) struct WideTree {
+    pub(super) nodes: Vec<WideNode>,
+}
+
+impl WideTree {
+    /// Bytes the nodes take.
+    pub(super) fn node_bytes(&self) -> usize {
+        self.nodes.len() * size_of::<WideNode>()
+    }
+
+    /// Depth of the deepest leaf (the root's children are at depth 1).
+    #[cfg(test)]
+    pub(super) fn depth(&self) -> usize {
+        let mut deepest = 0;
+        let mut todo = if self.nodes.is_empty() { vec![] } else { vec![(0usize, 1usize)] };
+        while let Some((n, d)) = todo.pop() {
+            deepest = deepest.max(d);
+            let node = &self.nodes[n];
+            for k in 0..WIDTH {
+                if node.meta[k] == 0 {
+                    todo.push((node.child[k] as usize, d + 1));
+                }
+            }
+        }
+        deepest
+    }
+}
+
+/// Collapses a binary tree into a four-wide one: each wide node takes a binary node's two children
+/// and, while it has fewer than four, replaces its interior child of largest surface area by that
+/// child's two children (the greedy rule of Wald et al., "Getting Rid of Packets", 2008). Nodes are
+/// laid out depth first, each node's interior children contiguous.
+pub(super) fn collapse(tree: &Tree) -> WideTree {
+    if tree.root.count == 0 && tree.pairs.is_empty() {
+        return WideTree::default();
+    }
+    let children = |n: &Node| -> [Node; 2] { tree.pairs[n.first as usize].0 };
+    let mut nodes = vec![WideNode::EMPTY];
+    // (wide node to fill, binary children it gets)
+    let mut todo: Vec<(usize, Vec<Node>)> = vec![(
+        0,
+        if tree.root.count > 0 {
+            vec![tree.root]
+        } else {
+            children(&tree.root).to_vec()
+        },
+    )];
+    while let Some((slot, mut kids)) = todo.pop() {
+        while kids.len() < WIDTH {
+            let widest = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| n.count == 0)
+                .max_by(|a, b| area(a.1).total_cmp(&area(b.1)))
+                .map(|(i, _)| i);
+            let Some(i) = widest else { break };
+            let [a, b] = children(&kids[i]);
+            kids[i] = a;
+            kids.insert(i + 1, b);
+        }
+        let mut node = WideNode::EMPTY;
+        let mut pending = Vec::new();
+        for (k, n) in kids.iter().enumerate() {
+            for axis in 0..3 {
+                node.lo[axis][k] = n.lo[axis];
+                node.hi[axis][k] = n.hi[axis];
+            }
+            if n.count > 0 {
+                node.child[k] = n.first;
+                node.meta[k] = LEAF | n.count;
+            } else {
+                let index = nodes.len() + pending.len();
+                node.child[k] = index as u32;
+                node.meta[k] = 0;
+                pending.push(children(n).to_vec());
+            }
+        }
+        let base = nodes.len();
+        nodes[slot] = node;
+        nodes.extend(std::iter::repeat_n(WideNode::EMPTY, pending.len()));
+        // Reversed, so the first child is built (and laid out) first.
+        todo.extend(pending.into_iter().enumerate().rev().map(|(j, k)| (base + j, k)));
+    }
+    WideTree { nodes }
+}
+
+/// Half the surface area of a binary node's box (the collapse's priority).
+fn area(n: &Node) -> f64 {
+    Aabb {
+        lo: Vec3A::from_array(n.lo),
+        hi: Vec3A::from_array(n.hi),
+    }
+    .half_area()
+}
+
+/// `x` grown by [`FAR_PAD`] of its magnitude, as in the binary traversal.
+#[inline(always)]
+fn pad_far(x: f32) -> f32 {
+    x + x.abs() * FAR_PAD
+}
+
+/// A ray/four-box test. Implementations are zero-sized tokens: holding one proves the CPU can run
+/// it.
+pub(super) trait WideKernel: Copy {
+    /// The per-ray constants the kernel precomputes.
+    type Ray;
+    /// Precomputes the per-ray constants for `[t_min, ..]`.
+    fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> Self::Ray;
+    /// Tests the four boxes of `node` against `[t_min, t_far]`: a mask (bit `k` for child `k`) and
+    /// the entry distances.
+    fn test(self, ray: &Self::Ray, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]);
+}
+
+/// The portable kernel: the binary tree's scalar slab test, one child at a time.
+#[derive(Clone, Copy)]
+pub(super) struct PortableWide;
+
+/// Per-ray constants of [`PortableWide`].
+pub(super) struct PortableWideRay {
+    origin: [f32; 3],
+    inv_dir: [f32; 3],
+    negative: [bool; 3],
+    t_min: f32,
+}
+
+impl WideKernel for PortableWide {
+    type Ray = PortableWideRay;
+
+    #[inline(always)]
+    fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> PortableWideRay {
+        PortableWideRay {
+            origin: origin.to_array(),
+            inv_dir: (Vec3A::ONE / direction).to_array(),
+            negative: [
+                direction.x.is_sign_negative(),
+                direction.y.is_sign_negative(),
+                direction.z.is_sign_negative(),
+            ],
+            t_min,
+        }
+    }
+
+    #[inline(always)]
+    fn test(self, ray: &PortableWideRay, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]) {
+        let mut mask = 0;
+        let mut entry = [0.0; WIDTH];
+        for c in 0..WIDTH {
+            let mut t0 = ray.t_min;
+            let mut t1 = t_far;
+            for k in 0..3 {
+                let (near, far) = if ray.negative[k] {
+                    (node.hi[k][c], node.lo[k][c])
+                } else {
+                    (node.lo[k][c], node.hi[k][c])
+                };
+                let a = (near - ray.origin[k]) * ray.inv_dir[k];
+                let b = (far - ray.origin[k]) * ray.inv_dir[k];
+                // A NaN (`0·∞`: origin on a slab plane of an axis-parallel ray) loses both
+                // comparisons, so that axis does not constrain the interval.
+                t0 = if a > t0 { a } else { t0 };
+                t1 = if b < t1 { b } else { t1 };
+            }
+            mask |= u32::from(t0 <= pad_far(t1)) << c;
+            entry[c] = t0;
+        }
+        (mask, entry)
+    }
+}
+
+/// The SSE kernel (x86-64's baseline: always available there): the portable kernel's operations
+/// on all four children at once. `maxps`/`minps` return their second operand when either is NaN,
+/// which is the portable kernel's `if a > t0 { a } else { t0 }`, so both give the same bits.
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(super) struct SseWide;
+
+/// Per-ray constants of [`SseWide`]: each broadcast to four lanes, and the offsets (in `f32`s from
+/// the node's start) of the near and far planes of each axis, picked by the direction's signs.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct SseWideRay {
+    origin: [core::arch::x86_64::__m128; 3],
+    inv_dir: [core::arch::x86_64::__m128; 3],
+    near: [usize; 3],
+    far: [usize; 3],
+    t_min: core::arch::x86_64::__m128,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl WideKernel for SseWide {
+    type Ray = SseWideRay;
+
+    #[inline(always)]
+    fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> SseWideRay {
+        use core::arch::x86_64::_mm_set1_ps;
+        let inv = Vec3A::ONE / direction;
+        let lo = |k: usize| WIDTH * k;
+        let hi = |k: usize| WIDTH * (3 + k);
+        let negative = |k: usize| direction[k].is_sign_negative();
+        // SAFETY: SSE is part of the x86-64 baseline; these intrinsics only touch registers.
+        unsafe {
+            SseWideRay {
+                origin: [0, 1, 2].map(|k| _mm_set1_ps(origin[k])),
+                inv_dir: [0, 1, 2].map(|k| _mm_set1_ps(inv[k])),
+                near: [0, 1, 2].map(|k| if negative(k) { hi(k) } else { lo(k) }),
+                far: [0, 1, 2].map(|k| if negative(k) { lo(k) } else { hi(k) }),
+                t_min: _mm_set1_ps(t_min),
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn test(self, ray: &SseWideRay, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]) {
+        use core::arch::x86_64::{
+            _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_load_ps, _mm_max_ps, _mm_min_ps,
+            _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps, _mm_sub_ps,
+        };
+        // SAFETY: SSE is part of the x86-64 baseline. `near`/`far` are offsets of 16-byte aligned
+        // rows of four `f32` inside the 64-byte aligned, 128-byte node (at most 20 + 4 ≤ 24 of its
+        // 32 words), so every aligned load is in bounds.
+        unsafe {
+            let p = (node as *const WideNode).cast::<f32>();
+            let mut t0 = ray.t_min;
+            let mut t1 = _mm_set1_ps(t_far);
+            for k in 0..3 {
+                let a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(p.add(ray.near[k])), ray.origin[k]), ray.inv_dir[k]);
+                let b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(p.add(ray.far[k])), ray.origin[k]), ray.inv_dir[k]);
+                t0 = _mm_max_ps(a, t0);
+                t1 = _mm_min_ps(b, t1);
+            }
+            let abs = _mm_and_ps(t1, _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff)));
+            let t1 = _mm_add_ps(t1, _mm_mul_ps(abs, _mm_set1_ps(FAR_PAD)));
+            let mask = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
+            let mut entry = [0.0f32; WIDTH];
+            _mm_storeu_ps(entry.as_mut_ptr(), t0);
+            (mask, entry)
+        }
+    }
+}
+
+/// Stack-based traversal of `tree` over `[t_min, t_far]` (`t_min` is in `ray`): at each node the
+/// children the ray enters are visited nearest entry first (the others wait on the stack, and are
+/// dropped when popped if a hit has since moved `t_far` in front of them); `leaf` may stop the
+/// traversal (any-hit queries stop at the first hit).
+#[inline(always)]
+pub(super) fn traverse<K: WideKernel, L: LeafVisitor>(
+    tree: &WideTree,
+    kernel: K,
+    ray: &K::Ray,
+    t_far: f32,
+    leaf: &mut L,
+) {
+    if tree.nodes.is_empty() {
+        return;
+    }
+    let mut t_far = t_far;
+    let mut stack = [(0u32, 0u32, 0.0f32); WIDE_STACK];
+    let mut sp = 0usize;
+    // (child, meta) of the node being visited: the root is interior node 0.
+    let (mut child, mut meta) = (0u32, 0u32);
+    loop {
+        if meta == 0 {
+            let node = &tree.nodes[child as usize];
+            let (mask, entry) = kernel.test(ray, node, t_far);
+            if mask != 0 {
+                let first = mask.trailing_zeros() as usize;
+                if mask & (mask - 1) == 0 {
+                    (child, meta) = (node.child[first], node.meta[first]);
+                    continue;
+                }
+                // Two to four children: sort by entry (farthest first), push all but the nearest.
+                let mut hits = [(0.0f32, 0usize); WIDTH];
+                let mut n = 0;
+                let mut bits = mask;
+                while bits != 0 {
+                    let c = bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    let mut j = n;
+                    while j > 0 && hits[j - 1].0 < entry[c] {
+                        hits[j] = hits[j - 1];
+                        j -= 1;
+                    }
+                    hits[j] = (entry[c], c);
+                    n += 1;
+                }
+                for &(t, c) in &hits[..n - 1] {
+                    stack[sp] = (node.child[c], node.meta[c], t);
+                    sp += 1;
+                }
+                let c = hits[n - 1].1;
+                (child, meta) = (node.child[c], node.meta[c]);
+                continue;
+            }
+        } else if leaf.visit(child as usize, (meta & !LEAF) as usize, &mut t_far) {
+            return;
+        }
+        // Pop the next pending child still in front of `t_far`.
+        let limit = pad_far(t_far);
+        loop {
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            let (c, m, t) = stack[sp];
+            if t <= limit {
+                (child, meta) = (c, m);
+                break;
+            }
+        }
+    }
+}
