@@ -10,10 +10,10 @@ use rayon::prelude::*;
 use super::avx2;
 use super::build::{PARALLEL_BUILD_MIN, build_tree};
 use super::traverse::{BoxKernel, LeafVisitor, ScalarKernel, traverse};
-use super::wide;
 use super::tree::{Aabb, Tree};
 use super::triangle::{TriRay, triangle_vertices};
-use super::wide::{WideKernel, WideTree, collapse};
+use super::wide;
+use super::wide::{Tri4, WideKernel, WideTree, collapse};
 use crate::ray::{Ray, TriangleMesh};
 
 /// Most triangles in a mesh leaf.
@@ -31,6 +31,18 @@ pub enum BvhLayout {
     Binary,
 }
 
+impl BvhLayout {
+    /// [`BvhLayout::Binary`] when the environment variable `OBSCURA_BVH_LAYOUT` is `binary`, else the
+    /// default.
+    #[must_use]
+    pub fn from_env() -> Self {
+        match std::env::var("OBSCURA_BVH_LAYOUT") {
+            Ok(v) if v.eq_ignore_ascii_case("binary") => Self::Binary,
+            _ => Self::default(),
+        }
+    }
+}
+
 /// A binned-SAH BVH over one mesh's triangles, in object space.
 ///
 /// Leaves hold at most four triangles. Skipped triangles (bad indices, non-finite or zero-area
@@ -43,7 +55,7 @@ pub struct MeshBvh {
     pub(super) tree: Tree,
     /// The four-wide tree; empty in the [`BvhLayout::Binary`] layout.
     pub(super) wide: WideTree,
-    /// Triangle vertices in leaf order.
+    /// Triangle vertices in leaf order (binary layout only).
     pub(super) tris: Vec<[Vec3A; 3]>,
     /// Mesh triangle index of each entry of `tris`.
     tri_ids: Vec<u32>,
@@ -54,8 +66,12 @@ impl MeshBvh {
     /// sweep below that, leaves of at most 4. Meshes of 16k triangles or more build their subtrees on
     /// rayon's thread pool; the tree does not depend on the number of threads.
     #[must_use]
+    ///
+    /// The layout is [`BvhLayout::Wide4`] unless the environment variable `OBSCURA_BVH_LAYOUT` is
+    /// `binary` (a switch for measuring a whole render with the former layout; the hits are the
+    /// same).
     pub fn build(mesh: TriangleMesh) -> Self {
-        Self::build_with_layout(mesh, BvhLayout::default())
+        Self::build_with_layout(mesh, BvhLayout::from_env())
     }
 
     /// [`MeshBvh::build`] with the hierarchy stored in `layout`.
@@ -82,17 +98,25 @@ impl MeshBvh {
         let bounds = tree.root_bounds();
         let wide = match layout {
             BvhLayout::Wide4 => {
-                let wide = collapse(&tree);
+                let tris: Vec<[Vec3A; 3]> = refs
+                    .iter()
+                    .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
+                    .collect();
+                let wide = collapse(&tree, &tris, &refs);
                 tree.pairs = Vec::new();
                 wide
             }
             BvhLayout::Binary => WideTree::default(),
         };
         // Every ref passed this same check, so none is dropped and `tris` stays aligned with `tri_ids`.
-        let tris = refs
-            .iter()
-            .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
-            .collect();
+        // The wide layout keeps its triangles in its leaf blocks instead.
+        let tris = match layout {
+            BvhLayout::Binary => refs
+                .iter()
+                .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
+                .collect(),
+            BvhLayout::Wide4 => Vec::new(),
+        };
         Self {
             mesh,
             layout,
@@ -136,7 +160,7 @@ impl MeshBvh {
     /// The number of triangles that can be hit (skipped triangles are not counted).
     #[must_use]
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.tri_ids.len()
     }
 
     /// The mesh the hierarchy was built over, unchanged.
@@ -226,16 +250,42 @@ impl MeshBvh {
         t_lim: f32,
         accept: F,
     ) -> Option<(f32, u32, f32, f32)> {
-        let mut visitor = MeshClosest {
-            bvh: self,
-            ray: TriRay::new(origin, direction),
-            t_min,
-            lim: t_lim,
-            best: None,
-            accept,
-        };
-        self.walk(kernel, origin, direction, t_min, t_lim, &mut visitor);
-        visitor.best
+        let ray = TriRay::new(origin, direction);
+        match self.layout {
+            BvhLayout::Wide4 => {
+                let k = kernel.wide();
+                let mut visitor = WideClosest {
+                    blocks: &self.wide.leaves,
+                    kernel: k,
+                    ray,
+                    t_min,
+                    lim: t_lim,
+                    best: None,
+                    accept,
+                };
+                wide::traverse(
+                    &self.wide,
+                    k,
+                    &k.prepare(origin, direction, t_min),
+                    t_lim,
+                    &mut visitor,
+                );
+                visitor.best
+            }
+            BvhLayout::Binary => {
+                let mut visitor = MeshClosest {
+                    bvh: self,
+                    ray,
+                    t_min,
+                    lim: t_lim,
+                    best: None,
+                    accept,
+                };
+                let box_ray = kernel.prepare(origin, direction, t_min);
+                traverse(&self.tree, kernel, &box_ray, t_lim, &mut visitor);
+                visitor.best
+            }
+        }
     }
 
     /// True when a triangle is hit with `t_min < t < t_max`.
@@ -248,38 +298,38 @@ impl MeshBvh {
         t_min: f32,
         t_max: f32,
     ) -> bool {
-        let mut visitor = MeshAny {
-            bvh: self,
-            ray: TriRay::new(origin, direction),
-            t_min,
-            t_max,
-            found: false,
-        };
-        self.walk(kernel, origin, direction, t_min, t_max, &mut visitor);
-        visitor.found
-    }
-
-    /// Runs `visitor` over the leaves the ray `[t_min, t_far]` reaches, in this BVH's layout
-    /// (with `kernel`'s tier of box test).
-    #[inline(always)]
-    fn walk<K: BoxKernel, L: LeafVisitor>(
-        &self,
-        kernel: K,
-        origin: Vec3A,
-        direction: Vec3A,
-        t_min: f32,
-        t_far: f32,
-        visitor: &mut L,
-    ) {
+        let ray = TriRay::new(origin, direction);
         match self.layout {
             BvhLayout::Wide4 => {
                 let k = kernel.wide();
-                let ray = k.prepare(origin, direction, t_min);
-                wide::traverse(&self.wide, k, &ray, t_far, visitor);
+                let mut visitor = WideAny {
+                    blocks: &self.wide.leaves,
+                    kernel: k,
+                    ray,
+                    t_min,
+                    t_max,
+                    found: false,
+                };
+                wide::traverse(
+                    &self.wide,
+                    k,
+                    &k.prepare(origin, direction, t_min),
+                    t_max,
+                    &mut visitor,
+                );
+                visitor.found
             }
             BvhLayout::Binary => {
-                let ray = kernel.prepare(origin, direction, t_min);
-                traverse(&self.tree, kernel, &ray, t_far, visitor);
+                let mut visitor = MeshAny {
+                    bvh: self,
+                    ray,
+                    t_min,
+                    t_max,
+                    found: false,
+                };
+                let box_ray = kernel.prepare(origin, direction, t_min);
+                traverse(&self.tree, kernel, &box_ray, t_max, &mut visitor);
+                visitor.found
             }
         }
     }
@@ -335,10 +385,62 @@ impl LeafVisitor for MeshAny<'_> {
     }
 }
 
+/// [`MeshClosest`] for the wide layout: a leaf is one [`Tri4`] block, tested four lanes at once.
+struct WideClosest<'a, K, F> {
+    blocks: &'a [Tri4],
+    kernel: K,
+    ray: TriRay,
+    t_min: f32,
+    lim: f32,
+    best: Option<(f32, u32, f32, f32)>,
+    accept: F,
+}
+
+impl<K: WideKernel, F: Fn(f32, f32) -> bool> LeafVisitor for WideClosest<'_, K, F> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
+        let block = &self.blocks[first];
+        let (mut mask, hits) = self.kernel.leaf(&self.ray, block, count, self.t_min, self.lim);
+        // Lanes in triangle order, each against the limit as it is then: the scalar loop's rule.
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let (t, u, v, det, id) = (hits[0][k], hits[1][k], hits[2][k], hits[3][k], block.id[k]);
+            if t < self.lim && self.best.is_none_or(|b| t < b.0 || id < b.1) && (self.accept)(t, det) {
+                self.best = Some((t, id, u, v));
+                self.lim = t.next_up();
+                *t_far = t;
+            }
+        }
+        false
+    }
+}
+
+/// [`MeshAny`] for the wide layout.
+struct WideAny<'a, K> {
+    blocks: &'a [Tri4],
+    kernel: K,
+    ray: TriRay,
+    t_min: f32,
+    t_max: f32,
+    found: bool,
+}
+
+impl<K: WideKernel> LeafVisitor for WideAny<'_, K> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
+        let (mask, _) = self
+            .kernel
+            .leaf(&self.ray, &self.blocks[first], count, self.t_min, self.t_max);
+        self.found = mask != 0;
+        self.found
+    }
+}
+
 impl fmt::Debug for MeshBvh {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("MeshBvh")
-            .field("triangles", &self.tris.len())
+            .field("triangles", &self.tri_ids.len())
             .field("layout", &self.layout)
             .field(
                 "nodes",

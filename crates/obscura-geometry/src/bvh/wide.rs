@@ -14,6 +14,7 @@ use glam::Vec3A;
 
 use super::traverse::{FAR_PAD, LeafVisitor};
 use super::tree::{Aabb, Node, Tree};
+use super::triangle::TriRay;
 
 /// Children per node.
 pub(super) const WIDTH: usize = 4;
@@ -52,23 +53,48 @@ impl WideNode {
     };
 }
 
-/// A four-wide tree: the root is `nodes[0]`; empty when `nodes` is.
+/// Up to four triangles of one leaf, coordinate by coordinate (`v[vertex][axis][lane]`), and their
+/// mesh triangle indices: 160 bytes, read by the leaf test in one go. Unused lanes repeat lane 0
+/// and are masked off by the leaf's count.
+#[repr(C, align(16))]
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Tri4 {
+    pub(super) v: [[[f32; WIDTH]; 3]; 3],
+    pub(super) id: [u32; WIDTH],
+}
+
+const _: () = assert!(size_of::<Tri4>() == 160);
+
+impl Tri4 {
+    /// The vertices of lane `k`.
+    #[inline(always)]
+    pub(super) fn triangle(&self, k: usize) -> [Vec3A; 3] {
+        [0, 1, 2].map(|j| Vec3A::new(self.v[j][0][k], self.v[j][1][k], self.v[j][2][k]))
+    }
+}
+
+/// A four-wide tree: the root is `nodes[0]`; empty when `nodes` is. Leaves index `leaves`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct WideTree {
     pub(super) nodes: Vec<WideNode>,
+    pub(super) leaves: Vec<Tri4>,
 }
 
 impl WideTree {
-    /// Bytes the nodes take.
+    /// Bytes the nodes and leaf blocks take.
     pub(super) fn node_bytes(&self) -> usize {
-        self.nodes.len() * size_of::<WideNode>()
+        self.nodes.len() * size_of::<WideNode>() + self.leaves.len() * size_of::<Tri4>()
     }
 
     /// Depth of the deepest leaf (the root's children are at depth 1).
     #[cfg(test)]
     pub(super) fn depth(&self) -> usize {
         let mut deepest = 0;
-        let mut todo = if self.nodes.is_empty() { vec![] } else { vec![(0usize, 1usize)] };
+        let mut todo = if self.nodes.is_empty() {
+            vec![]
+        } else {
+            vec![(0usize, 1usize)]
+        };
         while let Some((n, d)) = todo.pop() {
             deepest = deepest.max(d);
             let node = &self.nodes[n];
@@ -84,21 +110,50 @@ impl WideTree {
 
 /// Collapses a binary tree into a four-wide one: each wide node takes a binary node's two children
 /// and, while it has fewer than four, replaces its interior child of largest surface area by that
-/// child's two children (the greedy rule of Wald et al., "Getting Rid of Packets", 2008). Nodes are
-/// laid out depth first, each node's interior children contiguous.
-pub(super) fn collapse(tree: &Tree) -> WideTree {
+/// child's two children (the greedy rule of Wald et al., "Getting Rid of Packets", 2008). A binary
+/// subtree over at most [`WIDTH`] triangles becomes one leaf (its triangles are contiguous in leaf
+/// order), whose triangles `tris[i]` / `ids[i]` are packed into one [`Tri4`]. Nodes are laid out
+/// depth first, each node's interior children contiguous.
+pub(super) fn collapse(tree: &Tree, tris: &[[Vec3A; 3]], ids: &[u32]) -> WideTree {
     if tree.root.count == 0 && tree.pairs.is_empty() {
         return WideTree::default();
     }
     let children = |n: &Node| -> [Node; 2] { tree.pairs[n.first as usize].0 };
-    let mut nodes = vec![WideNode::EMPTY];
+    // A node as a leaf when its subtree holds at most WIDTH triangles.
+    let as_leaf = |n: Node| -> Node {
+        if n.count > 0 {
+            return n;
+        }
+        let (mut l, mut r) = (n, n);
+        while l.count == 0 {
+            l = children(&l)[0];
+        }
+        while r.count == 0 {
+            r = children(&r)[1];
+        }
+        let (first, end) = (l.first, r.first + r.count);
+        if end - first <= WIDTH as u32 {
+            Node {
+                first,
+                count: end - first,
+                ..n
+            }
+        } else {
+            n
+        }
+    };
+    let mut out = WideTree {
+        nodes: vec![WideNode::EMPTY],
+        leaves: Vec::new(),
+    };
+    let root = as_leaf(tree.root);
     // (wide node to fill, binary children it gets)
     let mut todo: Vec<(usize, Vec<Node>)> = vec![(
         0,
-        if tree.root.count > 0 {
-            vec![tree.root]
+        if root.count > 0 {
+            vec![root]
         } else {
-            children(&tree.root).to_vec()
+            children(&root).map(as_leaf).to_vec()
         },
     )];
     while let Some((slot, mut kids)) = todo.pop() {
@@ -110,7 +165,7 @@ pub(super) fn collapse(tree: &Tree) -> WideTree {
                 .max_by(|a, b| area(a.1).total_cmp(&area(b.1)))
                 .map(|(i, _)| i);
             let Some(i) = widest else { break };
-            let [a, b] = children(&kids[i]);
+            let [a, b] = children(&kids[i]).map(as_leaf);
             kids[i] = a;
             kids.insert(i + 1, b);
         }
@@ -122,22 +177,48 @@ pub(super) fn collapse(tree: &Tree) -> WideTree {
                 node.hi[axis][k] = n.hi[axis];
             }
             if n.count > 0 {
-                node.child[k] = n.first;
+                node.child[k] = out.leaves.len() as u32;
                 node.meta[k] = LEAF | n.count;
+                out.leaves
+                    .push(pack(tris, ids, n.first as usize, n.count as usize));
             } else {
-                let index = nodes.len() + pending.len();
+                let index = out.nodes.len() + pending.len();
                 node.child[k] = index as u32;
                 node.meta[k] = 0;
-                pending.push(children(n).to_vec());
+                pending.push(children(n).map(as_leaf).to_vec());
             }
         }
-        let base = nodes.len();
-        nodes[slot] = node;
-        nodes.extend(std::iter::repeat_n(WideNode::EMPTY, pending.len()));
+        let base = out.nodes.len();
+        out.nodes[slot] = node;
+        out.nodes
+            .extend(std::iter::repeat_n(WideNode::EMPTY, pending.len()));
         // Reversed, so the first child is built (and laid out) first.
         todo.extend(pending.into_iter().enumerate().rev().map(|(j, k)| (base + j, k)));
     }
-    WideTree { nodes }
+    out
+}
+
+/// The leaf block of triangles `first..first + count` (at most [`WIDTH`]).
+#[expect(
+    clippy::needless_range_loop,
+    reason = "lanes, vertices and axes index three arrays at once"
+)]
+fn pack(tris: &[[Vec3A; 3]], ids: &[u32], first: usize, count: usize) -> Tri4 {
+    let mut block = Tri4 {
+        v: [[[0.0; WIDTH]; 3]; 3],
+        id: [0; WIDTH],
+    };
+    for k in 0..WIDTH {
+        // Unused lanes repeat the first triangle; the count masks them off.
+        let i = first + if k < count { k } else { 0 };
+        for j in 0..3 {
+            for axis in 0..3 {
+                block.v[j][axis][k] = tris[i][j][axis];
+            }
+        }
+        block.id[k] = ids[i];
+    }
+    block
 }
 
 /// Half the surface area of a binary node's box (the collapse's priority).
@@ -165,6 +246,32 @@ pub(super) trait WideKernel: Copy {
     /// Tests the four boxes of `node` against `[t_min, t_far]`: a mask (bit `k` for child `k`) and
     /// the entry distances.
     fn test(self, ray: &Self::Ray, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]);
+    /// The watertight test ([`TriRay::intersect_det`]) on the first `count` triangles of `block`
+    /// with `t_min < t < lim`: a mask of the lanes hit and each lane's `(t, u, v, det)`, bit for bit
+    /// what the scalar test gives.
+    fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits);
+}
+
+/// Per-lane `t`, `u`, `v`, `det` of a leaf test (meaningful in the lanes of its mask).
+pub(super) type LeafHits = [[f32; WIDTH]; 4];
+
+/// The leaf test one lane at a time, with the scalar test itself.
+#[inline(always)]
+fn leaf_scalar(ray: &TriRay, block: &Tri4, lanes: u32, t_min: f32, lim: f32, hits: &mut LeafHits) -> u32 {
+    let mut mask = 0;
+    let mut bits = lanes;
+    while bits != 0 {
+        let k = bits.trailing_zeros() as usize;
+        bits &= bits - 1;
+        if let Some((t, u, v, det)) = ray.intersect_det(&block.triangle(k), t_min, lim) {
+            mask |= 1 << k;
+            hits[0][k] = t;
+            hits[1][k] = u;
+            hits[2][k] = v;
+            hits[3][k] = det;
+        }
+    }
+    mask
 }
 
 /// The portable kernel: the binary tree's scalar slab test, one child at a time.
@@ -197,6 +304,10 @@ impl WideKernel for PortableWide {
     }
 
     #[inline(always)]
+    #[expect(
+        clippy::needless_range_loop,
+        reason = "the child index picks a lane of six arrays"
+    )]
     fn test(self, ray: &PortableWideRay, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]) {
         let mut mask = 0;
         let mut entry = [0.0; WIDTH];
@@ -220,6 +331,13 @@ impl WideKernel for PortableWide {
             entry[c] = t0;
         }
         (mask, entry)
+    }
+
+    #[inline(always)]
+    fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
+        let mut hits = [[0.0; WIDTH]; 4];
+        let mask = leaf_scalar(ray, block, (1 << count) - 1, t_min, lim, &mut hits);
+        (mask, hits)
     }
 }
 
@@ -278,8 +396,14 @@ impl WideKernel for SseWide {
             let mut t0 = ray.t_min;
             let mut t1 = _mm_set1_ps(t_far);
             for k in 0..3 {
-                let a = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(p.add(ray.near[k])), ray.origin[k]), ray.inv_dir[k]);
-                let b = _mm_mul_ps(_mm_sub_ps(_mm_load_ps(p.add(ray.far[k])), ray.origin[k]), ray.inv_dir[k]);
+                let a = _mm_mul_ps(
+                    _mm_sub_ps(_mm_load_ps(p.add(ray.near[k])), ray.origin[k]),
+                    ray.inv_dir[k],
+                );
+                let b = _mm_mul_ps(
+                    _mm_sub_ps(_mm_load_ps(p.add(ray.far[k])), ray.origin[k]),
+                    ray.inv_dir[k],
+                );
                 t0 = _mm_max_ps(a, t0);
                 t1 = _mm_min_ps(b, t1);
             }
@@ -289,6 +413,83 @@ impl WideKernel for SseWide {
             let mut entry = [0.0f32; WIDTH];
             _mm_storeu_ps(entry.as_mut_ptr(), t0);
             (mask, entry)
+        }
+    }
+
+    /// The scalar test's operations, in its order, on four lanes: the shear as glam's `Mat3A ×
+    /// Vec3A` (`(c0·x + c1·y) + c2·z`), the edge functions, their signs, `det = (e0 + e1) + e2`,
+    /// `t = ((e0·az + e1·bz) + e2·cz)/det`, `u = e1/det`, `v = e2/det`. A lane with an edge function
+    /// exactly zero goes through the scalar test (it redoes the edges in `f64`).
+    #[inline(always)]
+    fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
+        use core::arch::x86_64::{
+            __m128, _mm_add_ps, _mm_and_ps, _mm_andnot_ps, _mm_cmpeq_ps, _mm_cmpgt_ps, _mm_cmplt_ps,
+            _mm_cmpneq_ps, _mm_div_ps, _mm_load_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_ps,
+            _mm_setzero_ps, _mm_storeu_ps, _mm_sub_ps,
+        };
+        let lanes = (1u32 << count) - 1;
+        let mut hits = [[0.0; WIDTH]; 4];
+        // SAFETY: SSE is part of the x86-64 baseline; `block` is 16-byte aligned and every row of
+        // four `f32` in it is too.
+        unsafe {
+            let o = ray.origin;
+            let m = ray.shear;
+            let cols = [m.x_axis, m.y_axis, m.z_axis];
+            let c = |col: usize, row: usize| _mm_set1_ps(cols[col][row]);
+            let sheared = |j: usize| -> [__m128; 3] {
+                let p = [0, 1, 2]
+                    .map(|axis| _mm_sub_ps(_mm_load_ps(block.v[j][axis].as_ptr()), _mm_set1_ps(o[axis])));
+                [0, 1, 2].map(|row| {
+                    _mm_add_ps(
+                        _mm_add_ps(_mm_mul_ps(c(0, row), p[0]), _mm_mul_ps(c(1, row), p[1])),
+                        _mm_mul_ps(c(2, row), p[2]),
+                    )
+                })
+            };
+            let (a, b, cc) = (sheared(0), sheared(1), sheared(2));
+            let e0 = _mm_sub_ps(_mm_mul_ps(cc[0], b[1]), _mm_mul_ps(cc[1], b[0]));
+            let e1 = _mm_sub_ps(_mm_mul_ps(a[0], cc[1]), _mm_mul_ps(a[1], cc[0]));
+            let e2 = _mm_sub_ps(_mm_mul_ps(b[0], a[1]), _mm_mul_ps(b[1], a[0]));
+            let zero = _mm_setzero_ps();
+            let any_zero = _mm_or_ps(
+                _mm_or_ps(_mm_cmpeq_ps(e0, zero), _mm_cmpeq_ps(e1, zero)),
+                _mm_cmpeq_ps(e2, zero),
+            );
+            let neg = _mm_or_ps(
+                _mm_or_ps(_mm_cmplt_ps(e0, zero), _mm_cmplt_ps(e1, zero)),
+                _mm_cmplt_ps(e2, zero),
+            );
+            let pos = _mm_or_ps(
+                _mm_or_ps(_mm_cmpgt_ps(e0, zero), _mm_cmpgt_ps(e1, zero)),
+                _mm_cmpgt_ps(e2, zero),
+            );
+            let det = _mm_add_ps(_mm_add_ps(e0, e1), e2);
+            let t = _mm_div_ps(
+                _mm_add_ps(
+                    _mm_add_ps(_mm_mul_ps(e0, a[2]), _mm_mul_ps(e1, b[2])),
+                    _mm_mul_ps(e2, cc[2]),
+                ),
+                det,
+            );
+            let ok = _mm_and_ps(
+                _mm_andnot_ps(_mm_and_ps(neg, pos), _mm_cmpneq_ps(det, zero)),
+                _mm_and_ps(
+                    _mm_cmpgt_ps(t, _mm_set1_ps(t_min)),
+                    _mm_cmplt_ps(t, _mm_set1_ps(lim)),
+                ),
+            );
+            let exact = _mm_movemask_ps(any_zero) as u32 & lanes;
+            let mut mask = _mm_movemask_ps(ok) as u32 & lanes & !exact;
+            if mask != 0 {
+                _mm_storeu_ps(hits[0].as_mut_ptr(), t);
+                _mm_storeu_ps(hits[1].as_mut_ptr(), _mm_div_ps(e1, det));
+                _mm_storeu_ps(hits[2].as_mut_ptr(), _mm_div_ps(e2, det));
+                _mm_storeu_ps(hits[3].as_mut_ptr(), det);
+            }
+            if exact != 0 {
+                mask |= leaf_scalar(ray, block, exact, t_min, lim, &mut hits);
+            }
+            (mask, hits)
         }
     }
 }

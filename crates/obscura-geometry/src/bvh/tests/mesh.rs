@@ -271,7 +271,10 @@ fn tree_depth_stays_bounded_on_adversarial_input() {
     assert!((41..=48).contains(&depth), "depth {depth}");
     let bvh = MeshBvh::build(soup(&triangles, 1.0));
     let wide_depth = bvh.wide.depth();
-    assert!(wide_depth <= depth, "wide depth {wide_depth} > binary depth {depth}");
+    assert!(
+        wide_depth <= depth,
+        "wide depth {wide_depth} > binary depth {depth}"
+    );
     for (k, i) in (-120..120).enumerate() {
         // All triangles containing the point lie at the same t; the smallest has the lowest index.
         let p = 0.3 * 2f32.powi(i);
