@@ -414,6 +414,11 @@ impl<K: WideKernel, F: Fn(f32, f32) -> bool> LeafVisitor for WideClosest<'_, K, 
         }
         false
     }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        wide::prefetch(&self.blocks[first]);
+    }
 }
 
 /// [`MeshAny`] for the wide layout.
@@ -434,6 +439,11 @@ impl<K: WideKernel> LeafVisitor for WideAny<'_, K> {
             .leaf(&self.ray, &self.blocks[first], count, self.t_min, self.t_max);
         self.found = mask != 0;
         self.found
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        wide::prefetch(&self.blocks[first]);
     }
 }
 

@@ -107,6 +107,12 @@ impl BoxKernel for ScalarKernel {
 pub(super) trait LeafVisitor {
     /// Tests primitives `first..first + count`; may shrink `t_far`; returns `true` to stop.
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool;
+    /// Hints that the leaf starting at `first` will be visited soon (the wide traversal calls it for
+    /// leaves it puts on its stack); by default nothing.
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        let _ = first;
+    }
 }
 
 /// Pops the next stacked node whose entry distance is still within `t_far`.
