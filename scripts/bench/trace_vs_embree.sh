@@ -42,10 +42,10 @@ echo "== Mrays/s (best round; each round the fastest of 5 passes, one thread) an
 awk '
     $4 == "Mrays/s" && $3 + 0 > rate[$1 " " $2] + 0 { rate[$1 " " $2] = $3 }
     END {
-        printf "%-11s %10s %10s %10s %12s %12s\n", "rays", "binary", "wide4", "embree", "binary/emb", "wide4/emb"
+        printf "%-11s %10s %10s %10s %12s %12s\n", "rays", "binary", "wide", "embree", "binary/emb", "wide/emb"
         n = split("primary incoherent shadow", sets, " ")
         for (i = 1; i <= n; i++) {
-            s = sets[i]; b = rate["obscura-binary " s]; w = rate["obscura-wide4 " s]; e = rate["embree " s]
+            s = sets[i]; b = rate["obscura-binary " s]; w = rate["obscura-wide " s]; e = rate["embree " s]
             printf "%-11s %10.2f %10.2f %10.2f %12.2f %12.2f\n", s, b, w, e, b / e, w / e
         }
     }' "$out/obscura.txt" "$out/embree.txt"

@@ -262,13 +262,13 @@ fn vs_embree(path: &Path) {
         s.incoherent.len(),
         s.shadow.len()
     );
-    for layout in [BvhLayout::Binary, BvhLayout::Wide4] {
+    for layout in [BvhLayout::Binary, BvhLayout::Wide] {
         let start = std::time::Instant::now();
         let bvh = MeshBvh::build_with_layout(mesh.clone(), layout);
         let build = start.elapsed();
         let name = match layout {
             BvhLayout::Binary => "obscura-binary",
-            BvhLayout::Wide4 => "obscura-wide4",
+            BvhLayout::Wide => "obscura-wide",
         };
         println!(
             "{name} build {:.1} ms memory {:.2} MB",

@@ -11,7 +11,7 @@ use glam::Vec3A;
 
 use super::traverse::{BoxKernel, FAR_PAD};
 use super::tree::NodePair;
-use super::wide::SseWide;
+use super::wide::Avx2Wide;
 
 /// Proof that the CPU has AVX2 and FMA; only [`Avx2Kernel::detect`] makes one.
 #[derive(Clone, Copy)]
@@ -40,11 +40,11 @@ pub(super) struct Avx2BoxRay {
 
 impl BoxKernel for Avx2Kernel {
     type Ray = Avx2BoxRay;
-    type Wide = SseWide;
+    type Wide = Avx2Wide;
 
     #[inline(always)]
-    fn wide(self) -> SseWide {
-        SseWide
+    fn wide(self) -> Avx2Wide {
+        Avx2Wide
     }
 
     #[inline(always)]

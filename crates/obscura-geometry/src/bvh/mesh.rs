@@ -23,9 +23,9 @@ const MESH_LEAF_SIZE: usize = 4;
 /// [module docs](super)); they differ in speed and memory.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BvhLayout {
-    /// Four children per node, their boxes tested together (the default: the faster one).
+    /// Eight children per node (four triangles per leaf), their boxes tested together (the default: the faster one).
     #[default]
-    Wide4,
+    Wide,
     /// The binary tree the builder makes, two children per cache line. Kept as the reference the
     /// benchmarks and tests compare the wide layout against.
     Binary,
@@ -51,9 +51,9 @@ pub struct MeshBvh {
     mesh: TriangleMesh,
     layout: BvhLayout,
     bounds: Aabb,
-    /// The binary tree; only its root is kept in the [`BvhLayout::Wide4`] layout.
+    /// The binary tree; only its root is kept in the [`BvhLayout::Wide`] layout.
     pub(super) tree: Tree,
-    /// The four-wide tree; empty in the [`BvhLayout::Binary`] layout.
+    /// The wide tree; empty in the [`BvhLayout::Binary`] layout.
     pub(super) wide: WideTree,
     /// Triangle vertices in leaf order (binary layout only).
     pub(super) tris: Vec<[Vec3A; 3]>,
@@ -67,7 +67,7 @@ impl MeshBvh {
     /// rayon's thread pool; the tree does not depend on the number of threads.
     #[must_use]
     ///
-    /// The layout is [`BvhLayout::Wide4`] unless the environment variable `OBSCURA_BVH_LAYOUT` is
+    /// The layout is [`BvhLayout::Wide`] unless the environment variable `OBSCURA_BVH_LAYOUT` is
     /// `binary` (a switch for measuring a whole render with the former layout; the hits are the
     /// same).
     pub fn build(mesh: TriangleMesh) -> Self {
@@ -97,7 +97,7 @@ impl MeshBvh {
         let mut tree = build_tree(&boxes, &mut refs, MESH_LEAF_SIZE);
         let bounds = tree.root_bounds();
         let wide = match layout {
-            BvhLayout::Wide4 => {
+            BvhLayout::Wide => {
                 let tris: Vec<[Vec3A; 3]> = refs
                     .iter()
                     .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
@@ -115,7 +115,7 @@ impl MeshBvh {
                 .iter()
                 .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
                 .collect(),
-            BvhLayout::Wide4 => Vec::new(),
+            BvhLayout::Wide => Vec::new(),
         };
         Self {
             mesh,
@@ -252,7 +252,7 @@ impl MeshBvh {
     ) -> Option<(f32, u32, f32, f32)> {
         let ray = TriRay::new(origin, direction);
         match self.layout {
-            BvhLayout::Wide4 => {
+            BvhLayout::Wide => {
                 let k = kernel.wide();
                 let mut visitor = WideClosest {
                     blocks: &self.wide.leaves,
@@ -300,7 +300,7 @@ impl MeshBvh {
     ) -> bool {
         let ray = TriRay::new(origin, direction);
         match self.layout {
-            BvhLayout::Wide4 => {
+            BvhLayout::Wide => {
                 let k = kernel.wide();
                 let mut visitor = WideAny {
                     blocks: &self.wide.leaves,
@@ -455,7 +455,7 @@ impl fmt::Debug for MeshBvh {
             .field(
                 "nodes",
                 &match self.layout {
-                    BvhLayout::Wide4 => self.wide.nodes.len(),
+                    BvhLayout::Wide => self.wide.nodes.len(),
                     BvhLayout::Binary => self.tree.node_count(),
                 },
             )

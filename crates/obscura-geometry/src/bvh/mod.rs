@@ -16,12 +16,13 @@
 //!
 //! # Layout (why it is fast)
 //!
-//! A mesh's hierarchy is built as a binary SAH tree and, by default ([`BvhLayout::Wide4`]), stored
-//! four-wide: each 128-byte node holds its four children's boxes coordinate by coordinate
-//! (`lo.x[4], lo.y[4], … hi.z[4]`), so one ray/box slab test covers all four with one SSE instruction
-//! per operation (SSE is x86-64's baseline; elsewhere a portable loop does the same operations). The
-//! binary tree is collapsed greedily (a node takes its children and opens the largest interior one
-//! until it has four), which halves the number of levels, and any subtree of at most four triangles
+//! A mesh's hierarchy is built as a binary SAH tree and, by default ([`BvhLayout::Wide`]), stored
+//! eight-wide: each 256-byte node holds its eight children's boxes coordinate by coordinate
+//! (`lo.x[8], lo.y[8], … hi.z[8]`), so one ray/box slab test covers all eight with one AVX2
+//! instruction per operation (detected at run time; without AVX2 a portable loop does the same
+//! operations). The binary tree is collapsed greedily (a node takes its children and opens the
+//! largest interior one until it has eight), which divides the number of levels by up to three, and
+//! any subtree of at most four triangles
 //! becomes one leaf whose triangles are packed coordinate by coordinate (`Tri4`, 160 bytes) and go
 //! through the watertight test four lanes at once. Children are visited nearest entry first; those
 //! waiting on the stack are prefetched, since an incoherent ray's time is mostly cache misses on
@@ -56,7 +57,7 @@
 //! | `tree` | boxes, the 32-byte node, the 64-byte node pair, the packed tree |
 //! | `build` | the binned-SAH builder (sequential and on rayon's pool) |
 //! | `traverse` | the ray/box-pair kernels (scalar; AVX2 in `avx2`) and the binary stack traversal |
-//! | `wide` | the four-wide node and leaf block, the collapse, the four-box and four-triangle kernels, the wide traversal |
+//! | `wide` | the eight-wide node and the four-triangle leaf block, the collapse, the eight-box and four-triangle kernels, the wide traversal |
 //! | `triangle` | the watertight ray/triangle test, skipped triangles, world-space hit records |
 //! | `mesh` | [`MeshBvh`]: one mesh's hierarchy, nearest hit and any hit |
 //! | `scene` | [`SceneAccel`] and [`Instance`]: the two-level, motion-blurred accelerator |

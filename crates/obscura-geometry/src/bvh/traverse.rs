@@ -30,7 +30,7 @@ pub(super) trait BoxKernel: Copy {
     /// Tests both boxes of `pair` against `[t_min, t_far]`. Returns a mask (bit 0: first child, bit 1:
     /// second) and the entry distances.
     fn test_pair(self, ray: &Self::Ray, pair: &NodePair, t_far: f32) -> (u32, f32, f32);
-    /// The four-wide kernel of the same tier, for mesh hierarchies.
+    /// The wide kernel of the same tier, for mesh hierarchies.
     type Wide: WideKernel;
     /// That kernel's token.
     fn wide(self) -> Self::Wide;

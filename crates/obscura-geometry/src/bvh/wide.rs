@@ -1,14 +1,16 @@
-//! The four-wide mesh hierarchy: [`WideNode`] (four children's boxes in structure-of-arrays form,
-//! 128 bytes, two cache lines), [`collapse`] from the binary SAH tree, the [`WideKernel`] box tests
-//! (portable here, SSE in [`SseWide`] on x86-64) and the front-to-back stack traversal [`traverse`].
+//! The eight-wide mesh hierarchy: [`WideNode`] (eight children's boxes in structure-of-arrays form,
+//! 256 bytes, four cache lines), leaf blocks of up to four triangles ([`Tri4`]), [`collapse`] from the
+//! binary SAH tree, the [`WideKernel`] box and triangle tests (portable here, AVX2 boxes and SSE
+//! triangles in [`Avx2Wide`] on x86-64) and the front-to-back stack traversal [`traverse`].
 //!
-//! A binary tree's traversal fetches one 64-byte node pair and tests two boxes per step; the
-//! four-wide tree tests four boxes per step with one instruction per operation and has about half as
+//! A binary tree's traversal fetches one 64-byte node pair and tests two boxes per step; the wide
+//! tree tests eight boxes per step with one instruction per operation and has a third to a half as
 //! many levels, so an incoherent ray takes fewer steps and fewer dependent cache misses. The boxes
 //! are exactly the binary tree's (collapsing only removes levels), the box test performs the same
 //! operations in the same order as [`ScalarKernel`](super::traverse::ScalarKernel)'s, and leaves are
-//! the same triangle ranges, so a ray tests a subset of the same triangles with the same test and
-//! gets the same hit, bit for bit (ties in `t` are broken by triangle index, not by order).
+//! the binary tree's triangle ranges (whole subtrees of at most four triangles merged), tested with
+//! the same operations, so a ray gets the same hit, bit for bit (ties in `t` are broken by triangle
+//! index, not by order).
 
 use glam::Vec3A;
 
@@ -17,16 +19,18 @@ use super::tree::{Aabb, Node, Tree};
 use super::triangle::TriRay;
 
 /// Children per node.
-pub(super) const WIDTH: usize = 4;
+pub(super) const WIDTH: usize = 8;
+/// Triangles per leaf block.
+pub(super) const LANES: usize = 4;
 /// Marks a leaf child in [`WideNode::meta`]; the low bits hold its primitive count.
 pub(super) const LEAF: u32 = 1 << 31;
 /// Traversal stack entries: each level leaves at most `WIDTH − 1` siblings pending, and the wide
 /// tree is no deeper than the binary one (at most 73 levels, see
-/// [`STACK_SIZE`](super::traverse::STACK_SIZE)): `3·73 + 1 < 224`.
-const WIDE_STACK: usize = 224;
+/// [`STACK_SIZE`](super::traverse::STACK_SIZE)): `7·73 + 1 < 520`.
+const WIDE_STACK: usize = 520;
 
-/// One node of the four-wide tree: the boxes of up to four children, coordinate by coordinate
-/// (`lo[axis][child]`), then what each child is. 128 bytes, aligned to a cache line.
+/// One node of the wide tree: the boxes of up to eight children, coordinate by coordinate
+/// (`lo[axis][child]`), then what each child is. 256 bytes, aligned to a cache line.
 ///
 /// A child is interior when `meta == 0` (then `child` is its node index) or a leaf when `meta`
 /// has [`LEAF`] set (then `child` is its first primitive in leaf order and `meta & !LEAF` the
@@ -41,7 +45,7 @@ pub(super) struct WideNode {
     pub(super) meta: [u32; WIDTH],
 }
 
-const _: () = assert!(size_of::<WideNode>() == 128 && align_of::<WideNode>() == 64);
+const _: () = assert!(size_of::<WideNode>() == 256 && align_of::<WideNode>() == 64);
 
 impl WideNode {
     /// A node with every slot unused.
@@ -59,8 +63,8 @@ impl WideNode {
 #[repr(C, align(16))]
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Tri4 {
-    pub(super) v: [[[f32; WIDTH]; 3]; 3],
-    pub(super) id: [u32; WIDTH],
+    pub(super) v: [[[f32; LANES]; 3]; 3],
+    pub(super) id: [u32; LANES],
 }
 
 const _: () = assert!(size_of::<Tri4>() == 160);
@@ -73,7 +77,7 @@ impl Tri4 {
     }
 }
 
-/// A four-wide tree: the root is `nodes[0]`; empty when `nodes` is. Leaves index `leaves`.
+/// A wide tree: the root is `nodes[0]`; empty when `nodes` is. Leaves index `leaves`.
 #[derive(Debug, Clone, Default)]
 pub(super) struct WideTree {
     pub(super) nodes: Vec<WideNode>,
@@ -108,10 +112,10 @@ impl WideTree {
     }
 }
 
-/// Collapses a binary tree into a four-wide one: each wide node takes a binary node's two children
-/// and, while it has fewer than four, replaces its interior child of largest surface area by that
+/// Collapses a binary tree into a wide one: each wide node takes a binary node's two children
+/// and, while it has fewer than [`WIDTH`], replaces its interior child of largest surface area by that
 /// child's two children (the greedy rule of Wald et al., "Getting Rid of Packets", 2008). A binary
-/// subtree over at most [`WIDTH`] triangles becomes one leaf (its triangles are contiguous in leaf
+/// subtree over at most [`LANES`] triangles becomes one leaf (its triangles are contiguous in leaf
 /// order), whose triangles `tris[i]` / `ids[i]` are packed into one [`Tri4`]. Nodes are laid out
 /// depth first, each node's interior children contiguous.
 pub(super) fn collapse(tree: &Tree, tris: &[[Vec3A; 3]], ids: &[u32]) -> WideTree {
@@ -119,7 +123,7 @@ pub(super) fn collapse(tree: &Tree, tris: &[[Vec3A; 3]], ids: &[u32]) -> WideTre
         return WideTree::default();
     }
     let children = |n: &Node| -> [Node; 2] { tree.pairs[n.first as usize].0 };
-    // A node as a leaf when its subtree holds at most WIDTH triangles.
+    // A node as a leaf when its subtree holds at most LANES triangles.
     let as_leaf = |n: Node| -> Node {
         if n.count > 0 {
             return n;
@@ -132,7 +136,7 @@ pub(super) fn collapse(tree: &Tree, tris: &[[Vec3A; 3]], ids: &[u32]) -> WideTre
             r = children(&r)[1];
         }
         let (first, end) = (l.first, r.first + r.count);
-        if end - first <= WIDTH as u32 {
+        if end - first <= LANES as u32 {
             Node {
                 first,
                 count: end - first,
@@ -198,17 +202,17 @@ pub(super) fn collapse(tree: &Tree, tris: &[[Vec3A; 3]], ids: &[u32]) -> WideTre
     out
 }
 
-/// The leaf block of triangles `first..first + count` (at most [`WIDTH`]).
+/// The leaf block of triangles `first..first + count` (at most [`LANES`]).
 #[expect(
     clippy::needless_range_loop,
     reason = "lanes, vertices and axes index three arrays at once"
 )]
 fn pack(tris: &[[Vec3A; 3]], ids: &[u32], first: usize, count: usize) -> Tri4 {
     let mut block = Tri4 {
-        v: [[[0.0; WIDTH]; 3]; 3],
-        id: [0; WIDTH],
+        v: [[[0.0; LANES]; 3]; 3],
+        id: [0; LANES],
     };
-    for k in 0..WIDTH {
+    for k in 0..LANES {
         // Unused lanes repeat the first triangle; the count masks them off.
         let i = first + if k < count { k } else { 0 };
         for j in 0..3 {
@@ -236,14 +240,14 @@ fn pad_far(x: f32) -> f32 {
     x + x.abs() * FAR_PAD
 }
 
-/// A ray/four-box test. Implementations are zero-sized tokens: holding one proves the CPU can run
+/// A ray/wide-node test. Implementations are zero-sized tokens: holding one proves the CPU can run
 /// it.
 pub(super) trait WideKernel: Copy {
     /// The per-ray constants the kernel precomputes.
     type Ray;
     /// Precomputes the per-ray constants for `[t_min, ..]`.
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> Self::Ray;
-    /// Tests the four boxes of `node` against `[t_min, t_far]`: a mask (bit `k` for child `k`) and
+    /// Tests the [`WIDTH`] boxes of `node` against `[t_min, t_far]`: a mask (bit `k` for child `k`) and
     /// the entry distances.
     fn test(self, ray: &Self::Ray, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]);
     /// The watertight test ([`TriRay::intersect_det`]) on the first `count` triangles of `block`
@@ -253,7 +257,7 @@ pub(super) trait WideKernel: Copy {
 }
 
 /// Per-lane `t`, `u`, `v`, `det` of a leaf test (meaningful in the lanes of its mask).
-pub(super) type LeafHits = [[f32; WIDTH]; 4];
+pub(super) type LeafHits = [[f32; LANES]; 4];
 
 /// The leaf test one lane at a time, with the scalar test itself.
 #[inline(always)]
@@ -335,37 +339,38 @@ impl WideKernel for PortableWide {
 
     #[inline(always)]
     fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
-        let mut hits = [[0.0; WIDTH]; 4];
+        let mut hits = [[0.0; LANES]; 4];
         let mask = leaf_scalar(ray, block, (1 << count) - 1, t_min, lim, &mut hits);
         (mask, hits)
     }
 }
 
-/// The SSE kernel (x86-64's baseline: always available there): the portable kernel's operations
-/// on all four children at once. `maxps`/`minps` return their second operand when either is NaN,
-/// which is the portable kernel's `if a > t0 { a } else { t0 }`, so both give the same bits.
+/// The AVX2 kernel (its token comes from [`Avx2Kernel`](super::avx2::Avx2Kernel), which checks the
+/// CPU): the portable kernel's operations on all eight children at once, and on the four triangles
+/// of a leaf in SSE. `vmaxps`/`vminps` return their second operand when either is NaN, which is the
+/// portable kernel's `if a > t0 { a } else { t0 }`, so both give the same bits.
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy)]
-pub(super) struct SseWide;
+pub(super) struct Avx2Wide;
 
-/// Per-ray constants of [`SseWide`]: each broadcast to four lanes, and the offsets (in `f32`s from
+/// Per-ray constants of [`Avx2Wide`]: each broadcast to eight lanes, and the offsets (in `f32`s from
 /// the node's start) of the near and far planes of each axis, picked by the direction's signs.
 #[cfg(target_arch = "x86_64")]
-pub(super) struct SseWideRay {
-    origin: [core::arch::x86_64::__m128; 3],
-    inv_dir: [core::arch::x86_64::__m128; 3],
+pub(super) struct Avx2WideRay {
+    origin: [core::arch::x86_64::__m256; 3],
+    inv_dir: [core::arch::x86_64::__m256; 3],
     near: [usize; 3],
     far: [usize; 3],
-    t_min: core::arch::x86_64::__m128,
+    t_min: core::arch::x86_64::__m256,
 }
 
 #[cfg(target_arch = "x86_64")]
-impl WideKernel for SseWide {
-    type Ray = SseWideRay;
+impl WideKernel for Avx2Wide {
+    type Ray = Avx2WideRay;
 
     #[inline(always)]
-    fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> SseWideRay {
-        use core::arch::x86_64::_mm_set1_ps;
+    fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> Avx2WideRay {
+        use core::arch::x86_64::_mm256_set1_ps as _mm_set1_ps;
         let inv = Vec3A::ONE / direction;
         let lo = |k: usize| WIDTH * k;
         let hi = |k: usize| WIDTH * (3 + k);
@@ -377,9 +382,9 @@ impl WideKernel for SseWide {
                 other
             }
         };
-        // SAFETY: SSE is part of the x86-64 baseline; these intrinsics only touch registers.
+        // SAFETY: the token proves AVX2; these intrinsics only touch registers.
         unsafe {
-            SseWideRay {
+            Avx2WideRay {
                 origin: [
                     _mm_set1_ps(origin.x),
                     _mm_set1_ps(origin.y),
@@ -402,35 +407,36 @@ impl WideKernel for SseWide {
     }
 
     #[inline(always)]
-    fn test(self, ray: &SseWideRay, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]) {
+    fn test(self, ray: &Avx2WideRay, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]) {
         use core::arch::x86_64::{
-            _mm_add_ps, _mm_and_ps, _mm_castsi128_ps, _mm_cmple_ps, _mm_load_ps, _mm_max_ps, _mm_min_ps,
-            _mm_movemask_ps, _mm_mul_ps, _mm_set1_epi32, _mm_set1_ps, _mm_storeu_ps, _mm_sub_ps,
+            _CMP_LE_OQ, _mm256_add_ps, _mm256_and_ps, _mm256_castsi256_ps, _mm256_cmp_ps, _mm256_load_ps,
+            _mm256_max_ps, _mm256_min_ps, _mm256_movemask_ps, _mm256_mul_ps, _mm256_set1_epi32,
+            _mm256_set1_ps, _mm256_storeu_ps, _mm256_sub_ps,
         };
-        // SAFETY: SSE is part of the x86-64 baseline. `near`/`far` are offsets of 16-byte aligned
-        // rows of four `f32` inside the 64-byte aligned, 128-byte node (at most 20 + 4 ≤ 24 of its
-        // 32 words), so every aligned load is in bounds.
+        // SAFETY: the token proves AVX2. `near`/`far` are offsets of 32-byte aligned rows of eight
+        // `f32` inside the 64-byte aligned, 256-byte node (at most 40 + 8 ≤ 48 of its 64 words), so
+        // every aligned load is in bounds.
         unsafe {
             let p = (node as *const WideNode).cast::<f32>();
             let mut t0 = ray.t_min;
-            let mut t1 = _mm_set1_ps(t_far);
+            let mut t1 = _mm256_set1_ps(t_far);
             for k in 0..3 {
-                let a = _mm_mul_ps(
-                    _mm_sub_ps(_mm_load_ps(p.add(ray.near[k])), ray.origin[k]),
+                let a = _mm256_mul_ps(
+                    _mm256_sub_ps(_mm256_load_ps(p.add(ray.near[k])), ray.origin[k]),
                     ray.inv_dir[k],
                 );
-                let b = _mm_mul_ps(
-                    _mm_sub_ps(_mm_load_ps(p.add(ray.far[k])), ray.origin[k]),
+                let b = _mm256_mul_ps(
+                    _mm256_sub_ps(_mm256_load_ps(p.add(ray.far[k])), ray.origin[k]),
                     ray.inv_dir[k],
                 );
-                t0 = _mm_max_ps(a, t0);
-                t1 = _mm_min_ps(b, t1);
+                t0 = _mm256_max_ps(a, t0);
+                t1 = _mm256_min_ps(b, t1);
             }
-            let abs = _mm_and_ps(t1, _mm_castsi128_ps(_mm_set1_epi32(0x7fff_ffff)));
-            let t1 = _mm_add_ps(t1, _mm_mul_ps(abs, _mm_set1_ps(FAR_PAD)));
-            let mask = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
+            let abs = _mm256_and_ps(t1, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fff_ffff)));
+            let t1 = _mm256_add_ps(t1, _mm256_mul_ps(abs, _mm256_set1_ps(FAR_PAD)));
+            let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32;
             let mut entry = [0.0f32; WIDTH];
-            _mm_storeu_ps(entry.as_mut_ptr(), t0);
+            _mm256_storeu_ps(entry.as_mut_ptr(), t0);
             (mask, entry)
         }
     }
@@ -447,7 +453,7 @@ impl WideKernel for SseWide {
             _mm_setzero_ps, _mm_storeu_ps, _mm_sub_ps,
         };
         let lanes = (1u32 << count) - 1;
-        let mut hits = [[0.0; WIDTH]; 4];
+        let mut hits = [[0.0; LANES]; 4];
         // SAFETY: SSE is part of the x86-64 baseline; `block` is 16-byte aligned and every row of
         // four `f32` in it is too.
         unsafe {
@@ -536,6 +542,9 @@ pub(super) fn prefetch<T>(value: &T) {
             if size_of::<T>() > 128 {
                 _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(128));
             }
+            if size_of::<T>() > 192 {
+                _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(192));
+            }
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
@@ -574,7 +583,7 @@ pub(super) fn traverse<K: WideKernel, L: LeafVisitor>(
                     (child, meta) = (node.child[first], node.meta[first]);
                     continue;
                 }
-                // Two to four children: sort by entry (farthest first), push all but the nearest.
+                // Two or more children: sort by entry (farthest first), push all but the nearest.
                 let mut hits = [(0.0f32, 0usize); WIDTH];
                 let mut n = 0;
                 let mut bits = mask;

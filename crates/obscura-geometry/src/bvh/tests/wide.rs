@@ -1,4 +1,4 @@
-//! The four-wide layout against the binary one (same hits, bit for bit, with both kernel tiers) and
+//! The wide layout against the binary one (same hits, bit for bit, with both kernel tiers) and
 //! against brute force, and the collapse's structure.
 
 use glam::Vec3A;
@@ -6,12 +6,12 @@ use proptest::prelude::*;
 
 use super::*;
 use crate::bvh::BvhLayout;
-use crate::bvh::wide::{LEAF, WIDTH};
+use crate::bvh::wide::{LANES, LEAF, WIDTH};
 
 /// Both layouts over `mesh`.
 fn both(mesh: &TriangleMesh) -> (MeshBvh, MeshBvh) {
     (
-        MeshBvh::build_with_layout(mesh.clone(), BvhLayout::Wide4),
+        MeshBvh::build_with_layout(mesh.clone(), BvhLayout::Wide),
         MeshBvh::build_with_layout(mesh.clone(), BvhLayout::Binary),
     )
 }
@@ -97,7 +97,7 @@ fn collapse_keeps_every_leaf_and_box() {
                     &bvh.wide.leaves[node.child[k] as usize],
                     (node.meta[k] & !LEAF) as usize,
                 );
-                assert!(count <= WIDTH);
+                assert!(count <= LANES);
                 for lane in 0..count {
                     seen[block.id[lane] as usize] += 1;
                     assert_eq!(block.triangle(lane), triangles[block.id[lane] as usize]);
