@@ -16,7 +16,7 @@ pub(super) const FAR_PAD: f32 = 1e-6;
 
 /// `x` grown by [`FAR_PAD`] of its magnitude (works for negative `x`; infinities stay put).
 #[inline(always)]
-fn pad_far(x: f32) -> f32 {
+pub(super) fn pad_far(x: f32) -> f32 {
     x + x.abs() * FAR_PAD
 }
 

@@ -14,7 +14,7 @@
 
 use glam::Vec3A;
 
-use super::traverse::{FAR_PAD, LeafVisitor};
+use super::traverse::{FAR_PAD, LeafVisitor, pad_far};
 use super::tree::{Aabb, Node, Tree};
 use super::triangle::TriRay;
 
@@ -232,12 +232,6 @@ fn area(n: &Node) -> f64 {
         hi: Vec3A::from_array(n.hi),
     }
     .half_area()
-}
-
-/// `x` grown by [`FAR_PAD`] of its magnitude, as in the binary traversal.
-#[inline(always)]
-fn pad_far(x: f32) -> f32 {
-    x + x.abs() * FAR_PAD
 }
 
 /// A ray/wide-node test. Implementations are zero-sized tokens: holding one proves the CPU can run
