@@ -26,7 +26,7 @@ use std::sync::LazyLock;
 use divan::Bencher;
 use divan::counter::ItemsCount;
 use glam::{Affine3A, Vec3A};
-use obscura_geometry::bvh::{Instance, MeshBvh, SceneAccel};
+use obscura_geometry::bvh::{BvhLayout, Instance, MeshBvh, SceneAccel};
 use obscura_geometry::ray::{Ray, Tracer, TriangleMesh};
 use obscura_scene::Sides;
 
@@ -36,6 +36,10 @@ const IMAGE_SIZE: usize = 1024;
 const RANDOM_RAYS: usize = 1 << 20;
 
 fn main() {
+    if let Some(path) = std::env::var_os("OBSCURA_TRACE_VS_EMBREE") {
+        vs_embree(Path::new(&path));
+        return;
+    }
     let s = &*SCENE;
     println!(
         "mesh: {} ({} triangles, {} hittable), primary hits {} of {}, shadow rays {}, kernel: {}",
@@ -236,6 +240,97 @@ fn segment_mesh(bencher: Bencher) {
 #[divan::bench(sample_count = 10, sample_size = 1)]
 fn segment_scene(bencher: Bencher) {
     bench_rays(bencher, &SCENE.segments, |r| SCENE.accel.occluded(r));
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Side by side with Embree (`scripts/bench/trace_vs_embree.sh`)
+
+/// Passes over a ray set whose fastest is reported.
+const PASSES: usize = 5;
+
+/// Times both layouts on the primary, incoherent and shadow rays (fastest of [`PASSES`] passes,
+/// this thread only), prints `layout set Mrays/s` lines, and writes the mesh, the rays and the wide
+/// BVH's answers to `path` for `bench/embree/trace_embree` (format in `bench/embree/README.md`).
+fn vs_embree(path: &Path) {
+    let s = &*SCENE;
+    let mesh = s.bvh.mesh();
+    println!(
+        "mesh: {} ({} triangles); rays: primary {}, incoherent {}, shadow {}",
+        s.name,
+        mesh.triangles.len(),
+        s.primary.len(),
+        s.incoherent.len(),
+        s.shadow.len()
+    );
+    for layout in [BvhLayout::Binary, BvhLayout::Wide] {
+        let start = std::time::Instant::now();
+        let bvh = MeshBvh::build_with_layout(mesh.clone(), layout);
+        let build = start.elapsed();
+        let name = match layout {
+            BvhLayout::Binary => "obscura-binary",
+            BvhLayout::Wide => "obscura-wide",
+        };
+        println!(
+            "{name} build {:.1} ms memory {:.2} MB",
+            build.as_secs_f64() * 1e3,
+            bvh.memory_bytes() as f64 / 1e6
+        );
+        let sets: [(&str, &[Ray], bool); 3] = [
+            ("primary", &s.primary, false),
+            ("incoherent", &s.incoherent, false),
+            ("shadow", &s.shadow, true),
+        ];
+        for (set, rays, shadow) in sets {
+            let best = (0..PASSES)
+                .map(|_| {
+                    let start = std::time::Instant::now();
+                    let n = if shadow {
+                        rays.iter().filter(|r| bvh.occluded(r)).count()
+                    } else {
+                        rays.iter().filter(|r| bvh.intersect(r).is_some()).count()
+                    };
+                    std::hint::black_box(n);
+                    start.elapsed().as_secs_f64()
+                })
+                .fold(f64::INFINITY, f64::min);
+            println!("{name} {set} {:.3} Mrays/s", rays.len() as f64 / best / 1e6);
+        }
+    }
+    let bvh = MeshBvh::build(mesh.clone());
+    let mut out = Vec::new();
+    let mut put = |bytes: &[u8]| out.extend_from_slice(bytes);
+    put(b"OBTR\x01\0\0\0");
+    put(&(mesh.positions.len() as u32).to_le_bytes());
+    put(&(mesh.triangles.len() as u32).to_le_bytes());
+    for p in &mesh.positions {
+        for c in p.to_array() {
+            put(&c.to_le_bytes());
+        }
+    }
+    for t in &mesh.triangles {
+        for i in t {
+            put(&i.to_le_bytes());
+        }
+    }
+    for (rays, shadow) in [(&s.primary, false), (&s.incoherent, false), (&s.shadow, true)] {
+        put(&(rays.len() as u32).to_le_bytes());
+        for r in rays.iter() {
+            let (t, id) = if shadow {
+                (if bvh.occluded(r) { 1.0 } else { 0.0 }, 0)
+            } else {
+                bvh.intersect(r).map_or((f32::INFINITY, u32::MAX), |h| (h.0, h.1))
+            };
+            for c in [r.origin.to_array(), r.direction.to_array()].concat() {
+                put(&c.to_le_bytes());
+            }
+            for c in [r.t_min, r.t_max, t] {
+                put(&c.to_le_bytes());
+            }
+            put(&id.to_le_bytes());
+        }
+    }
+    std::fs::write(path, out).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    println!("wrote {}", path.display());
 }
 
 // ---------------------------------------------------------------------------------------------------

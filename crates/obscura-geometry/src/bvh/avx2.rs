@@ -11,6 +11,7 @@ use glam::Vec3A;
 
 use super::traverse::{BoxKernel, FAR_PAD};
 use super::tree::NodePair;
+use super::wide::Avx2Wide;
 
 /// Proof that the CPU has AVX2 and FMA; only [`Avx2Kernel::detect`] makes one.
 #[derive(Clone, Copy)]
@@ -39,6 +40,12 @@ pub(super) struct Avx2BoxRay {
 
 impl BoxKernel for Avx2Kernel {
     type Ray = Avx2BoxRay;
+    type Wide = Avx2Wide;
+
+    #[inline(always)]
+    fn wide(self) -> Avx2Wide {
+        Avx2Wide
+    }
 
     #[inline(always)]
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> Avx2BoxRay {

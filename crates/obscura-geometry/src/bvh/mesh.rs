@@ -12,10 +12,36 @@ use super::build::{PARALLEL_BUILD_MIN, build_tree};
 use super::traverse::{BoxKernel, LeafVisitor, ScalarKernel, traverse};
 use super::tree::{Aabb, Tree};
 use super::triangle::{TriRay, triangle_vertices};
+use super::wide;
+use super::wide::{Tri4, WideKernel, WideTree, collapse};
 use crate::ray::{Ray, TriangleMesh};
 
 /// Most triangles in a mesh leaf.
 const MESH_LEAF_SIZE: usize = 4;
+
+/// How a [`MeshBvh`] stores its hierarchy. Both give the same hits, bit for bit (see the
+/// [module docs](super)); they differ in speed and memory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BvhLayout {
+    /// Eight children per node (four triangles per leaf), their boxes tested together (the default: the faster one).
+    #[default]
+    Wide,
+    /// The binary tree the builder makes, two children per cache line. Kept as the reference the
+    /// benchmarks and tests compare the wide layout against.
+    Binary,
+}
+
+impl BvhLayout {
+    /// [`BvhLayout::Binary`] when the environment variable `OBSCURA_BVH_LAYOUT` is `binary`, else the
+    /// default.
+    #[must_use]
+    pub fn from_env() -> Self {
+        match std::env::var("OBSCURA_BVH_LAYOUT") {
+            Ok(v) if v.eq_ignore_ascii_case("binary") => Self::Binary,
+            _ => Self::default(),
+        }
+    }
+}
 
 /// A binned-SAH BVH over one mesh's triangles, in object space.
 ///
@@ -23,9 +49,14 @@ const MESH_LEAF_SIZE: usize = 4;
 /// vertices) are left out and never hit.
 pub struct MeshBvh {
     mesh: TriangleMesh,
+    layout: BvhLayout,
+    bounds: Aabb,
+    /// The binary tree; only its root is kept in the [`BvhLayout::Wide`] layout.
     pub(super) tree: Tree,
-    /// Triangle vertices in leaf order.
-    tris: Vec<[Vec3A; 3]>,
+    /// The wide tree; empty in the [`BvhLayout::Binary`] layout.
+    pub(super) wide: WideTree,
+    /// Triangle vertices in leaf order (binary layout only).
+    pub(super) tris: Vec<[Vec3A; 3]>,
     /// Mesh triangle index of each entry of `tris`.
     tri_ids: Vec<u32>,
 }
@@ -35,7 +66,17 @@ impl MeshBvh {
     /// sweep below that, leaves of at most 4. Meshes of 16k triangles or more build their subtrees on
     /// rayon's thread pool; the tree does not depend on the number of threads.
     #[must_use]
+    ///
+    /// The layout is [`BvhLayout::Wide`] unless the environment variable `OBSCURA_BVH_LAYOUT` is
+    /// `binary` (a switch for measuring a whole render with the former layout; the hits are the
+    /// same).
     pub fn build(mesh: TriangleMesh) -> Self {
+        Self::build_with_layout(mesh, BvhLayout::from_env())
+    }
+
+    /// [`MeshBvh::build`] with the hierarchy stored in `layout`.
+    #[must_use]
+    pub fn build_with_layout(mesh: TriangleMesh, layout: BvhLayout) -> Self {
         let n = mesh.triangles.len().min(u32::MAX as usize);
         let bound = |i: usize| match triangle_vertices(&mesh, mesh.triangles[i]) {
             Some([a, b, c]) => Aabb {
@@ -53,32 +94,73 @@ impl MeshBvh {
         let mut refs: Vec<u32> = (0..n as u32)
             .filter(|&i| boxes[i as usize].lo.x <= boxes[i as usize].hi.x)
             .collect();
-        let tree = build_tree(&boxes, &mut refs, MESH_LEAF_SIZE);
+        let mut tree = build_tree(&boxes, &mut refs, MESH_LEAF_SIZE);
+        let bounds = tree.root_bounds();
+        let wide = match layout {
+            BvhLayout::Wide => {
+                let tris: Vec<[Vec3A; 3]> = refs
+                    .iter()
+                    .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
+                    .collect();
+                let wide = collapse(&tree, &tris, &refs);
+                tree.pairs = Vec::new();
+                wide
+            }
+            BvhLayout::Binary => WideTree::default(),
+        };
         // Every ref passed this same check, so none is dropped and `tris` stays aligned with `tri_ids`.
-        let tris = refs
-            .iter()
-            .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
-            .collect();
+        // The wide layout keeps its triangles in its leaf blocks instead.
+        let tris = match layout {
+            BvhLayout::Binary => refs
+                .iter()
+                .filter_map(|&i| triangle_vertices(&mesh, mesh.triangles[i as usize]))
+                .collect(),
+            BvhLayout::Wide => Vec::new(),
+        };
         Self {
             mesh,
+            layout,
+            bounds,
             tree,
+            wide,
             tris,
             tri_ids: refs,
         }
+    }
+
+    /// The layout the hierarchy is stored in.
+    #[must_use]
+    pub fn layout(&self) -> BvhLayout {
+        self.layout
+    }
+
+    /// Bytes the hierarchy takes beyond the mesh itself: nodes, triangles copied into leaf order
+    /// and their indices.
+    #[must_use]
+    pub fn memory_bytes(&self) -> usize {
+        size_of::<Tree>()
+            + self.tree.pairs.len() * size_of::<super::tree::NodePair>()
+            + self.wide.node_bytes()
+            + self.tris.len() * size_of::<[Vec3A; 3]>()
+            + self.tri_ids.len() * size_of::<u32>()
+    }
+
+    /// The object-space box of the hittable triangles (empty for none).
+    pub(super) fn root_bounds(&self) -> Aabb {
+        self.bounds
     }
 
     /// The object-space bounding box `(min, max)` of the triangles that can be hit. An empty mesh
     /// gives an empty box: `min = +∞`, `max = −∞`.
     #[must_use]
     pub fn bounds(&self) -> (Vec3A, Vec3A) {
-        let b = self.tree.root_bounds();
-        (b.lo, b.hi)
+        (self.bounds.lo, self.bounds.hi)
     }
 
     /// The number of triangles that can be hit (skipped triangles are not counted).
     #[must_use]
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.tri_ids.len()
     }
 
     /// The mesh the hierarchy was built over, unchanged.
@@ -168,17 +250,42 @@ impl MeshBvh {
         t_lim: f32,
         accept: F,
     ) -> Option<(f32, u32, f32, f32)> {
-        let box_ray = kernel.prepare(origin, direction, t_min);
-        let mut visitor = MeshClosest {
-            bvh: self,
-            ray: TriRay::new(origin, direction),
-            t_min,
-            lim: t_lim,
-            best: None,
-            accept,
-        };
-        traverse(&self.tree, kernel, &box_ray, t_lim, &mut visitor);
-        visitor.best
+        let ray = TriRay::new(origin, direction);
+        match self.layout {
+            BvhLayout::Wide => {
+                let k = kernel.wide();
+                let mut visitor = WideClosest {
+                    blocks: &self.wide.leaves,
+                    kernel: k,
+                    ray,
+                    t_min,
+                    lim: t_lim,
+                    best: None,
+                    accept,
+                };
+                wide::traverse(
+                    &self.wide,
+                    k,
+                    &k.prepare(origin, direction, t_min),
+                    t_lim,
+                    &mut visitor,
+                );
+                visitor.best
+            }
+            BvhLayout::Binary => {
+                let mut visitor = MeshClosest {
+                    bvh: self,
+                    ray,
+                    t_min,
+                    lim: t_lim,
+                    best: None,
+                    accept,
+                };
+                let box_ray = kernel.prepare(origin, direction, t_min);
+                traverse(&self.tree, kernel, &box_ray, t_lim, &mut visitor);
+                visitor.best
+            }
+        }
     }
 
     /// True when a triangle is hit with `t_min < t < t_max`.
@@ -191,16 +298,40 @@ impl MeshBvh {
         t_min: f32,
         t_max: f32,
     ) -> bool {
-        let box_ray = kernel.prepare(origin, direction, t_min);
-        let mut visitor = MeshAny {
-            bvh: self,
-            ray: TriRay::new(origin, direction),
-            t_min,
-            t_max,
-            found: false,
-        };
-        traverse(&self.tree, kernel, &box_ray, t_max, &mut visitor);
-        visitor.found
+        let ray = TriRay::new(origin, direction);
+        match self.layout {
+            BvhLayout::Wide => {
+                let k = kernel.wide();
+                let mut visitor = WideAny {
+                    blocks: &self.wide.leaves,
+                    kernel: k,
+                    ray,
+                    t_min,
+                    t_max,
+                    found: false,
+                };
+                wide::traverse(
+                    &self.wide,
+                    k,
+                    &k.prepare(origin, direction, t_min),
+                    t_max,
+                    &mut visitor,
+                );
+                visitor.found
+            }
+            BvhLayout::Binary => {
+                let mut visitor = MeshAny {
+                    bvh: self,
+                    ray,
+                    t_min,
+                    t_max,
+                    found: false,
+                };
+                let box_ray = kernel.prepare(origin, direction, t_min);
+                traverse(&self.tree, kernel, &box_ray, t_max, &mut visitor);
+                visitor.found
+            }
+        }
     }
 }
 
@@ -254,11 +385,80 @@ impl LeafVisitor for MeshAny<'_> {
     }
 }
 
+/// [`MeshClosest`] for the wide layout: a leaf is one [`Tri4`] block, tested four lanes at once.
+struct WideClosest<'a, K, F> {
+    blocks: &'a [Tri4],
+    kernel: K,
+    ray: TriRay,
+    t_min: f32,
+    lim: f32,
+    best: Option<(f32, u32, f32, f32)>,
+    accept: F,
+}
+
+impl<K: WideKernel, F: Fn(f32, f32) -> bool> LeafVisitor for WideClosest<'_, K, F> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool {
+        let block = &self.blocks[first];
+        let (mut mask, hits) = self.kernel.leaf(&self.ray, block, count, self.t_min, self.lim);
+        // Lanes in triangle order, each against the limit as it is then: the scalar loop's rule.
+        while mask != 0 {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let (t, u, v, det, id) = (hits[0][k], hits[1][k], hits[2][k], hits[3][k], block.id[k]);
+            if t < self.lim && self.best.is_none_or(|b| t < b.0 || id < b.1) && (self.accept)(t, det) {
+                self.best = Some((t, id, u, v));
+                self.lim = t.next_up();
+                *t_far = t;
+            }
+        }
+        false
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        wide::prefetch(&self.blocks[first]);
+    }
+}
+
+/// [`MeshAny`] for the wide layout.
+struct WideAny<'a, K> {
+    blocks: &'a [Tri4],
+    kernel: K,
+    ray: TriRay,
+    t_min: f32,
+    t_max: f32,
+    found: bool,
+}
+
+impl<K: WideKernel> LeafVisitor for WideAny<'_, K> {
+    #[inline(always)]
+    fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
+        let (mask, _) = self
+            .kernel
+            .leaf(&self.ray, &self.blocks[first], count, self.t_min, self.t_max);
+        self.found = mask != 0;
+        self.found
+    }
+
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        wide::prefetch(&self.blocks[first]);
+    }
+}
+
 impl fmt::Debug for MeshBvh {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("MeshBvh")
-            .field("triangles", &self.tris.len())
-            .field("nodes", &self.tree.node_count())
+            .field("triangles", &self.tri_ids.len())
+            .field("layout", &self.layout)
+            .field(
+                "nodes",
+                &match self.layout {
+                    BvhLayout::Wide => self.wide.nodes.len(),
+                    BvhLayout::Binary => self.tree.node_count(),
+                },
+            )
             .field("bounds", &self.bounds())
             .finish()
     }

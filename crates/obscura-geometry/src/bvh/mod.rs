@@ -16,12 +16,31 @@
 //!
 //! # Layout (why it is fast)
 //!
-//! Nodes are 32 bytes (`min`, child-or-first, `max`, count). The two children of a node sit side by
-//! side in one 64-byte-aligned pair, so one cache line is fetched per traversal step and both
-//! children are slab-tested at once: with AVX2 (detected at run time) one `vpermps` per child selects
-//! the near and far planes by the ray's direction signs, and the two boxes go through the slab test in
-//! one 8-lane register. Without AVX2 the same test runs in scalar code. Leaf triangles are copied into
-//! leaf order (48 bytes each) so a leaf is one contiguous read.
+//! A mesh's hierarchy is built as a binary SAH tree and, by default ([`BvhLayout::Wide`]), stored
+//! eight-wide: each 256-byte node holds its eight children's boxes coordinate by coordinate
+//! (`lo.x[8], lo.y[8], … hi.z[8]`), so one ray/box slab test covers all eight with one AVX2
+//! instruction per operation (detected at run time; without AVX2 a portable loop does the same
+//! operations). The binary tree is collapsed greedily (a node takes its children and opens the
+//! largest interior one until it has eight), which divides the number of levels by up to three, and
+//! any subtree of at most four triangles
+//! becomes one leaf whose triangles are packed coordinate by coordinate (`Tri4`, 160 bytes) and go
+//! through the watertight test four lanes at once. Children are visited nearest entry first; those
+//! waiting on the stack are prefetched, since an incoherent ray's time is mostly cache misses on
+//! nodes and leaves; any-hit queries (shadow rays) stop at the first hit.
+//!
+//! The wide layout gives the same hits as the binary one bit for bit: the boxes are the binary
+//! tree's, the slab test does the same operations in the same order (`maxps`/`minps` keep the NaN
+//! rule of the scalar test), the SIMD triangle test repeats the scalar one's operations in its order
+//! (a lane whose edge function is exactly zero is redone by the scalar test, which recomputes it in
+//! `f64`), and ties in `t` go to the lowest triangle index whatever the visiting order.
+//!
+//! The binary layout ([`BvhLayout::Binary`], or `OBSCURA_BVH_LAYOUT=binary` for [`MeshBvh::build`])
+//! is kept as the reference the benchmarks and tests compare against, and the scene's top level
+//! (a handful of instances) stays binary: nodes are 32 bytes (`min`, child-or-first, `max`, count),
+//! the two children of a node sit side by side in one 64-byte-aligned pair, and with AVX2 (detected
+//! at run time) one `vpermps` per child selects the near and far planes by the ray's direction signs
+//! so both boxes go through the slab test in one 8-lane register. Without AVX2 the same test runs in
+//! scalar code, and the wide layout's portable kernels with it.
 //!
 //! # Motion
 //!
@@ -37,7 +56,8 @@
 //! |---|---|
 //! | `tree` | boxes, the 32-byte node, the 64-byte node pair, the packed tree |
 //! | `build` | the binned-SAH builder (sequential and on rayon's pool) |
-//! | `traverse` | the ray/box-pair kernels (scalar; AVX2 in `avx2`) and the stack traversal |
+//! | `traverse` | the ray/box-pair kernels (scalar; AVX2 in `avx2`) and the binary stack traversal |
+//! | `wide` | the eight-wide node and the four-triangle leaf block, the collapse, the eight-box and four-triangle kernels, the wide traversal |
 //! | `triangle` | the watertight ray/triangle test, skipped triangles, world-space hit records |
 //! | `mesh` | [`MeshBvh`]: one mesh's hierarchy, nearest hit and any hit |
 //! | `scene` | [`SceneAccel`] and [`Instance`]: the two-level, motion-blurred accelerator |
@@ -52,6 +72,7 @@ mod tests;
 mod traverse;
 mod tree;
 mod triangle;
+mod wide;
 
-pub use mesh::MeshBvh;
+pub use mesh::{BvhLayout, MeshBvh};
 pub use scene::{Instance, SceneAccel};

@@ -133,7 +133,7 @@ impl SceneAccel {
         let boxes: Vec<Aabb> = placements[..n]
             .iter()
             .map(|p| match p.mesh.map(|m| &meshes[m]) {
-                Some(mesh) if mesh.triangle_count() > 0 => world_bounds(&p.motion, &mesh.tree.root_bounds()),
+                Some(mesh) if mesh.triangle_count() > 0 => world_bounds(&p.motion, &mesh.root_bounds()),
                 _ => Aabb::EMPTY,
             })
             .collect();

@@ -4,6 +4,7 @@
 use glam::Vec3A;
 
 use super::tree::{Node, NodePair, Tree};
+use super::wide::{PortableWide, WideKernel};
 
 /// Traversal stack entries. A node at depth `d` has at most `d` pending siblings on the stack; median
 /// splits from the builder's `SAH_DEPTH_LIMIT` (40) on halve the primitive count (at most
@@ -15,7 +16,7 @@ pub(super) const FAR_PAD: f32 = 1e-6;
 
 /// `x` grown by [`FAR_PAD`] of its magnitude (works for negative `x`; infinities stay put).
 #[inline(always)]
-fn pad_far(x: f32) -> f32 {
+pub(super) fn pad_far(x: f32) -> f32 {
     x + x.abs() * FAR_PAD
 }
 
@@ -29,6 +30,10 @@ pub(super) trait BoxKernel: Copy {
     /// Tests both boxes of `pair` against `[t_min, t_far]`. Returns a mask (bit 0: first child, bit 1:
     /// second) and the entry distances.
     fn test_pair(self, ray: &Self::Ray, pair: &NodePair, t_far: f32) -> (u32, f32, f32);
+    /// The wide kernel of the same tier, for mesh hierarchies.
+    type Wide: WideKernel;
+    /// That kernel's token.
+    fn wide(self) -> Self::Wide;
 }
 
 /// The portable kernel: Williams et al.'s slab test, one box at a time.
@@ -68,6 +73,12 @@ impl ScalarKernel {
 
 impl BoxKernel for ScalarKernel {
     type Ray = ScalarBoxRay;
+    type Wide = PortableWide;
+
+    #[inline(always)]
+    fn wide(self) -> PortableWide {
+        PortableWide
+    }
 
     #[inline(always)]
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> ScalarBoxRay {
@@ -96,6 +107,12 @@ impl BoxKernel for ScalarKernel {
 pub(super) trait LeafVisitor {
     /// Tests primitives `first..first + count`; may shrink `t_far`; returns `true` to stop.
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool;
+    /// Hints that the leaf starting at `first` will be visited soon (the wide traversal calls it for
+    /// leaves it puts on its stack); by default nothing.
+    #[inline(always)]
+    fn prefetch(&self, first: usize) {
+        let _ = first;
+    }
 }
 
 /// Pops the next stacked node whose entry distance is still within `t_far`.

@@ -11,8 +11,8 @@ use crate::ray::{Hit, Ray, TriangleMesh};
 /// exactly like the paper's scalar formulas.
 #[derive(Clone, Copy)]
 pub(super) struct TriRay {
-    origin: Vec3A,
-    shear: Mat3A,
+    pub(super) origin: Vec3A,
+    pub(super) shear: Mat3A,
 }
 
 impl TriRay {

@@ -7,7 +7,7 @@ use proptest::prelude::*;
 use super::*;
 use crate::bvh::build::PARALLEL_BUILD_MIN;
 use crate::bvh::traverse::STACK_SIZE;
-use crate::bvh::{Instance, SceneAccel};
+use crate::bvh::{BvhLayout, Instance, SceneAccel};
 use crate::ray::Tracer;
 
 proptest! {
@@ -94,7 +94,7 @@ fn large_mesh_matches_brute_force() {
         bvh.triangle_count() >= PARALLEL_BUILD_MIN,
         "exercise the parallel build"
     );
-    assert!(bvh.tree.depth() < STACK_SIZE);
+    assert!(bvh.wide.depth() < STACK_SIZE);
     let mut hits = 0;
     for k in 0..rays {
         let origin = rng.vec(1.5);
@@ -266,9 +266,15 @@ fn tree_depth_stays_bounded_on_adversarial_input() {
             [Vec3A::ZERO, Vec3A::new(x, 0.0, 0.0), Vec3A::new(0.0, x, 0.0)]
         })
         .collect();
-    let bvh = MeshBvh::build(soup(&triangles, 1.0));
-    let depth = bvh.tree.depth();
+    let binary = MeshBvh::build_with_layout(soup(&triangles, 1.0), BvhLayout::Binary);
+    let depth = binary.tree.depth();
     assert!((41..=48).contains(&depth), "depth {depth}");
+    let bvh = MeshBvh::build(soup(&triangles, 1.0));
+    let wide_depth = bvh.wide.depth();
+    assert!(
+        wide_depth <= depth,
+        "wide depth {wide_depth} > binary depth {depth}"
+    );
     for (k, i) in (-120..120).enumerate() {
         // All triangles containing the point lie at the same t; the smallest has the lowest index.
         let p = 0.3 * 2f32.powi(i);
@@ -304,7 +310,8 @@ fn sphere_3e38_builds_a_real_tree() {
             mesh.triangles.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
         }
     }
-    let bvh = MeshBvh::build(mesh);
+    let wide = MeshBvh::build(mesh.clone());
+    let bvh = MeshBvh::build_with_layout(mesh, BvhLayout::Binary);
     assert!(bvh.triangle_count() > 2000);
     let largest = bvh.tree.largest_leaf();
     assert!(largest <= 4, "a leaf of {largest} triangles");
@@ -316,5 +323,6 @@ fn sphere_3e38_builds_a_real_tree() {
     for _ in 0..64 {
         let d = Vec3A::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5);
         check_mesh_ray(&bvh, &Ray::new(Vec3A::ZERO, d.normalize()), radius).unwrap();
+        check_mesh_ray(&wide, &Ray::new(Vec3A::ZERO, d.normalize()), radius).unwrap();
     }
 }

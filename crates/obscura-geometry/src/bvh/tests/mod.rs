@@ -5,6 +5,7 @@ mod mesh;
 mod scene;
 mod triangle;
 mod visibility;
+mod wide;
 
 use glam::{Affine3A, Vec3A};
 use proptest::prelude::*;
