@@ -65,6 +65,10 @@ use serde_json::{Value, json};
 /// What to do instead when a format has no exact equivalent.
 pub const USE_RAYS: &str = "use `obscura rays` for the exact per-pixel ray map";
 
+/// The domain of COLMAP's models that project through `(x/z, y/z)`: a fisheye's rays past 90° (a field
+/// of view over 180°) have no COLMAP pixel.
+pub const FRONT_ONLY: &str = "exact for rays in front of the camera (z > 0, θ < 90°): COLMAP projects through (x/z, y/z); a field of view over 180° is beyond it";
+
 /// The pixel and axis conventions of every intrinsic in `equivalents`.
 pub const CONVENTION: &str = "raster pixels of the render: x right, y down, the top-left pixel's centre at (0.5, 0.5) (COLMAP, nerfstudio, gsplat; OpenCV's cx, cy are these − 0.5); camera axes x right, y down, z forward (OpenCV's)";
 
@@ -364,7 +368,13 @@ pub(crate) fn colmap(lens: &Result<Lens, String>, width: u32, height: u32) -> Va
         }
         Lens::Colmap { model, params } => (model.as_str(), params.clone()),
     };
-    json!({"model": model, "width": width, "height": height, "params": params})
+    let mut j = json!({"model": model, "width": width, "height": height, "params": params});
+    if matches!(lens, Lens::KannalaBrandt { .. } | Lens::Fisheye624 { .. })
+        || ["FOV", "DIVISION", "THIN_PRISM_FISHEYE"].contains(&model)
+    {
+        j["domain"] = json!(FRONT_ONLY);
+    }
+    j
 }
 
 /// The OpenCV camera (`model` pinhole/fisheye, `K`, `dist`), pixel centre at (0, 0).
