@@ -29,6 +29,10 @@ use serde_json::Value;
 use super::{ExportCamera, ExportError, ExportFormat, Item, Pose, WORLD_FLIPPED, create_dir};
 use glam::DMat4;
 
+/// How close (radians, and units per unit of distance) the cameras' relative poses must be in every
+/// frame to be one rigid rig: the precision of the `f32` transforms scenes hold.
+const RIGID: f64 = 2e-6;
+
 /// One image of the model.
 struct Image {
     id: usize,
@@ -195,10 +199,10 @@ fn rig(cameras: &[ExportCamera], camera_of: &[Vec<usize>], images: &[Image]) -> 
             match slot {
                 None => *slot = Some(relative),
                 Some(first) => {
-                    let same = first
-                        .translation
-                        .abs_diff_eq(relative.translation, 1e-9 * (1.0 + first.translation.length()))
-                        && first.rotation.dot(relative.rotation).abs() > 1.0 - 1e-12;
+                    // The same to the precision of the f32 transforms the scene holds.
+                    let scale = 1.0 + first.translation.length();
+                    let same = first.translation.abs_diff_eq(relative.translation, RIGID * scale)
+                        && first.rotation.angle_between(relative.rotation) < RIGID;
                     if !same {
                         return None;
                     }

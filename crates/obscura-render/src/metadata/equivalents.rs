@@ -245,11 +245,11 @@ fn calibrated(p: &Reader<'_>, w: f64, h: f64) -> Result<Lens, String> {
         [q[0] * sx, q[1] * sy]
     };
     let ci = if single { 1 } else { 2 };
-    let c = || [(q[ci] - shift) * sx, (q[ci + 1] - shift) * sy];
+    let at = |i: usize| q.get(i).copied().unwrap_or(0.0);
+    let c = || [(at(ci) - shift) * sx, (at(ci + 1) - shift) * sy];
     let rest = |from: usize| q[from..].to_vec();
     let pinhole = |k: [f64; 6], p: [f64; 2], s: [f64; 4]| Lens::Pinhole { f, c: c(), k, p, s };
     let kb = |k: [f64; 4]| Lens::KannalaBrandt { f, c: c(), k };
-    let at = |i: usize| q.get(i).copied().unwrap_or(0.0);
     Ok(match model.as_str() {
         "SIMPLE_PINHOLE" | "PINHOLE" => pinhole([0.0; 6], [0.0; 2], [0.0; 4]),
         "SIMPLE_RADIAL" => pinhole([q[3], 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; 2], [0.0; 4]),
@@ -304,7 +304,7 @@ fn calibrated(p: &Reader<'_>, w: f64, h: f64) -> Result<Lens, String> {
                 .map(|(i, k)| k / sx.powi(i as i32))
                 .collect();
             Lens::FTheta {
-                c: c(),
+                c: [(q[0] - shift) * sx, (q[1] - shift) * sy],
                 bw,
                 max_angle: q.get(2).copied().unwrap_or(std::f64::consts::PI),
             }
