@@ -213,25 +213,12 @@ struct Intrinsics {
 
 /// The intrinsics of `scene`'s camera when it is pinhole-equivalent (see the module documentation).
 fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
-    let cam = &scene.camera;
-    let (w, h) = (cam.format.width as f64, cam.format.height as f64);
-    let win = cam.screen_window();
-    let (l, r, b, t) = (
-        win.left as f64,
-        win.right as f64,
-        win.bottom as f64,
-        win.top as f64,
-    );
     match scene.projection.as_str() {
         "PxrPerspective" => {
-            let fov = field_of_view? as f64;
-            let d = 1.0 / (fov.to_radians() / 2.0).tan();
-            let p = [
-                d * w / (r - l),
-                d * h / (t - b),
-                -l * w / (r - l),
-                t * h / (t - b),
-            ];
+            let Ok(equivalents::Lens::Pinhole { f, c, .. }) = equivalents::lens(scene, field_of_view) else {
+                return None;
+            };
+            let p = [f[0], f[1], c[0], c[1]];
             Some(Intrinsics {
                 pinhole: p,
                 opencv_model: "pinhole",
@@ -240,7 +227,10 @@ fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
                 colmap_params: p.to_vec(),
             })
         }
-        "CalibratedCamera" => calibrated(scene, w, h),
+        "CalibratedCamera" => {
+            let format = scene.camera.format;
+            calibrated(scene, format.width as f64, format.height as f64)
+        }
         _ => None,
     }
 }
