@@ -38,8 +38,9 @@
 //!
 //! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
 //! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a
-//! pinhole-equivalent camera: `PxrPerspective` (its chief rays, `fx = d·W/(r − l)`, `fy = d·H/(t − b)`,
-//! `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster coordinates, `d = 1/tan(fov/2)`) and a
+//! pinhole-equivalent camera: `PxrPerspective` without a `fovEnd` zoom (its chief rays,
+//! `fx = d·W/(r − l)`, `fy = d·H/(t − b)`, `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster
+//! coordinates, `d = 1/tan(fov/2)`) and a
 //! `CalibratedCamera` whose model is one of COLMAP's pinhole-family or OpenCV's (`SIMPLE_PINHOLE`,
 //! `PINHOLE`, `SIMPLE_RADIAL`, `RADIAL`, `OPENCV`, `FULL_OPENCV`, `OPENCV_FISHEYE`, `OPENCV_PINHOLE`),
 //! rescaled to the render's size. COLMAP puts the centre of the top-left pixel at (0.5, 0.5) (raster
