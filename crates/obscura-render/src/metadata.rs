@@ -16,14 +16,31 @@
 //!   "world_to_camera": {"open": M, "close": M},   // 4×4, rows, column vectors: p_cam = M·p_world
 //!   "opencv": {"K": 3×3, "dist": [..], "model": "pinhole" | "fisheye",
 //!              "world_to_camera": {"open": M, "close": M}},
-//!   "colmap": {"model": "PINHOLE", "width": 640, "height": 360, "params": [fx, fy, cx, cy]}
+//!   "colmap": {"model": "PINHOLE", "width": 640, "height": 360, "params": [fx, fy, cx, cy]},
+//!   "camera_model": {"projection": "PxrPerspective", "lens": "pinhole", "fx": …, "fy": …, "cx": …,
+//!                    "cy": …, "k": [6], "p": [2], "s": [4], "formula": "…", "convention": "…",
+//!                    "width": 640, "height": 360},          // or {"lens": null, "reason": …}
+//!   "equivalents": {"convention": "…",
+//!                   "colmap": {"model", "width", "height", "params"[, "domain"]},
+//!                   "opencv": {"model": "pinhole" | "fisheye", "K", "dist"},
+//!                   "nerfstudio": {"camera_model", "fl_x", "fl_y", "cx", "cy", "w", "h", "k1"…},
+//!                   "gsplat": {"camera_model": "pinhole" | "fisheye" | "ftheta", "K", …}},
+//!   "rolling_shutter": {"sweep": "down", "duration": 0.0}   // PxrRollingShutter only
 //! }
 //! ```
 //!
+//! `camera_model` and `equivalents` (added keys; the schema stays `obscura-camera/1`) are the exact
+//! description of every model and its equivalent in each training format, or `{"model": null,
+//! "reason": …}` (nerfstudio: `camera_model` null) pointing to `obscura rays` — never an
+//! approximation. [`equivalents`] documents each mapping as a formula and the exactness table; the
+//! exports of `obscura-dataset` only format these entries. Intrinsics there are in raster pixels of
+//! the render (top-left pixel centre at (0.5, 0.5)) with OpenCV's camera axes.
+//!
 //! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
 //! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a
-//! pinhole-equivalent camera: `PxrPerspective` (its chief rays, `fx = d·W/(r − l)`, `fy = d·H/(t − b)`,
-//! `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster coordinates, `d = 1/tan(fov/2)`) and a
+//! pinhole-equivalent camera: `PxrPerspective` without a `fovEnd` zoom (its chief rays,
+//! `fx = d·W/(r − l)`, `fy = d·H/(t − b)`, `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster
+//! coordinates, `d = 1/tan(fov/2)`) and a
 //! `CalibratedCamera` whose model is one of COLMAP's pinhole-family or OpenCV's (`SIMPLE_PINHOLE`,
 //! `PINHOLE`, `SIMPLE_RADIAL`, `RADIAL`, `OPENCV`, `FULL_OPENCV`, `OPENCV_FISHEYE`, `OPENCV_PINHOLE`),
 //! rescaled to the render's size. COLMAP puts the centre of the top-left pixel at (0.5, 0.5) (raster
@@ -45,6 +62,8 @@ use obscura_geometry::motion::camera_motion;
 use obscura_image::atomic::{AtomicWriteError, write_atomically};
 
 use crate::render::{Prepared, RenderError};
+
+pub mod equivalents;
 
 /// The schema name written into every camera JSON.
 pub const SCHEMA: &str = "obscura-camera/1";
@@ -144,6 +163,21 @@ pub fn camera_json(scene: &Scene, prepared: &Prepared, frame: Option<i64>) -> Re
         "field_of_view": props.field_of_view.map(f64::from).map(num),
         "world_to_camera": {"open": rows(open), "close": rows(close)},
     });
+    let (model, equivalents) = equivalents::sections(scene, props.field_of_view);
+    j["camera_model"] = model;
+    j["equivalents"] = equivalents;
+    if scene.projection == "PxrRollingShutter" {
+        let list = &scene.projection_params;
+        let text = |n: &str, d: &str| match list.get(n).map(|e| &e.value) {
+            Some(ParamValue::Strings(v)) => v.first().cloned().unwrap_or_else(|| d.to_string()),
+            _ => d.to_string(),
+        };
+        let duration = match list.get("duration").map(|e| &e.value) {
+            Some(ParamValue::Floats(v)) => v.first().map(|&x| f64::from(x)).unwrap_or(1.0),
+            _ => 1.0,
+        };
+        j["rolling_shutter"] = json!({"sweep": text("sweep", "down"), "duration": duration});
+    }
     if let Some(config) = &scene.sensor {
         j["sensor"] = crate::sensor::record(config, props, (cam.format.width, cam.format.height));
     }
@@ -180,25 +214,12 @@ struct Intrinsics {
 
 /// The intrinsics of `scene`'s camera when it is pinhole-equivalent (see the module documentation).
 fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
-    let cam = &scene.camera;
-    let (w, h) = (cam.format.width as f64, cam.format.height as f64);
-    let win = cam.screen_window();
-    let (l, r, b, t) = (
-        win.left as f64,
-        win.right as f64,
-        win.bottom as f64,
-        win.top as f64,
-    );
     match scene.projection.as_str() {
         "PxrPerspective" => {
-            let fov = field_of_view? as f64;
-            let d = 1.0 / (fov.to_radians() / 2.0).tan();
-            let p = [
-                d * w / (r - l),
-                d * h / (t - b),
-                -l * w / (r - l),
-                t * h / (t - b),
-            ];
+            let Ok(equivalents::Lens::Pinhole { f, c, .. }) = equivalents::lens(scene, field_of_view) else {
+                return None;
+            };
+            let p = [f[0], f[1], c[0], c[1]];
             Some(Intrinsics {
                 pinhole: p,
                 opencv_model: "pinhole",
@@ -207,7 +228,10 @@ fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
                 colmap_params: p.to_vec(),
             })
         }
-        "CalibratedCamera" => calibrated(scene, w, h),
+        "CalibratedCamera" => {
+            let format = scene.camera.format;
+            calibrated(scene, format.width as f64, format.height as f64)
+        }
         _ => None,
     }
 }
