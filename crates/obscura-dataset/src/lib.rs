@@ -6,3 +6,5 @@
 //! instance, point tracks and cross-camera correspondences. Every annotation goes through the camera's
 //! exact inverse (`Projection::unproject`), so it is exact for fisheyes, calibrated lenses, panoramas
 //! and plugins alike; an export that cannot be exact in a format says so in the file.
+
+pub mod annotate;
