@@ -568,7 +568,7 @@ pub fn run(options: &DatasetOptions, session: &mut Session<'_>) -> Result<Summar
         render_frames(&layout, &frames, &cameras, options, session, &mut summary)?;
     }
     if options.finalize == Finalize::Only || options.frames.is_none() {
-        finalize(&layout, &frames, &cameras, options, &options_value, &mut summary)?;
+        finalize(&layout, &frames, &cameras, options, &options_value, session, &mut summary)?;
     }
     Ok(summary)
 }
@@ -667,6 +667,55 @@ fn camera_scene(mut scene: Scene, c: &Prepared) -> Result<Scene, DatasetError> {
     Ok(scene)
 }
 
+/// The renderer's options of a dataset.
+fn render_options(options: &DatasetOptions) -> RenderOptions {
+    let r = &options.render;
+    RenderOptions {
+        samples_per_pixel: r.spp,
+        seed: r.seed,
+        path: obscura_shading::integrator::PathOptions { max_depth: r.max_depth, ..Default::default() },
+        ..RenderOptions::default()
+    }
+}
+
+/// Where the scene's relative paths are read from.
+fn base_dir(options: &DatasetOptions) -> PathBuf {
+    options.scene.as_deref().and_then(Path::parent).map(Path::to_path_buf).unwrap_or_default()
+}
+
+/// The seed of the track points' sampling (fixed: every run and every farm task samples the same
+/// points).
+pub const TRACK_SEED: u64 = 0x0b5c_0a7a;
+
+/// The point tracks of camera `c` over `frames`, written to `tracks/<camera>.npz`: the points are
+/// sampled on the first frame's surfaces and followed through every frame's exact camera.
+fn write_tracks(
+    layout: &Layout,
+    frames: &Frames<'_>,
+    c: &Prepared,
+    options: &DatasetOptions,
+    registry: &mut Registry,
+) -> Result<(), DatasetError> {
+    let opts = render_options(options);
+    let dir = base_dir(options);
+    let name = &c.rig.name;
+    let mut points = None;
+    let mut seen = Vec::new();
+    let mut numbers = Vec::new();
+    for &(frame, index) in &frames.list {
+        let failed = |message: String| DatasetError::Frame { frame, camera: name.clone(), message };
+        let scene = camera_scene(frames.scene(frame, index)?, c)?;
+        let prepared = obscura_render::render::prepare(&scene, registry, &dir, &opts).map_err(|e| failed(e.to_string()))?;
+        let points = points.get_or_insert_with(|| crate::annotate::tracks::TrackPoints::sample(&prepared, options.tracks as usize, TRACK_SEED));
+        seen.push(crate::annotate::tracks::track_frame(&prepared, &scene, points, 0.0).map_err(|e| failed(e.to_string()))?);
+        numbers.push(i32::try_from(frame).map_err(|_| failed("the frame number does not fit the tracks' int32 frame list".into()))?);
+    }
+    let path = layout.at(&Layout::tracks(name));
+    create_parent(&path)?;
+    crate::annotate::tracks::write_tracks_npz(&path, &points.unwrap_or_default(), &seen, &numbers)
+        .map_err(|e| DatasetError::Output(e.to_string()))
+}
+
 /// Renders every selected frame of every camera that is not complete yet.
 fn render_frames(
     layout: &Layout,
@@ -677,43 +726,40 @@ fn render_frames(
     summary: &mut Summary,
 ) -> Result<(), DatasetError> {
     let r = &options.render;
-    let opts = RenderOptions {
-        samples_per_pixel: r.spp,
-        seed: r.seed,
-        path: obscura_shading::integrator::PathOptions {
-            max_depth: r.max_depth,
-            ..Default::default()
-        },
-        ..RenderOptions::default()
-    };
+    let opts = render_options(options);
     let size_source = match (&r.format, &options.scene) {
         (Some(_), _) => "--format".to_string(),
         (None, Some(p)) => format!("{}: Format", p.display()),
         (None, None) => "the built-in scene's Format".to_string(),
     };
-    let base_dir = options
-        .scene
-        .as_deref()
-        .and_then(Path::parent)
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
+    let base_dir = base_dir(options);
+    let boxes = options.annotations.contains(&Annotation::Boxes);
+    let correspondences = options.annotations.contains(&Annotation::Correspondences) && cameras.len() > 1;
     for &(frame, index) in &frames.list {
+        // A camera's frame is done when its images are complete and its per-frame annotations exist;
+        // otherwise it renders again (annotations need the render's film and prepared scene).
+        let done = |c: &Prepared| {
+            let name = &c.rig.name;
+            is_complete(&frame_displays(layout, name, frame))
+                && (!boxes || layout.at(&Layout::annotations(name, frame)).is_file())
+                && (!correspondences
+                    || cameras
+                        .iter()
+                        .filter(|b| b.rig.name != *name)
+                        .all(|b| layout.at(&Layout::correspondences(name, &b.rig.name, frame)).is_file()))
+        };
+        if cameras.iter().all(done) {
+            summary.skipped.extend(cameras.iter().map(|c| (c.rig.name.clone(), frame)));
+            continue;
+        }
+        let mut rendered = Vec::new();
         for c in cameras {
             let name = &c.rig.name;
             let displays = frame_displays(layout, name, frame);
-            if is_complete(&displays) {
-                summary.skipped.push((name.clone(), frame));
-                continue;
-            }
             let dir = layout.at(&Layout::images_dir(name));
-            std::fs::create_dir_all(&dir).map_err(|e| {
-                DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display()))
-            })?;
+            std::fs::create_dir_all(&dir).map_err(|e| DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display())))?;
             let scene = camera_scene(frames.scene(frame, index)?, c)?;
-            let writes = [FrameWrite {
-                number: Some(frame),
-                displays: &displays,
-            }];
+            let writes = [FrameWrite { number: Some(frame), displays: &displays }];
             let job = FrameJob {
                 scene: &scene,
                 base_dir: &base_dir,
@@ -725,23 +771,62 @@ fn render_frames(
                 sidecars: Sidecars::Always,
                 size_source: &size_source,
             };
-            let result =
-                render_frame(&job, session.registry, session.reporter).map_err(|e| DatasetError::Frame {
-                    frame,
-                    camera: name.clone(),
-                    message: e.to_string(),
-                })?;
+            let result = render_frame(&job, session.registry, session.reporter).map_err(|e| DatasetError::Frame {
+                frame,
+                camera: name.clone(),
+                message: e.to_string(),
+            })?;
             if result.output.stats.cancelled {
-                return Err(DatasetError::Cancelled {
-                    frame,
-                    camera: name.clone(),
-                });
+                return Err(DatasetError::Cancelled { frame, camera: name.clone() });
             }
             summary.render_seconds += result.output.stats.render_seconds;
             summary.rendered.push((name.clone(), frame));
+            rendered.push((scene, result));
         }
+        let start = std::time::Instant::now();
+        let failed = |camera: &str, e: crate::annotate::AnnotateError| DatasetError::Frame { frame, camera: camera.to_string(), message: e.to_string() };
+        if boxes {
+            for (c, (scene, result)) in cameras.iter().zip(&rendered) {
+                let name = &c.rig.name;
+                let found = crate::annotate::boxes::frame_boxes(&result.prepared, scene, &result.output.film, 0.0).map_err(|e| failed(name, e))?;
+                let format = scene.camera.format;
+                let file_name = Layout::exr(name, frame).to_string_lossy().replace('\\', "/");
+                let info = crate::annotate::boxes::ImageInfo {
+                    file_name: &file_name,
+                    camera: name,
+                    frame: Some(i64::from(frame)),
+                    width: format.width,
+                    height: format.height,
+                };
+                let coco = crate::annotate::boxes::coco_json(&info, result.prepared.ids(), &found);
+                write_json(&layout.at(&Layout::annotations(name, frame)), &coco)?;
+            }
+        }
+        if correspondences {
+            for (a, (_, ra)) in cameras.iter().zip(&rendered) {
+                for (b, (scene_b, rb)) in cameras.iter().zip(&rendered) {
+                    if a.rig.name == b.rig.name {
+                        continue;
+                    }
+                    let found = crate::annotate::correspondences::correspond(&ra.prepared, &rb.prepared, scene_b, 0.0)
+                        .map_err(|e| failed(&a.rig.name, e))?;
+                    let path = layout.at(&Layout::correspondences(&a.rig.name, &b.rig.name, frame));
+                    create_parent(&path)?;
+                    found.write_npz(&path).map_err(|e| failed(&a.rig.name, e))?;
+                }
+            }
+        }
+        summary.annotation_seconds += start.elapsed().as_secs_f64();
     }
     Ok(())
+}
+
+/// Creates the directory `path` is written into.
+fn create_parent(path: &Path) -> Result<(), DatasetError> {
+    match path.parent() {
+        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display()))),
+        None => Ok(()),
+    }
 }
 
 /// Assembles the files spanning frames and the manifest from the frames on disk.
@@ -749,8 +834,9 @@ fn finalize(
     layout: &Layout,
     frames: &Frames<'_>,
     cameras: &[Prepared],
-    _options: &DatasetOptions,
+    options: &DatasetOptions,
     options_value: &Value,
+    session: &mut Session<'_>,
     summary: &mut Summary,
 ) -> Result<(), DatasetError> {
     let mut missing = Vec::new();
@@ -771,17 +857,34 @@ fn finalize(
             if missing.len() > shown.len() { ", …" } else { "" }
         )));
     }
+    let start = std::time::Instant::now();
     let mut files: Vec<PathBuf> = Vec::new();
     for &(frame, _) in &frames.list {
         for c in cameras {
             let n = &c.rig.name;
-            files.extend([
-                Layout::exr(n, frame),
-                Layout::png(n, frame),
-                Layout::ids_json(n, frame),
-                Layout::camera_json(n, frame),
-            ]);
+            files.extend([Layout::exr(n, frame), Layout::png(n, frame), Layout::ids_json(n, frame), Layout::camera_json(n, frame)]);
+            if options.annotations.contains(&Annotation::Boxes) {
+                files.push(Layout::annotations(n, frame));
+            }
+            if options.annotations.contains(&Annotation::Correspondences) {
+                files.extend(cameras.iter().filter(|b| b.rig.name != *n).map(|b| Layout::correspondences(n, &b.rig.name, frame)));
+            }
         }
+    }
+    if options.annotations.contains(&Annotation::Tracks) {
+        for c in cameras {
+            write_tracks(layout, frames, c, options, session.registry)?;
+            files.push(Layout::tracks(&c.rig.name));
+        }
+    }
+    summary.annotation_seconds += start.elapsed().as_secs_f64();
+    let missing: Vec<String> = files.iter().filter(|f| !layout.at(f).is_file()).map(|f| f.display().to_string()).collect();
+    if let Some(first) = missing.first() {
+        return Err(DatasetError::Input(format!(
+            "{}: cannot finalize, {} file(s) of the rendered frames are missing (first: {first}); run the same command again (without --finalize) to make them",
+            layout.root().display(),
+            missing.len()
+        )));
     }
     let manifest = json!({
         "layout": LAYOUT_VERSION,
