@@ -568,7 +568,15 @@ pub fn run(options: &DatasetOptions, session: &mut Session<'_>) -> Result<Summar
         render_frames(&layout, &frames, &cameras, options, session, &mut summary)?;
     }
     if options.finalize == Finalize::Only || options.frames.is_none() {
-        finalize(&layout, &frames, &cameras, options, &options_value, session, &mut summary)?;
+        finalize(
+            &layout,
+            &frames,
+            &cameras,
+            options,
+            &options_value,
+            session,
+            &mut summary,
+        )?;
     }
     Ok(summary)
 }
@@ -673,14 +681,22 @@ fn render_options(options: &DatasetOptions) -> RenderOptions {
     RenderOptions {
         samples_per_pixel: r.spp,
         seed: r.seed,
-        path: obscura_shading::integrator::PathOptions { max_depth: r.max_depth, ..Default::default() },
+        path: obscura_shading::integrator::PathOptions {
+            max_depth: r.max_depth,
+            ..Default::default()
+        },
         ..RenderOptions::default()
     }
 }
 
 /// Where the scene's relative paths are read from.
 fn base_dir(options: &DatasetOptions) -> PathBuf {
-    options.scene.as_deref().and_then(Path::parent).map(Path::to_path_buf).unwrap_or_default()
+    options
+        .scene
+        .as_deref()
+        .and_then(Path::parent)
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
 }
 
 /// The seed of the track points' sampling (fixed: every run and every farm task samples the same
@@ -703,12 +719,25 @@ fn write_tracks(
     let mut seen = Vec::new();
     let mut numbers = Vec::new();
     for &(frame, index) in &frames.list {
-        let failed = |message: String| DatasetError::Frame { frame, camera: name.clone(), message };
+        let failed = |message: String| DatasetError::Frame {
+            frame,
+            camera: name.clone(),
+            message,
+        };
         let scene = camera_scene(frames.scene(frame, index)?, c)?;
-        let prepared = obscura_render::render::prepare(&scene, registry, &dir, &opts).map_err(|e| failed(e.to_string()))?;
-        let points = points.get_or_insert_with(|| crate::annotate::tracks::TrackPoints::sample(&prepared, options.tracks as usize, TRACK_SEED));
-        seen.push(crate::annotate::tracks::track_frame(&prepared, &scene, points, 0.0).map_err(|e| failed(e.to_string()))?);
-        numbers.push(i32::try_from(frame).map_err(|_| failed("the frame number does not fit the tracks' int32 frame list".into()))?);
+        let prepared = obscura_render::render::prepare(&scene, registry, &dir, &opts)
+            .map_err(|e| failed(e.to_string()))?;
+        let points = points.get_or_insert_with(|| {
+            crate::annotate::tracks::TrackPoints::sample(&prepared, options.tracks as usize, TRACK_SEED)
+        });
+        seen.push(
+            crate::annotate::tracks::track_frame(&prepared, &scene, points, 0.0)
+                .map_err(|e| failed(e.to_string()))?,
+        );
+        numbers.push(
+            i32::try_from(frame)
+                .map_err(|_| failed("the frame number does not fit the tracks' int32 frame list".into()))?,
+        );
     }
     let path = layout.at(&Layout::tracks(name));
     create_parent(&path)?;
@@ -743,13 +772,16 @@ fn render_frames(
             is_complete(&frame_displays(layout, name, frame))
                 && (!boxes || layout.at(&Layout::annotations(name, frame)).is_file())
                 && (!correspondences
-                    || cameras
-                        .iter()
-                        .filter(|b| b.rig.name != *name)
-                        .all(|b| layout.at(&Layout::correspondences(name, &b.rig.name, frame)).is_file()))
+                    || cameras.iter().filter(|b| b.rig.name != *name).all(|b| {
+                        layout
+                            .at(&Layout::correspondences(name, &b.rig.name, frame))
+                            .is_file()
+                    }))
         };
         if cameras.iter().all(done) {
-            summary.skipped.extend(cameras.iter().map(|c| (c.rig.name.clone(), frame)));
+            summary
+                .skipped
+                .extend(cameras.iter().map(|c| (c.rig.name.clone(), frame)));
             continue;
         }
         let mut rendered = Vec::new();
@@ -757,9 +789,14 @@ fn render_frames(
             let name = &c.rig.name;
             let displays = frame_displays(layout, name, frame);
             let dir = layout.at(&Layout::images_dir(name));
-            std::fs::create_dir_all(&dir).map_err(|e| DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display())))?;
+            std::fs::create_dir_all(&dir).map_err(|e| {
+                DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display()))
+            })?;
             let scene = camera_scene(frames.scene(frame, index)?, c)?;
-            let writes = [FrameWrite { number: Some(frame), displays: &displays }];
+            let writes = [FrameWrite {
+                number: Some(frame),
+                displays: &displays,
+            }];
             let job = FrameJob {
                 scene: &scene,
                 base_dir: &base_dir,
@@ -771,24 +808,34 @@ fn render_frames(
                 sidecars: Sidecars::Always,
                 size_source: &size_source,
             };
-            let result = render_frame(&job, session.registry, session.reporter).map_err(|e| DatasetError::Frame {
-                frame,
-                camera: name.clone(),
-                message: e.to_string(),
-            })?;
+            let result =
+                render_frame(&job, session.registry, session.reporter).map_err(|e| DatasetError::Frame {
+                    frame,
+                    camera: name.clone(),
+                    message: e.to_string(),
+                })?;
             if result.output.stats.cancelled {
-                return Err(DatasetError::Cancelled { frame, camera: name.clone() });
+                return Err(DatasetError::Cancelled {
+                    frame,
+                    camera: name.clone(),
+                });
             }
             summary.render_seconds += result.output.stats.render_seconds;
             summary.rendered.push((name.clone(), frame));
             rendered.push((scene, result));
         }
         let start = std::time::Instant::now();
-        let failed = |camera: &str, e: crate::annotate::AnnotateError| DatasetError::Frame { frame, camera: camera.to_string(), message: e.to_string() };
+        let failed = |camera: &str, e: crate::annotate::AnnotateError| DatasetError::Frame {
+            frame,
+            camera: camera.to_string(),
+            message: e.to_string(),
+        };
         if boxes {
             for (c, (scene, result)) in cameras.iter().zip(&rendered) {
                 let name = &c.rig.name;
-                let found = crate::annotate::boxes::frame_boxes(&result.prepared, scene, &result.output.film, 0.0).map_err(|e| failed(name, e))?;
+                let found =
+                    crate::annotate::boxes::frame_boxes(&result.prepared, scene, &result.output.film, 0.0)
+                        .map_err(|e| failed(name, e))?;
                 let format = scene.camera.format;
                 let file_name = Layout::exr(name, frame).to_string_lossy().replace('\\', "/");
                 let info = crate::annotate::boxes::ImageInfo {
@@ -808,8 +855,13 @@ fn render_frames(
                     if a.rig.name == b.rig.name {
                         continue;
                     }
-                    let found = crate::annotate::correspondences::correspond(&ra.prepared, &rb.prepared, scene_b, 0.0)
-                        .map_err(|e| failed(&a.rig.name, e))?;
+                    let found = crate::annotate::correspondences::correspond(
+                        &ra.prepared,
+                        &rb.prepared,
+                        scene_b,
+                        0.0,
+                    )
+                    .map_err(|e| failed(&a.rig.name, e))?;
                     let path = layout.at(&Layout::correspondences(&a.rig.name, &b.rig.name, frame));
                     create_parent(&path)?;
                     found.write_npz(&path).map_err(|e| failed(&a.rig.name, e))?;
@@ -824,7 +876,9 @@ fn render_frames(
 /// Creates the directory `path` is written into.
 fn create_parent(path: &Path) -> Result<(), DatasetError> {
     match path.parent() {
-        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display()))),
+        Some(dir) => std::fs::create_dir_all(dir).map_err(|e| {
+            DatasetError::Output(format!("{}: cannot create the directory: {e}", dir.display()))
+        }),
         None => Ok(()),
     }
 }
@@ -862,12 +916,22 @@ fn finalize(
     for &(frame, _) in &frames.list {
         for c in cameras {
             let n = &c.rig.name;
-            files.extend([Layout::exr(n, frame), Layout::png(n, frame), Layout::ids_json(n, frame), Layout::camera_json(n, frame)]);
+            files.extend([
+                Layout::exr(n, frame),
+                Layout::png(n, frame),
+                Layout::ids_json(n, frame),
+                Layout::camera_json(n, frame),
+            ]);
             if options.annotations.contains(&Annotation::Boxes) {
                 files.push(Layout::annotations(n, frame));
             }
             if options.annotations.contains(&Annotation::Correspondences) {
-                files.extend(cameras.iter().filter(|b| b.rig.name != *n).map(|b| Layout::correspondences(n, &b.rig.name, frame)));
+                files.extend(
+                    cameras
+                        .iter()
+                        .filter(|b| b.rig.name != *n)
+                        .map(|b| Layout::correspondences(n, &b.rig.name, frame)),
+                );
             }
         }
     }
@@ -878,7 +942,11 @@ fn finalize(
         }
     }
     summary.annotation_seconds += start.elapsed().as_secs_f64();
-    let missing: Vec<String> = files.iter().filter(|f| !layout.at(f).is_file()).map(|f| f.display().to_string()).collect();
+    let missing: Vec<String> = files
+        .iter()
+        .filter(|f| !layout.at(f).is_file())
+        .map(|f| f.display().to_string())
+        .collect();
     if let Some(first) = missing.first() {
         return Err(DatasetError::Input(format!(
             "{}: cannot finalize, {} file(s) of the rendered frames are missing (first: {first}); run the same command again (without --finalize) to make them",
