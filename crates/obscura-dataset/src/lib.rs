@@ -8,6 +8,7 @@
 //! and plugins alike; an export that cannot be exact in a format says so in the file.
 
 pub mod annotate;
+pub mod export;
 pub mod layout;
 pub mod rig;
 pub mod run;

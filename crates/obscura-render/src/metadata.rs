@@ -46,6 +46,8 @@ use obscura_image::atomic::{AtomicWriteError, write_atomically};
 
 use crate::render::{Prepared, RenderError};
 
+pub mod equivalents;
+
 /// The schema name written into every camera JSON.
 pub const SCHEMA: &str = "obscura-camera/1";
 
@@ -144,6 +146,21 @@ pub fn camera_json(scene: &Scene, prepared: &Prepared, frame: Option<i64>) -> Re
         "field_of_view": props.field_of_view.map(f64::from).map(num),
         "world_to_camera": {"open": rows(open), "close": rows(close)},
     });
+    let (model, equivalents) = equivalents::sections(scene, props.field_of_view);
+    j["camera_model"] = model;
+    j["equivalents"] = equivalents;
+    if scene.projection == "PxrRollingShutter" {
+        let list = &scene.projection_params;
+        let text = |n: &str, d: &str| match list.get(n).map(|e| &e.value) {
+            Some(ParamValue::Strings(v)) => v.first().cloned().unwrap_or_else(|| d.to_string()),
+            _ => d.to_string(),
+        };
+        let duration = match list.get("duration").map(|e| &e.value) {
+            Some(ParamValue::Floats(v)) => v.first().map(|&x| f64::from(x)).unwrap_or(1.0),
+            _ => 1.0,
+        };
+        j["rolling_shutter"] = json!({"sweep": text("sweep", "down"), "duration": duration});
+    }
     if let Some(config) = &scene.sensor {
         j["sensor"] = crate::sensor::record(config, props, (cam.format.width, cam.format.height));
     }
