@@ -7,9 +7,10 @@ use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
 use clap::Args;
+use obscura_dataset::export::ExportFormat;
 use obscura_dataset::run::{
-    ANNOTATION_NAMES, Annotation, DEFAULT_TRACKS, DatasetOptions, EXPORT_NAMES, Export, Finalize,
-    ParamReader, RenderSettings, Session, parse_names,
+    ANNOTATION_NAMES, Annotation, DEFAULT_TRACKS, DatasetOptions, Finalize, ParamReader, RenderSettings,
+    Session, export_names, parse_names,
 };
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::PluginSearch;
@@ -24,8 +25,8 @@ use crate::signals;
 use crate::stdout::outln;
 
 /// Reads one name of `--exports`.
-fn parse_export(text: &str) -> Result<Export, String> {
-    parse_names("--exports", text, &EXPORT_NAMES)?
+fn parse_export(text: &str) -> Result<ExportFormat, String> {
+    parse_names("--exports", text, &export_names())?
         .first()
         .copied()
         .ok_or_else(|| "--exports: an empty name; expected colmap, nerfstudio or gsplat".to_string())
@@ -57,7 +58,7 @@ pub struct DatasetArgs {
     rig: Option<PathBuf>,
     /// Camera exports: colmap, nerfstudio, gsplat (comma-separated).
     #[arg(long, value_name = "LIST", value_parser = parse_export, value_delimiter = ',')]
-    exports: Vec<Export>,
+    exports: Vec<ExportFormat>,
     /// Annotations: boxes, tracks, correspondences (comma-separated).
     #[arg(long, value_name = "LIST", value_parser = parse_annotation, value_delimiter = ',')]
     annotations: Vec<Annotation>,

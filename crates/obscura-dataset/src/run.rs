@@ -33,19 +33,9 @@ use obscura_scene::{Aov, Display, DisplayDriver, Scene};
 use obscura_sdk::{Format, Matrix4, MotionSample, ParamDecl, ParamList, ParamType, ParamValue, did_you_mean};
 use serde_json::{Value, json};
 
+use crate::export::{ExportCamera, ExportFormat, ExportFrame, write_exports};
 use crate::layout::{IMAGE_AOVS, LAYOUT_VERSION, Layout};
 use crate::rig::{Lens, Rig, RigCamera};
-
-/// A camera export format (`--exports`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Export {
-    /// COLMAP's sparse model text: `colmap/cameras.txt`, `images.txt`, `rigs.txt`, `frames.txt`.
-    Colmap,
-    /// nerfstudio's `transforms.json`.
-    Nerfstudio,
-    /// gsplat/3DGUT camera arguments: `gsplat/cameras.json`.
-    Gsplat,
-}
 
 /// An annotation kind (`--annotations`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -58,12 +48,11 @@ pub enum Annotation {
     Correspondences,
 }
 
-/// The names `--exports` takes, in order.
-pub const EXPORT_NAMES: [(&str, Export); 3] = [
-    ("colmap", Export::Colmap),
-    ("nerfstudio", Export::Nerfstudio),
-    ("gsplat", Export::Gsplat),
-];
+/// The names `--exports` takes, in order: [`ExportFormat::name`] of each format.
+#[must_use]
+pub fn export_names() -> Vec<(&'static str, ExportFormat)> {
+    ExportFormat::ALL.iter().map(|&f| (f.name(), f)).collect()
+}
 
 /// The names `--annotations` takes, in order.
 pub const ANNOTATION_NAMES: [(&str, Annotation); 3] = [
@@ -169,7 +158,7 @@ pub struct DatasetOptions {
     /// `--rig`: the rig file.
     pub rig: Option<PathBuf>,
     /// `--exports`.
-    pub exports: Vec<Export>,
+    pub exports: Vec<ExportFormat>,
     /// `--annotations`.
     pub annotations: Vec<Annotation>,
     /// `--tracks`: points per object for the tracks.
@@ -445,7 +434,7 @@ fn options_json(o: &DatasetOptions, params: &[String]) -> Value {
         "seed": r.seed,
         "max_depth": r.max_depth,
         "fps": r.fps,
-        "exports": o.exports.iter().map(|e| name_of(&EXPORT_NAMES, e)).collect::<Vec<_>>(),
+        "exports": o.exports.iter().map(|e| e.name()).collect::<Vec<_>>(),
         "annotations": o.annotations.iter().map(|a| name_of(&ANNOTATION_NAMES, a)).collect::<Vec<_>>(),
         "tracks": o.tracks,
     })
@@ -873,6 +862,27 @@ fn render_frames(
     Ok(())
 }
 
+/// The files under `root/dir`, relative to `root`, sorted.
+fn files_under(root: &Path, dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(root.join(&d)) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let rel = d.join(e.file_name());
+            if e.path().is_dir() {
+                stack.push(rel);
+            } else {
+                out.push(rel);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
 /// Creates the directory `path` is written into.
 fn create_parent(path: &Path) -> Result<(), DatasetError> {
     match path.parent() {
@@ -942,6 +952,41 @@ fn finalize(
         }
     }
     summary.annotation_seconds += start.elapsed().as_secs_f64();
+    if !options.exports.is_empty() {
+        let mut export_cameras = Vec::new();
+        for c in cameras {
+            let mut list = Vec::new();
+            for &(frame, _) in &frames.list {
+                let path = layout.at(&Layout::camera_json(&c.rig.name, frame));
+                let text = std::fs::read_to_string(&path)
+                    .map_err(|e| DatasetError::Input(format!("{}: {e}", path.display())))?;
+                let camera: Value = serde_json::from_str(&text)
+                    .map_err(|e| DatasetError::Input(format!("{}:{}: {e}", path.display(), e.line())))?;
+                list.push(ExportFrame {
+                    frame: i32::try_from(frame).map_err(|_| {
+                        DatasetError::Input(format!(
+                            "frame {frame}: beyond the exports' 32-bit frame numbers"
+                        ))
+                    })?,
+                    image: Layout::exr(&c.rig.name, frame),
+                    camera,
+                });
+            }
+            export_cameras.push(ExportCamera {
+                name: c.rig.name.clone(),
+                frames: list,
+            });
+        }
+        let warnings = write_exports(layout.root(), &export_cameras, &options.exports)
+            .map_err(|e| DatasetError::Output(e.to_string()))?;
+        summary.warnings.extend(warnings);
+        for dir in ["colmap", "gsplat", "nerfstudio"] {
+            files.extend(files_under(layout.root(), Path::new(dir)));
+        }
+        if layout.root().join("transforms.json").is_file() {
+            files.push(PathBuf::from("transforms.json"));
+        }
+    }
     let missing: Vec<String> = files
         .iter()
         .filter(|f| !layout.at(f).is_file())

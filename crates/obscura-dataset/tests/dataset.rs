@@ -5,9 +5,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+use obscura_dataset::export::ExportFormat;
 use obscura_dataset::run::{
-    ANNOTATION_NAMES, Annotation, DatasetOptions, EXPORT_NAMES, Export, Finalize, ParamReader,
-    RenderSettings, Session, Summary, parse_names, run,
+    ANNOTATION_NAMES, Annotation, DatasetOptions, Finalize, ParamReader, RenderSettings, Session, Summary,
+    export_names, parse_names, run,
 };
 use obscura_plugins::builtin_registry;
 use obscura_plugins::loader::PluginSearch;
@@ -409,7 +410,7 @@ fn a_colmap_rig_config_poses_cameras_from_the_reference_sensor() {
 
 #[test]
 fn bad_input_gets_a_located_error() {
-    let e = parse_names("--exports", "colmap,nerfstduio", &EXPORT_NAMES).unwrap_err();
+    let e = parse_names("--exports", "colmap,nerfstduio", &export_names()).unwrap_err();
     assert!(
         e.contains("'nerfstduio'")
             && e.contains("did you mean 'nerfstudio'")
@@ -417,8 +418,8 @@ fn bad_input_gets_a_located_error() {
         "{e}"
     );
     assert_eq!(
-        parse_names("--exports", "gsplat,colmap,gsplat", &EXPORT_NAMES).unwrap(),
-        [Export::Colmap, Export::Gsplat]
+        parse_names("--exports", "gsplat,colmap,gsplat", &export_names()).unwrap(),
+        [ExportFormat::Colmap, ExportFormat::Gsplat]
     );
     let e = parse_names("--annotations", "boxes,flow", &ANNOTATION_NAMES).unwrap_err();
     assert!(
