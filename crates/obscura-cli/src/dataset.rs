@@ -214,10 +214,11 @@ pub fn run(a: &DatasetArgs, search: &PluginSearch) -> Result<(), String> {
     }
     if !a.quiet {
         outln!(
-            "{}: rendered {} camera frame(s) in {:.2} s, {} already complete (skipped){}",
+            "{}: rendered {} camera frame(s) in {:.2} s, annotations {:.3} s, {} already complete (skipped){}",
             a.output.display(),
             summary.rendered.len(),
             summary.render_seconds,
+            summary.annotation_seconds,
             summary.skipped.len(),
             if summary.finalized {
                 "; finalized (dataset.json complete)".to_string()
