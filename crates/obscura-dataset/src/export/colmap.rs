@@ -26,7 +26,12 @@ use std::path::Path;
 use obscura_image::atomic::write_atomically;
 use serde_json::Value;
 
-use super::{ExportCamera, ExportError, ExportFormat, Item, Pose, create_dir};
+use super::{ExportCamera, ExportError, ExportFormat, Item, Pose, WORLD_FLIPPED, create_dir};
+use glam::DMat4;
+
+/// How close (radians, and units per unit of distance) the cameras' relative poses must be in every
+/// frame to be one rigid rig: the precision of the `f32` transforms scenes hold.
+const RIGID: f64 = 2e-6;
 
 /// One image of the model.
 struct Image {
@@ -43,6 +48,7 @@ struct Image {
 pub(crate) fn write(
     root: &Path,
     cameras: &[ExportCamera],
+    world: DMat4,
     warnings: &mut Vec<String>,
 ) -> Result<(), ExportError> {
     let dir = root.join("colmap");
@@ -51,6 +57,9 @@ pub(crate) fn write(
     let mut camera_of: Vec<Vec<usize>> = vec![Vec::new(); cameras.len()];
     let mut images: Vec<Image> = Vec::new();
     let mut notes = String::new();
+    if world != DMat4::IDENTITY {
+        let _ = writeln!(notes, "# World: {WORLD_FLIPPED}");
+    }
     for (ci, camera) in cameras.iter().enumerate() {
         for frame in &camera.frames {
             let item = Item { camera, frame };
@@ -70,6 +79,20 @@ pub(crate) fn write(
                 }
             };
             let key = parse_camera(&item, entry)?;
+            let fov = frame.camera["field_of_view"].as_f64().unwrap_or(0.0);
+            if entry.get("domain").is_some() && fov > 180.0 {
+                let _ = writeln!(
+                    notes,
+                    "# camera \"{}\" frame {}: a {fov}° field of view; {}",
+                    camera.name,
+                    frame.frame,
+                    entry["domain"].as_str().unwrap_or_default()
+                );
+                warnings.push(format!(
+                    "colmap: camera \"{}\" frame {}: the {fov}° field of view is wider than COLMAP's fisheye models reach (θ < 90°); pixels past 90° have no COLMAP ray",
+                    camera.name, frame.frame
+                ));
+            }
             let id = match intrinsics.iter().position(|k| *k == key) {
                 Some(i) => i + 1,
                 None => {
@@ -92,7 +115,7 @@ pub(crate) fn write(
                 source: ci,
                 frame: frame.frame,
                 name: item.image_name(),
-                pose: item.opencv_pose("open")?,
+                pose: item.opencv_pose("open", world)?,
             });
         }
     }
@@ -176,10 +199,10 @@ fn rig(cameras: &[ExportCamera], camera_of: &[Vec<usize>], images: &[Image]) -> 
             match slot {
                 None => *slot = Some(relative),
                 Some(first) => {
-                    let same = first
-                        .translation
-                        .abs_diff_eq(relative.translation, 1e-9 * (1.0 + first.translation.length()))
-                        && first.rotation.dot(relative.rotation).abs() > 1.0 - 1e-12;
+                    // The same to the precision of the f32 transforms the scene holds.
+                    let scale = 1.0 + first.translation.length();
+                    let same = first.translation.abs_diff_eq(relative.translation, RIGID * scale)
+                        && first.rotation.angle_between(relative.rotation) < RIGID;
                     if !same {
                         return None;
                     }

@@ -37,13 +37,14 @@ use super::{ExportCamera, ExportError, ExportFormat, FLIP_Y, Item, rows};
 pub(crate) fn write(
     root: &Path,
     cameras: &[ExportCamera],
+    world: DMat4,
     warnings: &mut Vec<String>,
 ) -> Result<(), ExportError> {
     let mut out = Vec::new();
     for camera in cameras {
         let mut frames = Vec::new();
         for frame in &camera.frames {
-            frames.push(entry(&Item { camera, frame }, warnings)?);
+            frames.push(entry(&Item { camera, frame }, world, warnings)?);
         }
         out.push(json!({"name": camera.name, "frames": frames}));
     }
@@ -52,13 +53,14 @@ pub(crate) fn write(
     let doc = json!({
         "schema": "obscura-gsplat/1",
         "convention": "Ks in raster pixels (top-left pixel centre at (0.5, 0.5), gsplat's); viewmats world-to-camera, OpenCV axes (x right, y down, z forward)",
+        "world": if world == DMat4::IDENTITY { json!("Obscura's world") } else { json!(super::WORLD_FLIPPED) },
         "cameras": out,
     });
     Ok(write_json(&dir.join("cameras.json"), &doc)?)
 }
 
 /// One frame's arguments.
-fn entry(item: &Item<'_>, warnings: &mut Vec<String>) -> Result<Value, ExportError> {
+fn entry(item: &Item<'_>, world: DMat4, warnings: &mut Vec<String>) -> Result<Value, ExportError> {
     let base = json!({"frame": item.frame.frame, "image": item.image_name()});
     let e = match item.equivalent(ExportFormat::Gsplat)? {
         Ok(e) => e,
@@ -107,7 +109,7 @@ fn entry(item: &Item<'_>, warnings: &mut Vec<String>) -> Result<Value, ExportErr
         };
         let n = lines.ok_or_else(|| item.error("equivalents.gsplat: expected width and height"))?;
         let time = |line: f64| (line + 0.5) / n * (1.0 - duration) + duration / 2.0;
-        let at = |t: f64| FLIP_Y * pose_at(open, close, t);
+        let at = |t: f64| FLIP_Y * pose_at(open, close, t) * world;
         j["rolling_shutter"] = json!(kind);
         j["viewmats"] = rows(at(time(0.0)));
         j["viewmats_rs"] = rows(at(time(n - 1.0)));
@@ -119,7 +121,7 @@ fn entry(item: &Item<'_>, warnings: &mut Vec<String>) -> Result<Value, ExportErr
             ));
         }
         j["rolling_shutter"] = json!("GLOBAL");
-        j["viewmats"] = rows(FLIP_Y * open);
+        j["viewmats"] = rows(FLIP_Y * open * world);
     }
     Ok(j)
 }

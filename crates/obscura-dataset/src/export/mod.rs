@@ -21,6 +21,12 @@
 //!
 //! # Poses
 //!
+//! All three formats need proper rotations in a right-handed world. RenderMan's camera space is
+//! left-handed, so a scene whose world-to-camera matrices are rotations has a left-handed world;
+//! the exports then use Obscura's world with z negated (`S = diag(1, 1, −1)`, [`world_flip`]) and
+//! say so in each file and in a warning ([`WORLD_FLIPPED`]). Below, `M` is the world-to-camera
+//! matrix composed with `S`.
+//!
 //! The camera JSON's `world_to_camera` is Obscura's camera space (x right, y up, z forward) at shutter
 //! open and close. COLMAP and gsplat take world-to-camera in OpenCV's axes, `diag(1, −1, 1)·M`;
 //! nerfstudio takes camera-to-world in OpenGL's (x right, y up, z back), `M⁻¹·diag(1, 1, −1)`. A
@@ -150,6 +156,10 @@ pub fn write_exports(
     formats: &[ExportFormat],
 ) -> Result<Vec<String>, ExportError> {
     let mut warnings = Vec::new();
+    let world = world_flip(cameras)?;
+    if world != DMat4::IDENTITY && !formats.is_empty() {
+        warnings.push(format!("exports: {WORLD_FLIPPED}"));
+    }
     let mut done = Vec::new();
     for &format in formats {
         if done.contains(&format) {
@@ -157,11 +167,13 @@ pub fn write_exports(
         }
         done.push(format);
         match format {
-            ExportFormat::Colmap => colmap::write(root, cameras, &mut warnings)?,
-            ExportFormat::Nerfstudio => nerfstudio::write(root, cameras, &mut warnings)?,
-            ExportFormat::Gsplat => gsplat::write(root, cameras, &mut warnings)?,
+            ExportFormat::Colmap => colmap::write(root, cameras, world, &mut warnings)?,
+            ExportFormat::Nerfstudio => nerfstudio::write(root, cameras, world, &mut warnings)?,
+            ExportFormat::Gsplat => gsplat::write(root, cameras, world, &mut warnings)?,
         }
     }
+    let mut seen = std::collections::HashSet::new();
+    warnings.retain(|w| seen.insert(w.clone()));
     Ok(warnings)
 }
 
@@ -249,15 +261,55 @@ impl Item<'_> {
         parts.join("/")
     }
 
-    /// A rigid world-to-camera pose in OpenCV's axes at `when`.
-    pub fn opencv_pose(&self, when: &str) -> Result<Pose, ExportError> {
-        let m = self.world_to_camera(when)?;
-        Pose::from_matrix(FLIP_Y * m).ok_or_else(|| {
+    /// World-to-camera in OpenCV's camera axes and the export's world (`world` from [`world_flip`]).
+    pub fn opencv_matrix(&self, when: &str, world: DMat4) -> Result<DMat4, ExportError> {
+        Ok(FLIP_Y * self.world_to_camera(when)? * world)
+    }
+
+    /// A rigid world-to-camera pose in OpenCV's axes at `when`, in the export's world.
+    pub fn opencv_pose(&self, when: &str, world: DMat4) -> Result<Pose, ExportError> {
+        let m = self.opencv_matrix(when, world)?;
+        Pose::from_matrix(m).ok_or_else(|| {
             self.error(format!(
                 "world_to_camera.{when} is not a rotation and a translation (scaled or sheared camera transform)"
             ))
         })
     }
+}
+
+/// What the exports say about their world when it is Obscura's with z negated.
+pub const WORLD_FLIPPED: &str = "the scene's world is left-handed (RenderMan's convention: det(world_to_camera) > 0 with a +Y-up, +Z-forward camera), and COLMAP, nerfstudio and gsplat need right-handed rotations: the exported world is Obscura's with z negated, a world point (x, y, z) is (x, y, -z) here";
+
+/// The matrix from Obscura's world to the exports' world: the identity when the scene's camera
+/// transforms are right-handed rotations after the camera-axis flip, else `diag(1, 1, −1)`
+/// ([`WORLD_FLIPPED`]). RenderMan's camera space (+Y up, +Z forward) is left-handed, so a scene
+/// whose world-to-camera is a proper rotation has a left-handed world; one written with RenderMan's
+/// usual `Scale 1 1 -1` (from a right-handed application) has a right-handed one.
+///
+/// # Errors
+/// [`ExportError::Camera`] when the frames disagree (some left-handed, some right-handed).
+pub fn world_flip(cameras: &[ExportCamera]) -> Result<DMat4, ExportError> {
+    let mut flip = None;
+    for camera in cameras {
+        for frame in &camera.frames {
+            let item = Item { camera, frame };
+            let left = DMat3::from_mat4(item.world_to_camera("open")?).determinant() > 0.0;
+            match flip {
+                None => flip = Some(left),
+                Some(f) if f != left => {
+                    return Err(item.error(
+                        "its world_to_camera's handedness differs from the first frame's: one world cannot hold both",
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    Ok(if flip == Some(true) {
+        DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0))
+    } else {
+        DMat4::IDENTITY
+    })
 }
 
 /// `diag(1, −1, 1, 1)`: Obscura's camera axes to OpenCV's (and back).

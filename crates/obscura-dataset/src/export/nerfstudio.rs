@@ -45,6 +45,7 @@ const KEYS: [&str; 14] = [
 pub(crate) fn write(
     root: &Path,
     cameras: &[ExportCamera],
+    world: glam::DMat4,
     warnings: &mut Vec<String>,
 ) -> Result<(), ExportError> {
     for camera in cameras {
@@ -54,15 +55,23 @@ pub(crate) fn write(
             (root.join("nerfstudio").join(&camera.name), PathBuf::from("../.."))
         };
         super::create_dir(&dir)?;
-        write_json(&dir.join("transforms.json"), &transforms(camera, &up, warnings)?)?;
+        write_json(
+            &dir.join("transforms.json"),
+            &transforms(camera, &up, world, warnings)?,
+        )?;
     }
     Ok(())
 }
 
-/// The `transforms.json` of one camera; image paths are prefixed with `up`.
+/// The `transforms.json` of one camera; image paths are prefixed with `up`, and `world` is the
+/// matrix from Obscura's world to the export's ([`super::world_flip`]).
+///
+/// # Errors
+/// [`ExportError::Camera`] when a frame's camera JSON lacks a field.
 pub fn transforms(
     camera: &ExportCamera,
     up: &Path,
+    world: glam::DMat4,
     warnings: &mut Vec<String>,
 ) -> Result<Value, ExportError> {
     let mut intrinsics: Vec<Map<String, Value>> = Vec::new();
@@ -89,7 +98,7 @@ pub fn transforms(
                 camera.name, frame.frame
             ));
         }
-        let c2w = item.world_to_camera("open")?.inverse() * OPENGL;
+        let c2w = (item.world_to_camera("open")? * world).inverse() * OPENGL;
         let path = up.join(&frame.image);
         let name: Vec<String> = path
             .components()
@@ -124,6 +133,9 @@ pub fn transforms(
                 }
             }
         }
+    }
+    if world != glam::DMat4::IDENTITY {
+        top.insert("obscura_world".into(), json!(super::WORLD_FLIPPED));
     }
     top.insert("frames".into(), Value::Array(frames));
     Ok(Value::Object(top))

@@ -65,6 +65,10 @@ use serde_json::{Value, json};
 /// What to do instead when a format has no exact equivalent.
 pub const USE_RAYS: &str = "use `obscura rays` for the exact per-pixel ray map";
 
+/// The domain of COLMAP's models that project through `(x/z, y/z)`: a fisheye's rays past 90° (a field
+/// of view over 180°) have no COLMAP pixel.
+pub const FRONT_ONLY: &str = "exact for rays in front of the camera (z > 0, θ < 90°): COLMAP projects through (x/z, y/z); a field of view over 180° is beyond it";
+
 /// The pixel and axis conventions of every intrinsic in `equivalents`.
 pub const CONVENTION: &str = "raster pixels of the render: x right, y down, the top-left pixel's centre at (0.5, 0.5) (COLMAP, nerfstudio, gsplat; OpenCV's cx, cy are these − 0.5); camera axes x right, y down, z forward (OpenCV's)";
 
@@ -241,11 +245,11 @@ fn calibrated(p: &Reader<'_>, w: f64, h: f64) -> Result<Lens, String> {
         [q[0] * sx, q[1] * sy]
     };
     let ci = if single { 1 } else { 2 };
-    let c = || [(q[ci] - shift) * sx, (q[ci + 1] - shift) * sy];
+    let at = |i: usize| q.get(i).copied().unwrap_or(0.0);
+    let c = || [(at(ci) - shift) * sx, (at(ci + 1) - shift) * sy];
     let rest = |from: usize| q[from..].to_vec();
     let pinhole = |k: [f64; 6], p: [f64; 2], s: [f64; 4]| Lens::Pinhole { f, c: c(), k, p, s };
     let kb = |k: [f64; 4]| Lens::KannalaBrandt { f, c: c(), k };
-    let at = |i: usize| q.get(i).copied().unwrap_or(0.0);
     Ok(match model.as_str() {
         "SIMPLE_PINHOLE" | "PINHOLE" => pinhole([0.0; 6], [0.0; 2], [0.0; 4]),
         "SIMPLE_RADIAL" => pinhole([q[3], 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; 2], [0.0; 4]),
@@ -300,7 +304,7 @@ fn calibrated(p: &Reader<'_>, w: f64, h: f64) -> Result<Lens, String> {
                 .map(|(i, k)| k / sx.powi(i as i32))
                 .collect();
             Lens::FTheta {
-                c: c(),
+                c: [(q[0] - shift) * sx, (q[1] - shift) * sy],
                 bw,
                 max_angle: q.get(2).copied().unwrap_or(std::f64::consts::PI),
             }
@@ -364,7 +368,13 @@ pub(crate) fn colmap(lens: &Result<Lens, String>, width: u32, height: u32) -> Va
         }
         Lens::Colmap { model, params } => (model.as_str(), params.clone()),
     };
-    json!({"model": model, "width": width, "height": height, "params": params})
+    let mut j = json!({"model": model, "width": width, "height": height, "params": params});
+    if matches!(lens, Lens::KannalaBrandt { .. } | Lens::Fisheye624 { .. })
+        || ["FOV", "DIVISION", "THIN_PRISM_FISHEYE"].contains(&model)
+    {
+        j["domain"] = json!(FRONT_ONLY);
+    }
+    j
 }
 
 /// The OpenCV camera (`model` pinhole/fisheye, `K`, `dist`), pixel centre at (0, 0).

@@ -139,3 +139,58 @@ fn a_projection_without_a_pinhole_equivalent_has_no_intrinsics() {
     assert_eq!(j["frame"], Value::Null);
     assert_eq!(j["clipping"][1], Value::Null);
 }
+
+/// Every calibration model at every parameter count gives an `equivalents` section (an exact model or
+/// a reason) without panicking, whatever its parameter values.
+#[test]
+fn every_calibration_model_has_an_equivalents_answer() {
+    for info in obscura_calibration::models::MODELS.iter() {
+        for &n in info.counts {
+            for value in ["0", "0.5", "-3", "1e30"] {
+                let values: Vec<&str> = vec![value; n];
+                let decl = format!("float[{n}] params");
+                let s = scene(
+                    "CalibratedCamera",
+                    &[
+                        ("string model", &[info.name]),
+                        (&decl, &values),
+                        ("int[2] resolution", &["640", "480"]),
+                    ],
+                    Format::new(320, 240),
+                );
+                let (model, eq) = equivalents::sections(&s, Some(60.0));
+                assert_eq!(model["projection"], "CalibratedCamera");
+                for format in ["colmap", "opencv", "gsplat"] {
+                    let e = &eq[format];
+                    assert!(
+                        e["model"].is_string()
+                            || e["reason"].as_str().is_some_and(|r| r.contains("obscura rays")),
+                        "{} {format}: {e}",
+                        info.name
+                    );
+                }
+                let e = &eq["nerfstudio"];
+                assert!(
+                    e["camera_model"].is_string() || e["reason"].is_string(),
+                    "{}: {e}",
+                    info.name
+                );
+            }
+        }
+    }
+}
+
+/// A projection with no closed form says so in every format, pointing to `obscura rays`.
+#[test]
+fn a_projection_without_a_closed_form_says_so_in_every_format() {
+    let s = scene("PxrCylinderCamera", &[], Format::new(64, 32));
+    let j = camera_json(&s, &prepared(&s), None).unwrap();
+    assert!(j["camera_model"]["lens"].is_null());
+    for format in ["colmap", "opencv", "nerfstudio", "gsplat"] {
+        let reason = j["equivalents"][format]["reason"].as_str().unwrap();
+        assert!(
+            reason.contains("PxrCylinderCamera") && reason.contains("obscura rays"),
+            "{reason}"
+        );
+    }
+}
