@@ -174,6 +174,8 @@ pub struct ChiefHit {
     pub distance: f32,
     /// World-space position.
     pub position: Vec3A,
+    /// World-space geometric normal, unit length, facing the ray's origin.
+    pub normal: Vec3A,
     /// Camera-space position, with the camera at the ray's time.
     pub camera_position: Vec3A,
     /// The point carried in its object's space (the instance's motion inverted at the ray's time).
@@ -320,6 +322,7 @@ impl Prepared {
                     ChiefHit {
                         distance: hit.t,
                         position: hit.position,
+                        normal: hit.geometric_normal,
                         camera_position: world.origin_cam + world.direction_cam * (hit.t / world.stretch),
                         object: ObjectPoint {
                             instance: hit.instance,

@@ -15,12 +15,15 @@
 //!    see (one-sided objects, clipping planes, `visibility camera`). With `d = (P − o)·d̂` the point's
 //!    distance along the ray (`P` the point in world space at the ray's time, `o`, `d̂` the ray's origin
 //!    and direction), the point is visible when the ray hits at a distance `t` with
-//!    `|t − d| ≤ OCCLUSION_TOLERANCE · d`, occluded otherwise (something nearer, nothing at all — the
-//!    back of a one-sided surface, a point beyond a clipping plane —, or a surface behind).
+//!    `|t − d| ≤ OCCLUSION_TOLERANCE · d / max(|n̂·d̂|, 0.05)` (`n̂` the hit's geometric normal),
+//!    occluded otherwise (something nearer, nothing at all — the back of a one-sided surface, a point
+//!    beyond a clipping plane —, or a surface behind).
 //!
-//! The tolerance (10⁻³ of the distance) covers rounding and the difference between two dicings of one
-//! smooth surface (a point found through camera A, tested against camera B's tessellation); an occluder
-//! closer to the point than that is not seen as one.
+//! The tolerance (10⁻³ of the distance, divided by the cosine of incidence since a surface offset
+//! along its normal moves the hit along a grazing ray by the offset over that cosine) covers rounding
+//! and the difference between two dicings of one smooth surface (a point found through camera A,
+//! tested against camera B's tessellation); an occluder closer to the point than that is not seen as
+//! one.
 
 use glam::Vec3A;
 use obscura_render::flow::{FlowTarget, ObjectPoint, Reprojection};
@@ -30,6 +33,9 @@ use rayon::prelude::*;
 /// Relative tolerance of the occlusion test: a point is visible when the chief ray through its
 /// position hits within `OCCLUSION_TOLERANCE × distance` of it along the ray.
 pub const OCCLUSION_TOLERANCE: f32 = 1e-3;
+
+/// The smallest cosine of incidence the tolerance is divided by (20× at grazing rays).
+const MIN_INCIDENCE: f32 = 0.05;
 
 /// Points per parallel task.
 const CHUNK: usize = 256;
@@ -135,9 +141,10 @@ fn occlude(prepared: &Prepared, motion: &FlowTarget, points: &[ObjectPoint], loc
         };
         let world: Vec3A = to_world.transform_point3a(p.position);
         let d = (world - ray.origin).dot(ray.direction);
-        let visible = ray
-            .hit
-            .is_some_and(|hit| (hit.distance - d).abs() <= OCCLUSION_TOLERANCE * d.abs());
+        let visible = ray.hit.is_some_and(|hit| {
+            let incidence = hit.normal.dot(ray.direction).abs().max(MIN_INCIDENCE);
+            (hit.distance - d).abs() <= OCCLUSION_TOLERANCE * d.abs() / incidence
+        });
         if !visible {
             located[i].status = Status::Occluded;
         }
