@@ -40,7 +40,7 @@
 //! "params": …}}`: camera `ringK` (K from 0) turned `K·360°/count` about +Y (from +Z towards +X) and
 //! moved `radius` along its own +Z. `translation` is in scene units in the base camera's space;
 //! `rotation` is a 3×3 matrix (rows, column vectors: the rig camera's axes are its columns), an
-//! `{"axis", "degrees"}` pair (left-handed rotation about the axis as RenderMan's `Rotate`), or a
+//! `{"axis", "degrees"}` pair (Rodrigues' formula: about +Y a positive angle turns +Z towards +X), or a
 //! quaternion `{"wxyz": [w, x, y, z]}`. A camera without a projection or calibration renders through
 //! the dataset's own (the scene's, or `--projection`/`--calibration`). Relative paths are read from
 //! the rig file's directory.
@@ -593,9 +593,8 @@ impl Reader<'_> {
     }
 }
 
-/// A rotation by `degrees` about the unit `axis`, as RenderMan's `Rotate` turns a camera: from +Z
-/// towards +X about +Y (for camera space's left-handed axes this is glam's right-handed rotation by
-/// the same angle about the same axis vector applied to the axes' coordinates).
+/// A rotation by `degrees` about the unit `axis` (Rodrigues' formula on the coordinates): about +Y a
+/// positive angle turns +Z towards +X.
 #[must_use]
 pub fn rotate(axis: DVec3, degrees: f64) -> DMat3 {
     DMat3::from_axis_angle(axis, degrees.to_radians())

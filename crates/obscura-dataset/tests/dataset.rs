@@ -122,7 +122,9 @@ fn manifest(dir: &Path) -> Value {
 fn the_layout_holds_every_path_and_the_manifest_lists_exactly_them() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("ds");
-    let s = go(&options(&scene(tmp.path()), &out)).unwrap();
+    let mut o = options(&scene(tmp.path()), &out);
+    o.exports = ExportFormat::ALL.to_vec();
+    let s = go(&o).unwrap();
     assert!(s.finalized);
     assert_eq!(
         s.rendered,
@@ -150,6 +152,12 @@ fn the_layout_holds_every_path_and_the_manifest_lists_exactly_them() {
         "annotations/camera/0001.json",
         "annotations/camera/0002.json",
         "tracks/camera.npz",
+        "colmap/cameras.txt",
+        "colmap/images.txt",
+        "colmap/rigs.txt",
+        "colmap/frames.txt",
+        "transforms.json",
+        "gsplat/cameras.json",
     ] {
         assert!(listed.iter().any(|l| l == f), "{f} not in {listed:?}");
     }

@@ -18,8 +18,14 @@ RIG = {
     ],
 }
 
-OPTIONS = dict(format=(40, 24), spp=1, annotations=["boxes", "tracks", "correspondences"], tracks=8)
-CLI = ["--format", "40x24", "--spp", "1", "--annotations", "boxes,tracks,correspondences", "--tracks", "8"]
+OPTIONS = dict(
+    format=(40, 24), spp=1, annotations=["boxes", "tracks", "correspondences"], tracks=8,
+    exports=["colmap", "nerfstudio", "gsplat"],
+)
+CLI = [
+    "--format", "40x24", "--spp", "1", "--annotations", "boxes,tracks,correspondences", "--tracks", "8",
+    "--exports", "colmap,nerfstudio,gsplat",
+]
 
 
 def tree(root):
@@ -45,6 +51,10 @@ def test_render_dataset_writes_the_layout_and_resumes(tmp_path):
         "tracks/left.npz",
         "correspondences/left__right/0001.npz",
         "correspondences/right__left/0001.npz",
+        "colmap/cameras.txt",
+        "nerfstudio/left/transforms.json",
+        "nerfstudio/right/transforms.json",
+        "gsplat/cameras.json",
     ]:
         assert f in files, f
     t = np.load(out / "tracks" / "left.npz")
