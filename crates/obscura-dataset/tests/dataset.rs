@@ -256,6 +256,16 @@ fn assert_close(a: &[[f64; 4]; 4], b: &[[f64; 4]; 4], what: &str) {
     }
 }
 
+/// The world-to-camera of frame 1 rendered without a rig: the rig's base.
+fn base_camera(tmp: &Path) -> [[f64; 4]; 4] {
+    let out = tmp.join("base");
+    let mut o = options(&scene(tmp), &out);
+    o.annotations.clear();
+    o.frames = Some("1".parse().unwrap());
+    go(&o).unwrap();
+    world_to_camera(&out, "camera")
+}
+
 fn render_rig(tmp: &Path, rig: &Path, name: &str) -> PathBuf {
     let out = tmp.join(name);
     let mut o = options(&scene(tmp), &out);
@@ -269,12 +279,7 @@ fn render_rig(tmp: &Path, rig: &Path, name: &str) -> PathBuf {
 #[test]
 fn a_stereo_rig_poses_each_camera_by_its_translation_from_the_base() {
     let tmp = tempfile::tempdir().unwrap();
-    let base_dir = tmp.path().join("base");
-    let mut o = options(&scene(tmp.path()), &base_dir);
-    o.annotations.clear();
-    o.frames = Some("1".parse().unwrap());
-    go(&o).unwrap();
-    let base = world_to_camera(&base_dir, "camera");
+    let base = base_camera(tmp.path());
     let rig = tmp.path().join("stereo.json");
     std::fs::write(
         &rig,
@@ -315,12 +320,7 @@ fn a_stereo_rig_poses_each_camera_by_its_translation_from_the_base() {
 #[test]
 fn a_kalibr_camchain_poses_each_camera_by_its_chain_in_opencv_axes() {
     let tmp = tempfile::tempdir().unwrap();
-    let base_dir = tmp.path().join("base");
-    let mut o = options(&scene(tmp.path()), &base_dir);
-    o.annotations.clear();
-    o.frames = Some("1".parse().unwrap());
-    go(&o).unwrap();
-    let base = world_to_camera(&base_dir, "camera");
+    let base = base_camera(tmp.path());
     // cam1 = cam0 turned 0.1 rad about OpenCV's +Y and moved; cam2 moved down (OpenCV +Y) from cam1.
     let (c, s) = (0.1f64.cos(), 0.1f64.sin());
     let t10 = [
@@ -373,12 +373,7 @@ fn a_kalibr_camchain_poses_each_camera_by_its_chain_in_opencv_axes() {
 #[test]
 fn a_colmap_rig_config_poses_cameras_from_the_reference_sensor() {
     let tmp = tempfile::tempdir().unwrap();
-    let base_dir = tmp.path().join("base");
-    let mut o = options(&scene(tmp.path()), &base_dir);
-    o.annotations.clear();
-    o.frames = Some("1".parse().unwrap());
-    go(&o).unwrap();
-    let base = world_to_camera(&base_dir, "camera");
+    let base = base_camera(tmp.path());
     // cam_from_rig of camera2: 90° about OpenCV's +Z, then moved; (w, x, y, z) = (cos 45°, 0, 0, sin 45°).
     let h = std::f64::consts::FRAC_1_SQRT_2;
     let rig = tmp.path().join("rig_config.json");
