@@ -1001,3 +1001,100 @@ fn a_rolling_shutter_gives_gsplat_the_pose_of_every_row() {
         }
     }
 }
+
+/// nerfstudio's ray of pixel `(x, y)` of an `OMNIDIRECTIONALSTEREO_L/R` camera, in OpenGL camera
+/// axes (`cameras.py`, `_compute_rays_for_omnidirectional_stereo`: equirectangular directions,
+/// origins `σ·(0.064/2)·(x_axis·cos θ + z_axis·sin θ)` with `z_axis = (0, 0, −1)`, σ = +1 right).
+fn nerfstudio_ods_ray(t: &Value, x: f64, y: f64) -> (DVec3, DVec3) {
+    let key = |k: &str| t[k].as_f64().unwrap();
+    let a = (x - key("cx")) / key("fl_x");
+    let b = -(y - key("cy")) / key("fl_y");
+    let theta = -std::f64::consts::PI * a;
+    let phi = std::f64::consts::PI * (0.5 - b);
+    let dir = DVec3::new(-theta.sin() * phi.sin(), phi.cos(), -theta.cos() * phi.sin());
+    let sigma = if t["camera_model"] == "OMNIDIRECTIONALSTEREO_R" {
+        1.0
+    } else {
+        -1.0
+    };
+    let origin = sigma * 0.032 * (DVec3::X * theta.cos() + DVec3::NEG_Z * theta.sin());
+    (origin, dir)
+}
+
+/// Both eyes of an omnidirectional-stereo panorama with nerfstudio's geometry (IPD 0.064 m, parallel,
+/// no pole merging) export as OMNIDIRECTIONALSTEREO_L/R: nerfstudio's ray of the pixel the render puts
+/// a point at passes through that point (to 1e-3 px of angle); the centre eye is EQUIRECTANGULAR;
+/// the default eye (IPD 0.0635, merged poles) has no equivalent, said in the file.
+#[test]
+fn omnidirectional_stereo_eyes_are_nerfstudio_ods_cameras() {
+    for (eye, ipd, merge, model) in [
+        ("left", "0.064", "90", Some("OMNIDIRECTIONALSTEREO_L")),
+        ("right", "0.064", "90", Some("OMNIDIRECTIONALSTEREO_R")),
+        ("center", "0.064", "60", Some("EQUIRECTANGULAR")),
+        ("left", "0.0635", "60", None),
+    ] {
+        let case = Case {
+            name: "ods",
+            projection: "OmnidirectionalStereo",
+            params: vec![
+                ("string eye", vec![eye]),
+                ("float interpupilaryDistance", vec![ipd]),
+                ("float poleMergeFrom", vec![merge]),
+                ("float poleMergeTo", vec![merge]),
+            ],
+            size: (512, 256),
+            window: None,
+            max_angle: None,
+            exact: &[],
+        };
+        let r = render_frame(&case, 1);
+        let dir = tempfile::tempdir().unwrap();
+        let cameras = [ExportCamera {
+            name: "eye".into(),
+            frames: vec![ExportFrame {
+                frame: 1,
+                image: "images/eye/0001.exr".into(),
+                camera: r.camera.clone(),
+            }],
+        }];
+        let warnings = write_exports(dir.path(), &cameras, &[Nerfstudio]).unwrap();
+        let t: Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.path().join("transforms.json")).unwrap())
+                .unwrap();
+        let Some(model) = model else {
+            assert!(
+                t["camera_model"].is_null() && t["reason"].as_str().unwrap().contains("0.064"),
+                "{t}"
+            );
+            assert!(
+                warnings
+                    .iter()
+                    .any(|w| w.contains("nerfstudio") && w.contains("obscura rays"))
+            );
+            continue;
+        };
+        assert_eq!(t["camera_model"], model);
+        let c2w = matrix(&t["frames"][0]["transform_matrix"]);
+        let s = DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0));
+        let rad_per_px = std::f64::consts::PI / t["fl_x"].as_f64().unwrap();
+        for &(world, [x, y]) in &r.points {
+            let (origin, direction) = if model == "EQUIRECTANGULAR" {
+                let (_, d) = nerfstudio_ods_ray(
+                    &json!({"camera_model": "", "cx": t["cx"], "cy": t["cy"], "fl_x": t["fl_x"], "fl_y": t["fl_y"]}),
+                    x,
+                    y,
+                );
+                (DVec3::ZERO, d)
+            } else {
+                nerfstudio_ods_ray(&t, x, y)
+            };
+            let to_point = s.transform_point3(world) - c2w.transform_point3(origin);
+            let angle = to_point.angle_between(c2w.transform_vector3(direction));
+            assert!(
+                angle < 1e-3 * rad_per_px,
+                "{eye}: {world} is {} px off nerfstudio's ray",
+                angle / rad_per_px
+            );
+        }
+    }
+}

@@ -16,9 +16,25 @@
 //!   "world_to_camera": {"open": M, "close": M},   // 4×4, rows, column vectors: p_cam = M·p_world
 //!   "opencv": {"K": 3×3, "dist": [..], "model": "pinhole" | "fisheye",
 //!              "world_to_camera": {"open": M, "close": M}},
-//!   "colmap": {"model": "PINHOLE", "width": 640, "height": 360, "params": [fx, fy, cx, cy]}
+//!   "colmap": {"model": "PINHOLE", "width": 640, "height": 360, "params": [fx, fy, cx, cy]},
+//!   "camera_model": {"projection": "PxrPerspective", "lens": "pinhole", "fx": …, "fy": …, "cx": …,
+//!                    "cy": …, "k": [6], "p": [2], "s": [4], "formula": "…", "convention": "…",
+//!                    "width": 640, "height": 360},          // or {"lens": null, "reason": …}
+//!   "equivalents": {"convention": "…",
+//!                   "colmap": {"model", "width", "height", "params"[, "domain"]},
+//!                   "opencv": {"model": "pinhole" | "fisheye", "K", "dist"},
+//!                   "nerfstudio": {"camera_model", "fl_x", "fl_y", "cx", "cy", "w", "h", "k1"…},
+//!                   "gsplat": {"camera_model": "pinhole" | "fisheye" | "ftheta", "K", …}},
+//!   "rolling_shutter": {"sweep": "down", "duration": 0.0}   // PxrRollingShutter only
 //! }
 //! ```
+//!
+//! `camera_model` and `equivalents` (added keys; the schema stays `obscura-camera/1`) are the exact
+//! description of every model and its equivalent in each training format, or `{"model": null,
+//! "reason": …}` (nerfstudio: `camera_model` null) pointing to `obscura rays` — never an
+//! approximation. [`equivalents`] documents each mapping as a formula and the exactness table; the
+//! exports of `obscura-dataset` only format these entries. Intrinsics there are in raster pixels of
+//! the render (top-left pixel centre at (0.5, 0.5)) with OpenCV's camera axes.
 //!
 //! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
 //! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a

@@ -23,6 +23,8 @@
 //! | `Fisheye` `equidistant` | Kannala–Brandt, `k = 0` | `fx = ax·2/fov`, `fy = ay·2/fov` (fov in radians), `cx = −ax·l`, `cy = ay·t` |
 //! | `Fisheye` `polynomial` (square pixels) | f-theta, `θ = P(ρ)` | `P_i = −k_i·(sensorWidthMm/(r − l)/ax)^i`, centre as above |
 //! | `PxrSphereCamera` | equirectangular | azimuth `φ = (u − u0)/su`, elevation `(v0 − v)/sv`: `su = ax·hw/(hsweep/2)`, `u0 = ax·(cxw − l)`, `sv = ay·hh/(vsweep/2)`, `v0 = ay·(t − cyw)` |
+//! | `OmnidirectionalStereo` `center` (or IPD 0) | equirectangular | as `PxrSphereCamera` |
+//! | `OmnidirectionalStereo` left/right, IPD 0.064 m, parallel eyes, `poleMergeFrom` ≥ 90° | nerfstudio's ODS eye | as `PxrSphereCamera`, origins `∓0.032·(cos φ, 0, −sin φ)` (left −, right +) |
 //! | `CalibratedCamera` | its own model | `f·(W/W_cal, H/H_cal)`, `(c − shift)·(W/W_cal, H/H_cal)` (`shift` the model's pixel convention) |
 //!
 //! A calibrated model keeps its own name and parameters where the format has it; otherwise it is
@@ -46,6 +48,12 @@
 //!   `FISHEYE624` takes `distortion_params` = k0…k5 p0 p1 s0…s3 (Aria's order, COLMAP's
 //!   `RAD_TAN_THIN_PRISM_FISHEYE`); `EQUIRECTANGULAR` maps `(u − cx)/fl_x` to azimuth `π·(u − cx)/fl_x`
 //!   and `(v − cy)/fl_y` to elevation `−π·(v − cy)/fl_y`, so any latitude–longitude window is exact.
+//!   `OMNIDIRECTIONALSTEREO_L/R` are the same directions from origins `σ·(0.064/2)·(cos θ, 0, sin θ)`
+//!   (OpenGL axes, `θ = −π(u − cx)/fl_x`, σ = −1 left, +1 right; `vr_ipd = 0.064` is fixed in
+//!   `_compute_rays_for_omnidirectional_stereo`), which is Obscura's ODS eye with that IPD, parallel
+//!   eyes and no pole merging. `VR180_L/R` (a 180° equirectangular eye offset by ±0.032 m from the
+//!   written pose) is not produced: a VR180 eye rendered with `PxrSphereCamera` (hsweep 180) from the
+//!   eye's own position is already exact as `EQUIRECTANGULAR` with the eye's pose.
 //! - **gsplat/3DGUT** (`gsplat/rendering.py` `rasterization`, `gsplat/cuda/include/Cameras.cuh`):
 //!   `pinhole` with `radial_coeffs` k1…k6 (rational, numerator k1…k3, denominator k4…k6),
 //!   `tangential_coeffs` p1 p2, `thin_prism_coeffs` s1…s4 (OpenCV's); `fisheye` with `radial_coeffs`
@@ -61,6 +69,9 @@
 use obscura_scene::Scene;
 use obscura_sdk::ParamValue;
 use serde_json::{Value, json};
+
+/// Why a camera whose rays leave different points has no model in COLMAP, OpenCV or gsplat.
+const NOT_CENTRAL: &str = "the rays leave a circle of origins (not a central camera), which COLMAP, OpenCV and gsplat cannot describe";
 
 /// What to do instead when a format has no exact equivalent.
 pub const USE_RAYS: &str = "use `obscura rays` for the exact per-pixel ray map";
@@ -97,6 +108,10 @@ pub(crate) enum Lens {
     },
     /// Latitude–longitude: azimuth `(u − u0)/su` (toward +x), elevation `(v0 − v)/sv` (toward −y).
     Equirect { s: [f64; 2], c: [f64; 2] },
+    /// One eye of an omnidirectional-stereo panorama with nerfstudio's geometry: the latitude–longitude
+    /// directions of [`Lens::Equirect`] from origins on the viewing circle, `σ·(IPD/2)·right(φ)`
+    /// (σ = −1 left, +1 right), parallel eyes, no pole merging.
+    Ods { s: [f64; 2], c: [f64; 2], right: bool },
     /// A COLMAP model with no counterpart among the above (FOV, DIVISION, EUCM, THIN_PRISM_FISHEYE),
     /// its parameters at the render's size.
     Colmap { model: String, params: Vec<f64> },
@@ -175,18 +190,49 @@ pub(crate) fn lens(scene: &Scene, field_of_view: Option<f32>) -> Result<Lens, St
                 )),
             }
         }
-        "PxrSphereCamera" => {
-            let hsweep = p.float("hsweep").unwrap_or(360.0).to_radians();
-            let vsweep = p.float("vsweep").unwrap_or(180.0).to_radians();
-            let (cxw, cyw, hw, hh) = ((l + r) / 2.0, (b + t) / 2.0, (r - l) / 2.0, (t - b) / 2.0);
-            Ok(Lens::Equirect {
-                s: [ax * hw / (hsweep / 2.0), ay * hh / (vsweep / 2.0)],
-                c: [ax * (cxw - l), ay * (t - cyw)],
+        "OmnidirectionalStereo" => {
+            let eye = p.string("eye").unwrap_or_else(|| "left".into());
+            let ipd = p.float("interpupilaryDistance").unwrap_or(0.0635);
+            let convergence = p.float("convergenceDistance").unwrap_or(f64::INFINITY);
+            let merge_from = p.float("poleMergeFrom").unwrap_or(60.0);
+            let (s, c) = lat_long(&p, [ax, ay], [l, r, b, t]);
+            if eye == "center" || ipd == 0.0 {
+                return Ok(Lens::Equirect { s, c });
+            }
+            // nerfstudio's OMNIDIRECTIONALSTEREO_L/R (cameras.py): vr_ipd = 0.064, parallel eyes,
+            // no pole merging.
+            if (ipd - 0.064).abs() > 1e-7
+                || (convergence.is_finite() && convergence != 0.0)
+                || merge_from < 90.0
+            {
+                return Err(format!(
+                    "an omnidirectional-stereo eye is not a central camera, and nerfstudio's OMNIDIRECTIONALSTEREO fixes IPD 0.064 m, parallel eyes and no pole merging (this one: interpupilaryDistance {ipd}, convergenceDistance {convergence}, poleMergeFrom {merge_from}°)"
+                ));
+            }
+            Ok(Lens::Ods {
+                s,
+                c,
+                right: eye == "right",
             })
+        }
+        "PxrSphereCamera" => {
+            let (s, c) = lat_long(&p, [ax, ay], [l, r, b, t]);
+            Ok(Lens::Equirect { s, c })
         }
         "CalibratedCamera" => calibrated(&p, w, h),
         _ => Err(format!("{name} has no closed-form camera model in these formats")),
     }
+}
+
+/// The scales and centre of the latitude–longitude lens ([`Lens::Equirect`]) of a panorama's `hsweep`, `vsweep` over the window `[l, r, b, t]`.
+fn lat_long(p: &Reader<'_>, [ax, ay]: [f64; 2], [l, r, b, t]: [f64; 4]) -> ([f64; 2], [f64; 2]) {
+    let hsweep = p.float("hsweep").unwrap_or(360.0).to_radians();
+    let vsweep = p.float("vsweep").unwrap_or(180.0).to_radians();
+    let (cxw, cyw, hw, hh) = ((l + r) / 2.0, (b + t) / 2.0, (r - l) / 2.0, (t - b) / 2.0);
+    (
+        [ax * hw / (hsweep / 2.0), ay * hh / (vsweep / 2.0)],
+        [ax * (cxw - l), ay * (t - cyw)],
+    )
 }
 
 /// Reads the scene's projection parameters (defaults are the caller's).
@@ -366,6 +412,7 @@ pub(crate) fn colmap(lens: &Result<Lens, String>, width: u32, height: u32) -> Va
             }
             ("EQUIRECTANGULAR", vec![ew, eh])
         }
+        Lens::Ods { .. } => return none(NOT_CENTRAL),
         Lens::Colmap { model, params } => (model.as_str(), params.clone()),
     };
     let mut j = json!({"model": model, "width": width, "height": height, "params": params});
@@ -401,6 +448,7 @@ pub(crate) fn opencv(lens: &Result<Lens, String>) -> Value {
         }
         Ok(Lens::FTheta { .. }) => none("OpenCV has no f-theta model"),
         Ok(Lens::Equirect { .. }) => none("OpenCV has no equirectangular model"),
+        Ok(Lens::Ods { .. }) => none(NOT_CENTRAL),
         Ok(Lens::Colmap { model, .. }) => none(&format!("OpenCV has no {model} model")),
     }
 }
@@ -448,6 +496,15 @@ pub(crate) fn nerfstudio(lens: &Result<Lens, String>, width: u32, height: u32) -
         Lens::Equirect { s, c } => {
             let pi = std::f64::consts::PI;
             base("EQUIRECTANGULAR", &[pi * s[0], pi * s[1]], c)
+        }
+        Lens::Ods { s, c, right } => {
+            let pi = std::f64::consts::PI;
+            let model = if *right {
+                "OMNIDIRECTIONALSTEREO_R"
+            } else {
+                "OMNIDIRECTIONALSTEREO_L"
+            };
+            base(model, &[pi * s[0], pi * s[1]], c)
         }
         Lens::FTheta { c, bw, .. } => {
             // θ = bw(ρ) is nerfstudio's OPENCV_FISHEYE only when it is linear (equidistant).
@@ -518,6 +575,7 @@ pub(crate) fn gsplat(lens: &Result<Lens, String>, width: u32, height: u32) -> Va
             })
         }
         Lens::Equirect { .. } => none("gsplat has no equirectangular camera"),
+        Lens::Ods { .. } => none(NOT_CENTRAL),
         Lens::Colmap { model, .. } => none(&format!("gsplat has no {model} camera")),
     }
 }
@@ -546,6 +604,11 @@ fn describe(lens: &Result<Lens, String>) -> Value {
         Ok(Lens::Equirect { s, c }) => json!({
             "lens": "equirectangular", "su": s[0], "sv": s[1], "u0": c[0], "v0": c[1],
             "formula": "azimuth φ = atan2(x, z) = (u − u0)/su, elevation = atan2(−y, √(x² + z²)) = (v0 − v)/sv",
+        }),
+        Ok(Lens::Ods { s, c, right }) => json!({
+            "lens": "omnidirectional_stereo", "su": s[0], "sv": s[1], "u0": c[0], "v0": c[1],
+            "eye": if *right { "right" } else { "left" }, "interpupillary_distance": 0.064,
+            "formula": "as equirectangular, from the origin ±(IPD/2)·(cos φ, 0, −sin φ) in OpenCV axes (+ right eye, − left)",
         }),
         Ok(Lens::Colmap { model, params }) => json!({
             "lens": "colmap", "model": model, "params": params,
