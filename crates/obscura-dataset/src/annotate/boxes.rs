@@ -10,9 +10,11 @@
 //!   triangles the render diced, in object space — seen through the camera with
 //!   [`super::reproject::locate`] (each point at its own row time under a rolling shutter). First every
 //!   vertex; then each triangle that could reach the box's edge (its vertices' box within
-//!   `s/2 + 1` px of an extreme, `s` its projected size, or a vertex outside the projection's domain)
-//!   is sampled on a barycentric grid of `n = clamp(⌈2s⌉, 2, 128)` steps per edge, since a
-//!   projection bends straight edges (a fisheye's box is not its corners'). The box is clipped to
+//!   `s/2 + 1` px of an extreme that lies inside the image, `s` its projected size, or a vertex
+//!   outside the projection's domain), and that box grown by the same margin meets the image, is
+//!   sampled on a barycentric grid of `n = clamp(⌈2s⌉, 2, 128)` steps per edge (16 for a triangle
+//!   crossing the domain's edge), since a projection bends straight edges (a fisheye's box is not its
+//!   corners'). The box is clipped to
 //!   the image `[0, W] × [0, H]` (`bbox_full_clipped` says it was) and is `None` when no point is
 //!   in the projection's domain; `crosses_domain` is true when part of the surface is outside the
 //!   domain (behind a pinhole, beyond a fisheye's field of view), where the box covers only the part
@@ -240,6 +242,8 @@ fn full_box(
         instance,
         position: p,
     };
+    let format = prepared.stage().camera().format;
+    let (w, h) = (format.width as f64, format.height as f64);
     let vertices: Vec<ObjectPoint> = mesh.positions.iter().map(|&p| point(p)).collect();
     let seen = locate(prepared, motion, &vertices, false);
     let mut extent = Extent::EMPTY;
@@ -265,10 +269,19 @@ fn full_box(
         }
         let size = (tri.0[2] - tri.0[0]).max(tri.0[3] - tri.0[1]);
         let margin = size / 2.0 + 1.0;
-        let near = tri.0[0] < extent.0[0] + margin
-            || tri.0[1] < extent.0[1] + margin
-            || tri.0[2] > extent.0[2] - margin
-            || tri.0[3] > extent.0[3] - margin;
+        // Only the clipped box matters: a triangle that cannot reach the image is left alone, and a
+        // side of the box already beyond the image's edge is settled.
+        if tri.0[0] - margin > w
+            || tri.0[2] + margin < 0.0
+            || tri.0[1] - margin > h
+            || tri.0[3] + margin < 0.0
+        {
+            continue;
+        }
+        let near = (extent.0[0] > 0.0 && tri.0[0] < extent.0[0] + margin)
+            || (extent.0[1] > 0.0 && tri.0[1] < extent.0[1] + margin)
+            || (extent.0[2] < w && tri.0[2] > extent.0[2] - margin)
+            || (extent.0[3] < h && tri.0[3] > extent.0[3] - margin);
         if inside < 3 || near {
             let n = if inside < 3 {
                 16
