@@ -38,8 +38,9 @@
 //!
 //! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
 //! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a
-//! pinhole-equivalent camera: `PxrPerspective` (its chief rays, `fx = d·W/(r − l)`, `fy = d·H/(t − b)`,
-//! `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster coordinates, `d = 1/tan(fov/2)`) and a
+//! pinhole-equivalent camera: `PxrPerspective` without a `fovEnd` zoom (its chief rays,
+//! `fx = d·W/(r − l)`, `fy = d·H/(t − b)`, `cx = −l·W/(r − l)`, `cy = t·H/(t − b)` in raster
+//! coordinates, `d = 1/tan(fov/2)`) and a
 //! `CalibratedCamera` whose model is one of COLMAP's pinhole-family or OpenCV's (`SIMPLE_PINHOLE`,
 //! `PINHOLE`, `SIMPLE_RADIAL`, `RADIAL`, `OPENCV`, `FULL_OPENCV`, `OPENCV_FISHEYE`, `OPENCV_PINHOLE`),
 //! rescaled to the render's size. COLMAP puts the centre of the top-left pixel at (0.5, 0.5) (raster
@@ -213,25 +214,12 @@ struct Intrinsics {
 
 /// The intrinsics of `scene`'s camera when it is pinhole-equivalent (see the module documentation).
 fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
-    let cam = &scene.camera;
-    let (w, h) = (cam.format.width as f64, cam.format.height as f64);
-    let win = cam.screen_window();
-    let (l, r, b, t) = (
-        win.left as f64,
-        win.right as f64,
-        win.bottom as f64,
-        win.top as f64,
-    );
     match scene.projection.as_str() {
         "PxrPerspective" => {
-            let fov = field_of_view? as f64;
-            let d = 1.0 / (fov.to_radians() / 2.0).tan();
-            let p = [
-                d * w / (r - l),
-                d * h / (t - b),
-                -l * w / (r - l),
-                t * h / (t - b),
-            ];
+            let Ok(equivalents::Lens::Pinhole { f, c, .. }) = equivalents::lens(scene, field_of_view) else {
+                return None;
+            };
+            let p = [f[0], f[1], c[0], c[1]];
             Some(Intrinsics {
                 pinhole: p,
                 opencv_model: "pinhole",
@@ -240,7 +228,10 @@ fn intrinsics(scene: &Scene, field_of_view: Option<f32>) -> Option<Intrinsics> {
                 colmap_params: p.to_vec(),
             })
         }
-        "CalibratedCamera" => calibrated(scene, w, h),
+        "CalibratedCamera" => {
+            let format = scene.camera.format;
+            calibrated(scene, format.width as f64, format.height as f64)
+        }
         _ => None,
     }
 }

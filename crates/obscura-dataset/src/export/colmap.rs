@@ -109,12 +109,18 @@ pub(crate) fn write(
                     camera.name, frame.frame
                 ));
             }
+            let name = item.image_name();
+            if name.chars().any(char::is_whitespace) {
+                return Err(item.error(format!(
+                    "image \"{name}\": COLMAP's images.txt separates fields by spaces, so an image name cannot contain whitespace"
+                )));
+            }
             images.push(Image {
                 id: images.len() + 1,
                 camera_id: id,
                 source: ci,
                 frame: frame.frame,
-                name: item.image_name(),
+                name,
                 pose: item.opencv_pose("open", world)?,
             });
         }
