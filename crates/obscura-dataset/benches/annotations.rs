@@ -67,36 +67,11 @@ fn scene(camera: &str) -> Scene {
         .push(object(sphere(0.5), Vec3::new(-3.0, 0.0, 1.0), "c"));
     s.objects
         .push(object(sphere(0.8), Vec3::new(0.5, -1.5, 4.0), "d"));
-    let h = 0.6;
-    let positions = (0..8)
-        .map(|k| {
-            Vec3::new(
-                if k & 1 == 0 { -h } else { h },
-                if k & 2 == 0 { -h } else { h },
-                if k & 4 == 0 { -h } else { h },
-            )
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let mesh = Mesh {
-        positions,
-        normals: None,
-        triangles: quads
-            .iter()
-            .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-            .collect(),
-        uvs: Vec::new(),
-        colors: None,
-    };
-    s.objects
-        .push(object(Shape::Mesh(mesh), Vec3::new(0.2, 1.3, 6.0), "box"));
+    s.objects.push(object(
+        Shape::Mesh(Mesh::cube(1.2)),
+        Vec3::new(0.2, 1.3, 6.0),
+        "box",
+    ));
     s.lights.push(Light::Dome {
         color: Rgb::WHITE,
         intensity: 1.0,

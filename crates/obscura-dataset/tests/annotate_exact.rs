@@ -11,7 +11,7 @@ mod plugin_build;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
-use glam::{DMat4, DVec3, Mat4, Vec3};
+use glam::{DMat4, DVec3, Mat4};
 use obscura_dataset::annotate::Status;
 use obscura_dataset::annotate::boxes::frame_boxes;
 use obscura_dataset::annotate::correspondences::correspond;
@@ -83,37 +83,6 @@ fn camera_to_world(t: f64, travel: DVec3, turn: f64, base: DMat4) -> DMat4 {
     base * DMat4::from_translation(travel * t) * DMat4::from_rotation_y((turn * t).to_radians())
 }
 
-fn cube_mesh(h: f32) -> Mesh {
-    let mut positions = Vec::new();
-    for k in 0..8 {
-        positions.push(Vec3::new(
-            if k & 1 == 0 { -h } else { h },
-            if k & 2 == 0 { -h } else { h },
-            if k & 4 == 0 { -h } else { h },
-        ));
-    }
-    // Outward quads (counter-clockwise seen from outside).
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    Mesh {
-        positions,
-        normals: None,
-        triangles,
-        uvs: Vec::new(),
-        colors: None,
-    }
-}
-
 /// The scene through `projection`: the bodies moving from `t0` to `t1` of their paths over the
 /// shutter, the camera from `base·camera(t0)` to `base·camera(t1)`.
 fn scene(
@@ -146,7 +115,7 @@ fn scene(
     }
     for (i, b) in BODIES.iter().enumerate() {
         let shape = if b.cube {
-            Shape::Mesh(cube_mesh(b.size as f32))
+            Shape::Mesh(Mesh::cube(2.0 * b.size as f32))
         } else {
             Shape::Sphere {
                 radius: b.size as f32,
