@@ -960,3 +960,29 @@ fn tracks_under_a_rolling_shutter_are_seen_at_their_own_row_time() {
     eprintln!("rolling shutter: {checked} tracks, worst {worst:.2e} px, row times {spread:?}");
     assert!(checked > 200 && spread.1 - spread.0 > 0.3, "{checked} {spread:?}");
 }
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
+
+    /// Over the whole image of a moving fisheye: the surface point a chief ray hits, carried in its
+    /// object's space, reprojects to the raster position the ray came from (within 1e-4 px) and is
+    /// located visible there.
+    #[test]
+    fn locate_inverts_the_chief_ray_trace(x in 0.0f64..128.0, y in 0.0f64..96.0, tau in 0.0f32..0.9) {
+        use obscura_dataset::annotate::reproject::locate;
+        use obscura_render::flow::FlowTarget;
+        static FRAME: std::sync::OnceLock<(Scene, Prepared)> = std::sync::OnceLock::new();
+        let (s, p) = FRAME.get_or_init(|| {
+            let s = scene(FISHEYE.0, FISHEYE.1, Format::new(128, 96), DMat4::IDENTITY, (0.0, 1.0));
+            let p = prepared(&s, &mut builtin_registry());
+            (s, p)
+        });
+        let Some(hit) = p.trace_chief(&[(x, y)], tau)[0].and_then(|r| r.hit) else {
+            return Ok(());
+        };
+        let motion = FlowTarget::new(s, tau).unwrap();
+        let l = locate(p, &motion, &[hit.object], true)[0];
+        proptest::prop_assert!((l.raster[0] - x).hypot(l.raster[1] - y) < 1e-4, "{:?} vs ({x}, {y})", l.raster);
+        proptest::prop_assert_eq!(l.status, Status::Visible);
+    }
+}
