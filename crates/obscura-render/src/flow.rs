@@ -14,7 +14,8 @@
 //! target's canonical time (`τ = 1⁻`, the largest `f32` below 1, for shutter close; 0 for another
 //! frame's shutter open): a fixed point `s = unproject(C'(t(s))⁻¹·M'(t(s))·P_o, t(s))`, iterated from the
 //! reference position until the time stops changing (one step for a global shutter) or the position
-//! moves less than 10⁻⁵ pixel, at most 16 steps.
+//! moves less than 10⁻⁵ pixel (or, far outside the image, four `f32` steps of its distance from the
+//! image centre, the precision of the screen coordinates), at most 16 steps.
 //!
 //! `flow = raster(target) − raster(unproject(C(t₀)⁻¹·P, t₀))`, in pixels, +x right, +y down. The
 //! reference position goes through `unproject` as well (rather than being taken as `c`), so both ends
@@ -355,7 +356,8 @@ impl Prepared {
     /// `s = unproject(C(t(s))⁻¹·M(t(s))·P_o, t(s))` with `t(s)` the time the projection gives the raster
     /// position `s`, iterated from `start` (one raster position per point; the image centre when
     /// `None`) until the time stops changing (one step for a global shutter) or the position moves less
-    /// than 10⁻⁵ pixel, at most 16 steps. The position may lie outside the image; checking the frame is
+    /// than 10⁻⁵ pixel (far outside the image: four `f32` steps of its distance from the centre), at
+    /// most 16 steps. The position may lie outside the image; checking the frame is
     /// the caller's.
     ///
     /// This is the one place the renderer maps object-space points through a camera's exact inverse:
@@ -419,7 +421,11 @@ impl Prepared {
                     continue;
                 };
                 let step = (moved.0 - r.0).hypot(moved.1 - r.1);
-                if previous.is_some() && step < CONVERGED_PX {
+                // f32 screen positions far outside the image are coarser than 10⁻⁵ px.
+                let precision = 4.0
+                    * f64::from(f32::EPSILON)
+                    * (moved.0 - centre.0).abs().max((moved.1 - centre.1).abs());
+                if previous.is_some() && step < CONVERGED_PX.max(precision) {
                     out[i] = Reprojection::Seen { raster: moved, time };
                 } else {
                     next.push((i, moved, Some(time)));
