@@ -38,6 +38,9 @@ if ! "$py" -c "import rawpy" 2>/dev/null; then
   "$py" -m pip install --quiet --disable-pip-version-check rawpy
 fi
 export OBSCURA_REQUIRE_RAWPY=1
+# Dataset annotations (issue 28, wt-28b): NumPy (already installed above) reads the tracks and
+# correspondences .npz files back.
+export OBSCURA_REQUIRE_NUMPY=1
 
 echo "== cargo test --workspace"
 cargo test --workspace

@@ -26,6 +26,7 @@ use obscura_sdk::{Format, ScreenWindow};
 mod args;
 mod build_plugin;
 mod check;
+mod dataset;
 mod farm;
 mod lens;
 mod params;
@@ -94,6 +95,10 @@ enum Command {
     /// Compile a RenderMan projection plugin's C++ sources, as they are written (RenderMan 19-21, 22 or
     /// 23-27), into an Obscura plugin with the embedded RenderMan-compatible headers.
     BuildPlugin(Box<build_plugin::BuildPluginArgs>),
+    /// Render a dataset for vision: images of every camera of a rig with ground truth, camera exports
+    /// (COLMAP, nerfstudio, gsplat), boxes, point tracks and correspondences, in the layout of
+    /// docs/datasets.md. Resumable; splittable by frame (--frames, then --finalize).
+    Dataset(Box<dataset::DatasetArgs>),
 }
 
 #[derive(Args, Debug)]
@@ -464,6 +469,7 @@ fn main() -> ExitCode {
         Command::UsdCameras(a) => usd::run(a),
         Command::Merge(a) => farm::merge(a),
         Command::Submit(a) => farm::submit(a),
+        Command::Dataset(a) => dataset::run(a, &search),
         Command::BuildPlugin(a) => build_plugin::run(a).map_err(|e| e.to_string()),
         Command::Check(a) => match check::run(a, &search) {
             check::Outcome::Clean => Ok(()),

@@ -7,4 +7,8 @@
 //! exact inverse (`Projection::unproject`), so it is exact for fisheyes, calibrated lenses, panoramas
 //! and plugins alike; an export that cannot be exact in a format says so in the file.
 
+pub mod annotate;
 pub mod export;
+pub mod layout;
+pub mod rig;
+pub mod run;

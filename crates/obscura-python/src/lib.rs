@@ -13,6 +13,7 @@
 //! | `rays.rs` | `project`, `rays`, `pixel_to_ray`, `ray_to_pixel`, `world_to_pixel` |
 //! | `registry.rs` | the process's projection registry, plugins, `projections()` |
 //! | `tools.rs` | `stmap`, `check`, `render` |
+//! | `dataset.rs` | `render_dataset`: the dataset driver of `obscura dataset` |
 //! | `farm.rs` | `parse_frames`, `frame_chunks`: the CLI's frame-list parser |
 //! | `pool.rs` | the worker threads (`set_num_threads`) |
 //!
@@ -22,6 +23,7 @@ use pyo3::prelude::*;
 
 mod arrays;
 mod camera;
+mod dataset;
 mod farm;
 mod params;
 mod pool;
@@ -42,6 +44,7 @@ fn _obscura(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(tools::stmap, m)?)?;
     m.add_function(wrap_pyfunction!(tools::check, m)?)?;
     m.add_function(wrap_pyfunction!(tools::render, m)?)?;
+    m.add_function(wrap_pyfunction!(dataset::render_dataset, m)?)?;
     m.add_function(wrap_pyfunction!(farm::parse_frames, m)?)?;
     m.add_function(wrap_pyfunction!(farm::frame_chunks, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

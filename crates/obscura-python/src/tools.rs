@@ -135,11 +135,11 @@ fn aov_named(name: &str) -> PyResult<Aov> {
 /// Python's reporter: progress counters and the cancel flag the calling thread polls, and the
 /// messages, returned in `stats["warnings"]`.
 #[derive(Default)]
-struct Polled {
+pub(crate) struct Polled {
     done: AtomicUsize,
     total: AtomicUsize,
     cancel: AtomicBool,
-    messages: Mutex<Vec<String>>,
+    pub(crate) messages: Mutex<Vec<String>>,
 }
 
 impl Reporter for Polled {

@@ -14,7 +14,8 @@
 //! target's canonical time (`τ = 1⁻`, the largest `f32` below 1, for shutter close; 0 for another
 //! frame's shutter open): a fixed point `s = unproject(C'(t(s))⁻¹·M'(t(s))·P_o, t(s))`, iterated from the
 //! reference position until the time stops changing (one step for a global shutter) or the position
-//! moves less than 10⁻⁵ pixel, at most 16 steps.
+//! moves less than 10⁻⁵ pixel (or, far outside the image, four `f32` steps of its distance from the
+//! image centre, the precision of the screen coordinates), at most 16 steps.
 //!
 //! `flow = raster(target) − raster(unproject(C(t₀)⁻¹·P, t₀))`, in pixels, +x right, +y down. The
 //! reference position goes through `unproject` as well (rather than being taken as `c`), so both ends
@@ -82,6 +83,27 @@ impl FlowTarget {
         })
     }
 
+    /// The canonical time sample handed to the projection.
+    #[must_use]
+    pub fn time_sample(&self) -> f32 {
+        self.time_sample
+    }
+
+    /// Camera-to-world at shutter-normalised `time`.
+    #[must_use]
+    pub fn camera_to_world(&self, time: f32) -> glam::Affine3A {
+        self.camera_to_world.object_to_world(time)
+    }
+
+    /// Object-to-world of instance `instance` (an index into the scene's objects) at shutter-normalised
+    /// `time`; `None` when there is no such instance.
+    #[must_use]
+    pub fn object_to_world(&self, instance: u32, time: f32) -> Option<glam::Affine3A> {
+        self.objects
+            .get(instance as usize)
+            .map(|m| m.object_to_world(time))
+    }
+
     /// How many objects the target has: a sequence's frames must keep the same objects in the same
     /// order for flow to cross frames.
     #[must_use]
@@ -101,15 +123,64 @@ pub struct FlowOutput {
     pub seconds: f64,
 }
 
-/// A reference point on its way to a target: its object, its object-space position, its reference
-/// raster position, and the iteration's state.
+/// A surface point carried in its object's space: the instance it lies on (an index into the scene's
+/// objects, `instanceId − 1`) and its position in that instance's object space. Object motion carries
+/// it to world space at any time: `P(t) = M(t)·position`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectPoint {
+    /// Index of the instance in the scene's objects.
+    pub instance: u32,
+    /// Object-space position.
+    pub position: Vec3A,
+}
+
+/// Where [`Prepared::reproject`] put a point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Reprojection {
+    /// Seen through the projection at `raster` (pixels, x right, y down, the top-left pixel's centre at
+    /// (0.5, 0.5); possibly outside the image) at shutter-normalised `time`, the time the projection
+    /// gives that raster position (a rolling shutter's row time).
+    Seen {
+        /// Raster position.
+        raster: (f64, f64),
+        /// The time the point is seen at.
+        time: f32,
+    },
+    /// Outside the projection's domain: `unproject` gives `None` (or a non-finite position), or the
+    /// projection culls the ray at the position `unproject` gives.
+    OutsideDomain,
+    /// The fixed point between the position and the projection's time for it did not converge in 16
+    /// steps.
+    NotConverged,
+}
+
+/// A chief ray (lens centre, one raster position) taken to world space and traced: see
+/// [`Prepared::trace_chief`].
 #[derive(Debug, Clone, Copy)]
-struct Tracked {
-    /// Index in the row.
-    column: usize,
-    instance: u32,
-    p_object: Vec3A,
-    reference: (f64, f64),
+pub struct ChiefRay {
+    /// The shutter-normalised time the projection gave the ray.
+    pub time: f32,
+    /// World-space origin.
+    pub origin: Vec3A,
+    /// World-space unit direction.
+    pub direction: Vec3A,
+    /// The nearest surface camera rays see along it, if any.
+    pub hit: Option<ChiefHit>,
+}
+
+/// What a chief ray hit.
+#[derive(Debug, Clone, Copy)]
+pub struct ChiefHit {
+    /// World-space distance from the ray's origin.
+    pub distance: f32,
+    /// World-space position.
+    pub position: Vec3A,
+    /// World-space geometric normal, unit length, facing the ray's origin.
+    pub normal: Vec3A,
+    /// Camera-space position, with the camera at the ray's time.
+    pub camera_position: Vec3A,
+    /// The point carried in its object's space (the instance's motion inverted at the ray's time).
+    pub object: ObjectPoint,
 }
 
 /// Counts over the pass, for the warning.
@@ -179,60 +250,95 @@ impl Prepared {
         forward: Option<&FlowTarget>,
         backward: Option<&FlowTarget>,
     ) -> (Vec<FlowPixel>, Counts) {
-        let cam = self.stage().camera();
-        let crop = cam.pixels();
+        let crop = self.stage().camera().pixels();
         let n = crop.width() as usize;
-        let mut batch = Batch::with_capacity(n);
-        for x in crop.x0..crop.x1 {
-            batch.push(
-                cam.raster_to_screen(x as f64 + 0.5, y as f64 + 0.5),
-                Point2::new(0.5, 0.5),
-                0.0,
-            );
-            batch.aperture.push(Point2::ZERO);
-        }
-        self.stage().run_prepared(&mut batch);
+        let rasters: Vec<(f64, f64)> = (crop.x0..crop.x1)
+            .map(|x| (x as f64 + 0.5, y as f64 + 0.5))
+            .collect();
         let mut out = vec![FlowPixel::NONE; n];
         let mut counts = Counts::default();
+        // (column, the point, its reference raster position)
         let mut tracked = Vec::with_capacity(n);
-        for (column, ray) in batch.rays.iter().enumerate() {
-            if ray.is_culled() {
-                continue;
-            }
-            let time = batch.time[column];
-            let Some(world) = self.world_ray(ray, time) else {
-                continue;
-            };
-            let Some(hit) = self.accel().intersect_camera(&world.ray) else {
+        for (column, chief) in self.trace_chief(&rasters, 0.0).into_iter().enumerate() {
+            let Some(hit) = chief.and_then(|c| c.hit.map(|h| (c.time, h))) else {
                 continue;
             };
             counts.hits += 1;
-            let p_camera = world.origin_cam + world.direction_cam * (hit.t / world.stretch);
-            let Some(reference) = self.unproject_raster(p_camera, time) else {
+            let Some(reference) = self.unproject_raster(hit.1.camera_position, hit.0) else {
                 counts.no_inverse += 1;
                 continue;
             };
-            let to_object = self.accel().instance_transform_at(hit.instance, time).inverse();
-            tracked.push(Tracked {
-                column,
-                instance: hit.instance,
-                p_object: to_object.transform_point3a(hit.position),
-                reference,
-            });
+            tracked.push((column, hit.1.object, reference));
         }
-        if let Some(target) = forward {
-            for (column, flow) in self.follow(&tracked, target, &mut batch) {
-                out[column].forward = flow;
-                out[column].forward_valid = 1.0;
-            }
-        }
-        if let Some(target) = backward {
-            for (column, flow) in self.follow(&tracked, target, &mut batch) {
-                out[column].backward = flow;
-                out[column].backward_valid = 1.0;
+        let points: Vec<ObjectPoint> = tracked.iter().map(|t| t.1).collect();
+        let starts: Vec<(f64, f64)> = tracked.iter().map(|t| t.2).collect();
+        let cam = self.stage().camera();
+        let (w, h) = (cam.format.width as f64, cam.format.height as f64);
+        for (target, forward) in [(forward, true), (backward, false)] {
+            let Some(target) = target else { continue };
+            let moved = self.reproject(&points, Some(&starts), target);
+            for ((column, _, reference), m) in tracked.iter().zip(moved) {
+                let Reprojection::Seen { raster: r, .. } = m else {
+                    continue;
+                };
+                if !((0.0..=w).contains(&r.0) && (0.0..=h).contains(&r.1)) {
+                    continue;
+                }
+                let flow = [(r.0 - reference.0) as f32, (r.1 - reference.1) as f32];
+                let pixel = &mut out[*column];
+                if forward {
+                    pixel.forward = flow;
+                    pixel.forward_valid = 1.0;
+                } else {
+                    pixel.backward = flow;
+                    pixel.backward_valid = 1.0;
+                }
             }
         }
         (out, counts)
+    }
+
+    /// The chief rays (lens centre) through the raster positions `rasters` (pixels, possibly outside the
+    /// image) at canonical time `time_sample`, each at the time the projection gives it, taken to world
+    /// space with the camera's motion and traced to the nearest surface camera rays see (one-sided
+    /// objects, clipping planes and `visibility camera` as in the render). `None` where the projection
+    /// culls the ray or the camera transform collapses it.
+    #[must_use]
+    pub fn trace_chief(&self, rasters: &[(f64, f64)], time_sample: f32) -> Vec<Option<ChiefRay>> {
+        let cam = self.stage().camera();
+        let mut batch = Batch::with_capacity(rasters.len());
+        for r in rasters {
+            batch.push(cam.raster_to_screen(r.0, r.1), Point2::new(0.5, 0.5), time_sample);
+            batch.aperture.push(Point2::ZERO);
+        }
+        self.stage().run_prepared(&mut batch);
+        (batch.rays.iter().zip(&batch.time))
+            .map(|(ray, &time)| {
+                if ray.is_culled() {
+                    return None;
+                }
+                let world = self.world_ray(ray, time)?;
+                let hit = self.accel().intersect_camera(&world.ray).map(|hit| {
+                    let to_object = self.accel().instance_transform_at(hit.instance, time).inverse();
+                    ChiefHit {
+                        distance: hit.t,
+                        position: hit.position,
+                        normal: hit.geometric_normal,
+                        camera_position: world.origin_cam + world.direction_cam * (hit.t / world.stretch),
+                        object: ObjectPoint {
+                            instance: hit.instance,
+                            position: to_object.transform_point3a(hit.position),
+                        },
+                    }
+                });
+                Some(ChiefRay {
+                    time,
+                    origin: world.ray.origin,
+                    direction: world.ray.direction,
+                    hit,
+                })
+            })
+            .collect()
     }
 
     /// `unproject` of a camera-space point at `time`, in raster coordinates.
@@ -245,15 +351,39 @@ impl Prepared {
         (s.x.is_finite() && s.y.is_finite()).then(|| cam.screen_window().screen_to_raster(cam.format, s))
     }
 
-    /// The flows of `tracked` toward `target`: `(column, flow)` for each point whose target position
-    /// converged inside the image.
-    fn follow(&self, tracked: &[Tracked], target: &FlowTarget, batch: &mut Batch) -> Vec<(usize, [f32; 2])> {
+    /// Where each of `points` is seen through this camera with the scene's motion `target` (its camera
+    /// and objects) at the canonical time `target` carries: the fixed point of the module documentation,
+    /// `s = unproject(C(t(s))⁻¹·M(t(s))·P_o, t(s))` with `t(s)` the time the projection gives the raster
+    /// position `s`, iterated from `start` (one raster position per point; the image centre when
+    /// `None`) until the time stops changing (one step for a global shutter) or the position moves less
+    /// than 10⁻⁵ pixel (far outside the image: four `f32` steps of its distance from the centre), at
+    /// most 16 steps. The position may lie outside the image; checking the frame is
+    /// the caller's.
+    ///
+    /// This is the one place the renderer maps object-space points through a camera's exact inverse:
+    /// flow, point tracks, boxes and cross-camera correspondences all use it.
+    ///
+    /// # Panics
+    /// When `start` is given with another length than `points`, or a point's instance is not one of
+    /// `target`'s objects.
+    #[must_use]
+    pub fn reproject(
+        &self,
+        points: &[ObjectPoint],
+        start: Option<&[(f64, f64)]>,
+        target: &FlowTarget,
+    ) -> Vec<Reprojection> {
         let cam = self.stage().camera();
-        let (w, h) = (cam.format.width as f64, cam.format.height as f64);
-        let mut done = Vec::with_capacity(tracked.len());
-        // (point, current raster position, the time that position was computed for)
-        let mut pending: Vec<(Tracked, (f64, f64), Option<f32>)> =
-            tracked.iter().map(|t| (*t, t.reference, None)).collect();
+        let centre = (cam.format.width as f64 / 2.0, cam.format.height as f64 / 2.0);
+        if let Some(start) = start {
+            assert_eq!(start.len(), points.len(), "one start per point");
+        }
+        let mut out = vec![Reprojection::NotConverged; points.len()];
+        let mut batch = Batch::with_capacity(points.len());
+        // (index, current raster position, the time that position was computed for)
+        let mut pending: Vec<(usize, (f64, f64), Option<f32>)> = (0..points.len())
+            .map(|i| (i, start.map_or(centre, |s| s[i]), None))
+            .collect();
         for _ in 0..MAX_STEPS {
             if pending.is_empty() {
                 break;
@@ -267,43 +397,42 @@ impl Prepared {
                 );
                 batch.aperture.push(Point2::ZERO);
             }
-            self.stage().run_prepared(batch);
+            self.stage().run_prepared(&mut batch);
             let mut next = Vec::with_capacity(pending.len());
-            for (i, (t, r, previous)) in pending.into_iter().enumerate() {
-                if batch.rays[i].is_culled() {
+            for (k, (i, r, previous)) in pending.into_iter().enumerate() {
+                if batch.rays[k].is_culled() {
+                    out[i] = Reprojection::OutsideDomain;
                     continue;
                 }
-                let time = batch.time[i];
+                let time = batch.time[k];
                 if previous == Some(time) {
-                    done.push((t, r));
+                    out[i] = Reprojection::Seen { raster: r, time };
                     continue;
                 }
-                let object = target.objects[t.instance as usize].object_to_world(time);
-                let p_world = object.transform_point3a(t.p_object);
+                let p = points[i];
+                let object = target.objects[p.instance as usize].object_to_world(time);
+                let p_world = object.transform_point3a(p.position);
                 let p_camera = target
                     .camera_to_world
                     .world_to_object(time)
                     .transform_point3a(p_world);
                 let Some(moved) = self.unproject_raster(p_camera, time) else {
+                    out[i] = Reprojection::OutsideDomain;
                     continue;
                 };
                 let step = (moved.0 - r.0).hypot(moved.1 - r.1);
-                if previous.is_some() && step < CONVERGED_PX {
-                    done.push((t, moved));
+                // f32 screen positions far outside the image are coarser than 10⁻⁵ px.
+                let precision = 4.0
+                    * f64::from(f32::EPSILON)
+                    * (moved.0 - centre.0).abs().max((moved.1 - centre.1).abs());
+                if previous.is_some() && step < CONVERGED_PX.max(precision) {
+                    out[i] = Reprojection::Seen { raster: moved, time };
                 } else {
-                    next.push((t, moved, Some(time)));
+                    next.push((i, moved, Some(time)));
                 }
             }
             pending = next;
         }
-        done.into_iter()
-            .filter(|(_, r)| (0.0..=w).contains(&r.0) && (0.0..=h).contains(&r.1))
-            .map(|(t, r)| {
-                (
-                    t.column,
-                    [(r.0 - t.reference.0) as f32, (r.1 - t.reference.1) as f32],
-                )
-            })
-            .collect()
+        out
     }
 }

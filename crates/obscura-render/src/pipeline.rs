@@ -132,6 +132,9 @@ pub struct FrameResult {
     pub output: RenderOutput,
     /// Every file written, in order: the displays of each write, then its sidecars.
     pub written: Vec<PathBuf>,
+    /// The prepared scene the frame was rendered from (camera stage, geometry, IDs): what annotations
+    /// computed after the render trace against.
+    pub prepared: crate::render::Prepared,
 }
 
 /// Why a frame was not rendered or not written. Each variant's text names the file, object or
@@ -229,5 +232,9 @@ pub fn render_frame(
     if let Some(w) = out.stats.contract.warning(&scene.projection) {
         reporter.message(Message::Contract, &w);
     }
-    Ok(FrameResult { output: out, written })
+    Ok(FrameResult {
+        output: out,
+        written,
+        prepared,
+    })
 }

@@ -88,6 +88,20 @@ impl IdTable {
         }
     }
 
+    /// The name of object `object_id` (from 1); `None` for 0 or an unknown ID.
+    #[must_use]
+    pub fn object_name(&self, object_id: u32) -> Option<&str> {
+        let i = (object_id as usize).checked_sub(1)?;
+        self.objects.get(i).map(String::as_str)
+    }
+
+    /// The name of instance `instance_id` (from 1); `None` for 0 or an unknown ID.
+    #[must_use]
+    pub fn instance_name(&self, instance_id: u32) -> Option<&str> {
+        let i = (instance_id as usize).checked_sub(1)?;
+        self.instances.get(i).map(|(n, _)| n.as_str())
+    }
+
     /// The table as JSON: `{"objects": {"<id>": "name"}, "instances": {"<id>": {"name", "object",
     /// "material", "source"}}, "materials": {"<id>": "name"}, "background": 0}`.
     #[must_use]

@@ -60,6 +60,41 @@ pub struct Mesh {
     pub colors: Option<Vec<[f32; 4]>>,
 }
 
+impl Mesh {
+    /// A cube of edge `size` centred on the origin (USD's `Cube`): corner `k` at the `k & 1`,
+    /// `k >> 1 & 1`, `k >> 2 & 1` ends of x, y and z, each face two triangles wound counter-clockwise
+    /// seen from outside.
+    #[must_use]
+    pub fn cube(size: f32) -> Mesh {
+        let h = size / 2.0;
+        let positions = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { -h } else { h },
+                    if i & 2 == 0 { -h } else { h },
+                    if i & 4 == 0 { -h } else { h },
+                )
+            })
+            .collect();
+        let quads: [[u32; 4]; 6] = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        Mesh {
+            positions,
+            triangles: quads
+                .iter()
+                .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+                .collect(),
+            ..Mesh::default()
+        }
+    }
+}
+
 /// A Catmull–Clark subdivision control mesh (`SubdivisionMesh "catmull-clark"`).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct SubdivMesh {

@@ -133,7 +133,9 @@ pub fn build(
                     theta_max: 360.0,
                 })
             }
-            "Cube" => Some(Shape::Mesh(cube(values.real(path, "size", time, 2.0)? as f32))),
+            "Cube" => Some(Shape::Mesh(Mesh::cube(
+                values.real(path, "size", time, 2.0)? as f32
+            ))),
             "Cylinder" | "Cone" => Some(Shape::Mesh(round(&values, path, ty, time)?)),
             "Capsule" | "Capsule_1" => {
                 capsule(&values, path, ty, time, &mut scene.warnings)?.map(Shape::Mesh)
@@ -308,7 +310,9 @@ fn instance(
                         theta_max: 360.0,
                     })
                 }
-                "Cube" => Some(Shape::Mesh(cube(values.real(path, "size", time, 2.0)? as f32))),
+                "Cube" => Some(Shape::Mesh(Mesh::cube(
+                    values.real(path, "size", time, 2.0)? as f32
+                ))),
                 _ => Some(Shape::Mesh(round(values, path, ty, time)?)),
             };
             let Some(shape) = shape else { continue };
@@ -971,39 +975,6 @@ fn primvar2(
             ));
         }
     })
-}
-
-/// A cube of edge `size` centred on the origin.
-fn cube(size: f32) -> Mesh {
-    let h = size / 2.0;
-    let positions: Vec<Vec3> = (0..8)
-        .map(|i| {
-            Vec3::new(
-                if i & 1 == 0 { -h } else { h },
-                if i & 2 == 0 { -h } else { h },
-                if i & 4 == 0 { -h } else { h },
-            )
-        })
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    Mesh {
-        positions,
-        normals: None,
-        triangles,
-        uvs: Vec::new(),
-        colors: None,
-    }
 }
 
 /// A `Cylinder` or `Cone` (capped) as a mesh of 64 segments, along its `axis`.

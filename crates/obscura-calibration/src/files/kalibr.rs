@@ -1,6 +1,7 @@
 //! Kalibr's `camchain.yaml` (and the single-camera `camera.yaml` of the same layout): a mapping of
 //! cameras `cam0`, `cam1`, … each with `camera_model`, `intrinsics`, `distortion_model`,
-//! `distortion_coeffs` and `resolution` (extrinsics such as `T_cn_cnm1` are ignored).
+//! `distortion_coeffs` and `resolution`. The chain's extrinsics (`T_cn_cnm1`, each camera's pose from the
+//! previous one) are read apart, by [`chain`], for camera rigs.
 //!
 //! Kalibr's intrinsics vectors are reordered into the target model's order:
 //!
@@ -22,6 +23,106 @@
 
 use super::tree::Node;
 use super::{Calibration, CalibrationFileError, FileFormat, Number, Src, choose_camera};
+
+/// One camera of a Kalibr camchain with its extrinsics, in file order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ChainCamera {
+    /// The entry's key (`cam0`, `cam1`, …).
+    pub id: String,
+    /// `T_cn_cnm1`: the 4×4 transform (rows) taking a point in the previous camera's frame to this
+    /// one's (Kalibr's cameras are OpenCV's: +X right, +Y down, looking down +Z); `None` for the first
+    /// camera, whose frame is the chain's.
+    pub t_cn_cnm1: Option<[[f64; 4]; 4]>,
+    /// The 1-based line of the entry (of `T_cn_cnm1` when present).
+    pub line: usize,
+}
+
+/// Reads the cameras of a Kalibr camchain with their `T_cn_cnm1` (every camera after the first must
+/// have one: a 4×4 list of rows whose last row is `0 0 0 1`).
+///
+/// # Errors
+/// A [`CalibrationFileError`] naming the file, the line and the key: not a camchain, a camera after
+/// the first without `T_cn_cnm1`, a matrix that is not 4×4 numbers or not rigid-shaped.
+pub fn chain(text: &str, file: &str) -> Result<Vec<ChainCamera>, CalibrationFileError> {
+    let src = Src { file };
+    let root = super::tree::parse(&src, text)?;
+    if !looks_like(&root) {
+        return Err(src.whole(
+            "not a Kalibr camchain: expected cam0: { camera_model, intrinsics, distortion_model, distortion_coeffs, resolution }, cam1: { …, T_cn_cnm1 }",
+        ));
+    }
+    let mut out = Vec::new();
+    for (id, cam) in root
+        .entries()
+        .unwrap_or_default()
+        .iter()
+        .filter(|(_, v)| is_camera(v))
+    {
+        let Some(node) = cam.get("T_cn_cnm1") else {
+            if !out.is_empty() {
+                return Err(src.err(
+                    cam.line,
+                    format!("{id}.T_cn_cnm1: missing; every camera after the first needs its pose from the previous one (a 4x4 matrix)"),
+                ));
+            }
+            out.push(ChainCamera {
+                id: id.clone(),
+                t_cn_cnm1: None,
+                line: cam.line,
+            });
+            continue;
+        };
+        let key = format!("{id}.T_cn_cnm1");
+        let rows = node.items().filter(|r| r.len() == 4).ok_or_else(|| {
+            src.err(
+                node.line,
+                format!(
+                    "{key}: expected a 4x4 matrix (four rows of four numbers), got {}",
+                    node.describe()
+                ),
+            )
+        })?;
+        let mut m = [[0.0; 4]; 4];
+        for (r, row) in rows.iter().enumerate() {
+            let items = row.items().filter(|i| i.len() == 4).ok_or_else(|| {
+                src.err(
+                    row.line,
+                    format!(
+                        "{key}: row {}: expected four numbers, got {}",
+                        r + 1,
+                        row.describe()
+                    ),
+                )
+            })?;
+            for (c, n) in src.numbers(items, &key)?.iter().enumerate() {
+                m[r][c] = n.value;
+            }
+        }
+        let last = m[3];
+        if last
+            .iter()
+            .zip([0.0, 0.0, 0.0, 1.0])
+            .any(|(a, b)| (a - b).abs() > 1e-9)
+        {
+            return Err(src.err(
+                node.line,
+                format!("{key}: the last row is {last:?}; expected [0, 0, 0, 1] (a rigid transform)"),
+            ));
+        }
+        if out.is_empty() {
+            return Err(src.err(
+                node.line,
+                format!("{key}: the first camera of the chain has no previous camera; expected no T_cn_cnm1"),
+            ));
+        }
+        out.push(ChainCamera {
+            id: id.clone(),
+            t_cn_cnm1: Some(m),
+            line: node.line,
+        });
+    }
+    Ok(out)
+}
 
 /// True when `root` is a mapping holding at least one camera entry (a mapping with `camera_model` or
 /// `intrinsics`).

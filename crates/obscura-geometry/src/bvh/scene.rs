@@ -211,6 +211,14 @@ impl SceneAccel {
         (b.lo, b.hi)
     }
 
+    /// The triangles of `instance` in its object space (as diced for the render), or `None` for an
+    /// instance that is out of range or has no mesh.
+    #[must_use]
+    pub fn instance_mesh(&self, instance: u32) -> Option<&TriangleMesh> {
+        let mesh = self.placements.get(instance as usize)?.mesh?;
+        Some(self.meshes[mesh].mesh())
+    }
+
     /// The object-to-world transform of `instance` at shutter time `time` (clamped to the sampled
     /// range; NaN means the first sample).
     ///

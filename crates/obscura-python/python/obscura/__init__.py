@@ -24,6 +24,7 @@ from ._obscura import (
     parse_frames,
     projections,
     render,
+    render_dataset,
     set_num_threads,
     stmap,
 )
@@ -40,6 +41,7 @@ __all__ = [
     "parse_frames",
     "projections",
     "render",
+    "render_dataset",
     "set_num_threads",
     "stmap",
 ]

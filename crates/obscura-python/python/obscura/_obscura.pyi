@@ -215,6 +215,31 @@ def check(
     """The contract report of ``obscura check --json`` as a dict; ``clean`` is True when every
     check passed."""
 
+def render_dataset(
+    scene: Optional[Union[str, PathLike[str]]],
+    output: Union[str, PathLike[str]],
+    frames: Optional[str] = None,
+    rig: Optional[Union[str, PathLike[str]]] = None,
+    exports: Optional[Union[str, Sequence[str]]] = None,
+    annotations: Optional[Union[str, Sequence[str]]] = None,
+    tracks: int = 256,
+    finalize: bool = False,
+    projection: Optional[str] = None,
+    params: Optional[Dict[str, Any]] = None,
+    calibration: Optional[Union[str, PathLike[str]]] = None,
+    camera: Optional[str] = None,
+    format: Optional[Tuple[int, int]] = None,
+    spp: Optional[int] = None,
+    seed: int = 0,
+    max_depth: int = 6,
+    fps: float = 24.0,
+) -> Dict[str, Any]:
+    """Renders a dataset through the same driver as `obscura dataset` (layout: docs/datasets.md):
+    images of every camera of `rig` with ground truth, `exports` (colmap, nerfstudio, gsplat),
+    `annotations` (boxes, tracks, correspondences) and `dataset.json`. Resumable; `frames` renders a
+    farm task's frames, `finalize=True` assembles the files spanning frames. Returns `rendered`,
+    `skipped`, `render_seconds`, `annotation_seconds`, `finalized`, `warnings`."""
+
 def render(
     scene: Optional[Union[str, PathLike[str]]] = None,
     camera: Optional[Camera] = None,
