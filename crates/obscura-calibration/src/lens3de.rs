@@ -902,6 +902,23 @@ impl Lens {
         (res <= 1e-12 * (1.0 + q[0].abs() + q[1].abs())).then_some(p)
     }
 
+    /// The pinhole 3DE's model undistorts to, as COLMAP's `PINHOLE` `[fx, fy, cx, cy]` on this
+    /// plate's raster (pixel centres at `i + ½`): the undistorted raster position `q` has the ray
+    /// `((q_x − c_x)/f_x, (q_y − c_y)/f_y, 1)`, with `f_x = fl/(r_fb·a_x)`, `f_y = fl/(r_fb·|a_y|)`
+    /// (`a` the raster → diagonally normalised scale, `r_fb` the half diagonal of the film back)
+    /// and `c` the raster position of the lens centre (`dn = 0`). It is the camera of the plate's
+    /// undistorted image (Nuke's `LD_3DE4_*` node in undistort mode), which an overscanned render
+    /// extends.
+    #[must_use]
+    pub fn pinhole(&self) -> [f64; 4] {
+        [
+            self.focal / (self.r_fb * self.a[0]),
+            -self.focal / (self.r_fb * self.a[1]),
+            -self.b[0] / self.a[0],
+            -self.b[1] / self.a[1],
+        ]
+    }
+
     /// The bounding box (x0, y0, x1, y1), raster, y down, of the undistorted image of the plate's
     /// `width × height` frame: the extremes of [`Lens::undistort`] along the four edges, sampled
     /// densely (the frame's edge points beyond the fold are left out).
@@ -1079,6 +1096,49 @@ mod tests {
         // The lens's own undistorted box of the frame (raster, y down) is the same figure.
         let b = l.undistorted_box(w, h).unwrap();
         padded([b[0], h - b[3], b[2], h - b[1]], [-503.0, -377.0, 2502.0, 1877.0]);
+    }
+
+    /// The lens's pinhole gives each plate pixel the ray of its undistorted position, for every
+    /// model (anamorphic with rotation and an off-centre lens included).
+    #[test]
+    fn the_pinhole_is_the_ray_of_the_undistorted_position() {
+        let (w, h) = (1920.0, 1080.0);
+        for (kind, set) in [
+            (
+                Kind::RadialStandard4,
+                vec![
+                    ("Distortion - Degree 2", -0.12),
+                    ("Quartic Distortion - Degree 4", 0.03),
+                    ("tde4_lens_center_offset_x_cm", 0.05),
+                    ("tde4_lens_center_offset_y_cm", -0.03),
+                ],
+            ),
+            (
+                Kind::AnamorphicStandard4,
+                vec![
+                    ("Cx02 - Degree 2", 0.05),
+                    ("Lens Rotation", 3.0),
+                    ("Squeeze-X", 0.9),
+                    ("tde4_pixel_aspect", 2.0),
+                    ("tde4_lens_center_offset_x_cm", -0.04),
+                ],
+            ),
+        ] {
+            let l = lens(kind, &set, w, h);
+            let [fx, fy, cx, cy] = l.pinhole();
+            for px in [[10.5, 20.5], [960.0, 540.0], [1800.25, 1000.75], [300.0, 900.0]] {
+                let q = l.undistort(px).unwrap();
+                let (ray, _) = l.ray(px).unwrap();
+                let want = [(q[0] - cx) / fx, (q[1] - cy) / fy];
+                let got = [ray[0] / ray[2], ray[1] / ray[2]];
+                for k in 0..2 {
+                    assert!(
+                        (got[k] - want[k]).abs() < 1e-12,
+                        "{kind:?} {px:?}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+        }
     }
 
     /// The anamorphic polynomial in its polar form `1 + Σ C_{i,d}·r^d·cos(iφ)`, written

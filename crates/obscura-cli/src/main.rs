@@ -28,6 +28,7 @@ mod build_plugin;
 mod check;
 mod farm;
 mod lens;
+mod overscan;
 mod params;
 mod render;
 mod signals;
@@ -202,6 +203,16 @@ struct RenderArgs {
     /// Write the sensor's raw mosaic as a DNG file (needs a sensor).
     #[arg(long, value_name = "OUT.dng")]
     raw: Option<PathBuf>,
+    // Overscan (issue 26): the CG for a plate, larger than the plate.
+    /// Render past the plate (the --format, else the calibration's size) by PIXELS on every side,
+    /// LEFT,TOP,RIGHT,BOTTOM, or auto: the margins of Nuke's LD_3DE4_* bounding box of the
+    /// undistorted plate (needs --calibration with a 3DEqualizer lens). With a 3DE lens the render is
+    /// its undistorted pinhole; otherwise the scene's camera with its screen window pushed out at
+    /// the same pixel pitch. Each EXR's display window is the plate and its data window the
+    /// overscanned box; the PNG preview shows the plate; the camera JSON records both.
+    #[arg(long, value_name = "PIXELS|L,T,R,B|auto", value_parser = overscan::parse_overscan,
+          conflicts_with_all = ["tile", "tiles", "crop", "sensor", "sensor_params", "raw"])]
+    overscan: Option<overscan::OverscanArg>,
 }
 
 #[derive(Args, Debug)]
