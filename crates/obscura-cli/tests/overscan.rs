@@ -238,3 +238,105 @@ fn an_overscanned_pinhole_redistorted_by_obscuras_stmap_is_the_render_through_th
         "{uncovered_without_overscan}"
     );
 }
+
+/// Without a lens, `--overscan PIXELS` renders the scene's own camera past the plate at the same
+/// pixel pitch: the plate's pixels keep their rays, the PNG preview is the plate, the camera JSON
+/// states the plate, the data window and the margins.
+#[test]
+fn a_given_overscan_extends_the_scenes_camera_at_the_same_pitch() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    std::fs::write(p("empty.rib"), "WorldBegin\nWorldEnd\n").unwrap();
+    let common = [
+        "render",
+        &p("empty.rib"),
+        "-p",
+        "PxrPerspective",
+        "--param",
+        "fov=50",
+        "--format",
+        "16x9",
+        "--spp",
+        "256",
+        "--quiet",
+    ];
+    run(&[&common[..], &["-o", &p("plate.exr")]].concat());
+    run(&[
+        &common[..],
+        &["--overscan", "3,2,5,4", "--camera-json", "-o", &p("over.exr")],
+    ]
+    .concat());
+    let over = read_all_flat_layers_from_file(p("over.exr")).unwrap();
+    let plate = read_all_flat_layers_from_file(p("plate.exr")).unwrap();
+    let layer = &over.layer_data[0];
+    assert_eq!(layer.attributes.layer_position.0, -3);
+    assert_eq!(layer.attributes.layer_position.1, -2);
+    assert_eq!((layer.size.0, layer.size.1), (24, 15));
+    assert_eq!(over.attributes.display_window.size.0, 16);
+    assert_eq!(over.attributes.display_window.size.1, 9);
+    let (a, b) = (directions(&plate), directions(&over));
+    // fov 50° over the 9 px height (the shorter side): the pitch is at most tan(25°)/4.5 rad.
+    let pitch = 25f64.to_radians().tan() / 4.5;
+    let bound = 2.0 * std::f64::consts::SQRT_2 / 16.0 * pitch;
+    let mut worst = 0.0f64;
+    for j in 0..9 {
+        for i in 0..16 {
+            worst = worst.max(angle(a[j * 16 + i], b[(j + 2) * 24 + i + 3]));
+        }
+    }
+    assert!(worst <= bound, "{worst} > {bound}");
+    // The margin's pixels continue the pinhole: the overscan's first column (plate x = −2.5) is
+    // the pinhole ray there, at its angle from the plate's first column (x = 0.5).
+    let ray = |x: f64, y: f64| {
+        let k = 25f64.to_radians().tan();
+        let (sx, sy) = (-16.0 / 9.0 + x / 16.0 * 32.0 / 9.0, 1.0 - y / 9.0 * 2.0);
+        let v = [sx * k, sy * k, 1.0];
+        let n = (v[0] * v[0] + v[1] * v[1] + 1.0).sqrt();
+        v.map(|c| c / n)
+    };
+    let want = angle(ray(-2.5, 0.5), ray(0.5, 0.5));
+    assert!((angle(b[2 * 24], b[2 * 24 + 3]) - want).abs() <= bound, "{want}");
+    let png = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p("over.png")).unwrap()))
+        .read_info()
+        .unwrap();
+    assert_eq!((png.info().width, png.info().height), (16, 9), "the preview is the plate");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(p("over.camera.json")).unwrap()).unwrap();
+    assert_eq!(json["image"]["width"], 16);
+    assert_eq!(json["image"]["data_window"], serde_json::json!([-3, -2, 21, 13]));
+    assert_eq!(json["image"]["overscan"], serde_json::json!([3, 2, 5, 4]));
+    assert_eq!(json["complete"], true);
+}
+
+/// What `--overscan` cannot do is said, naming the option.
+#[test]
+fn overscan_refusals_name_what_is_missing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).display().to_string();
+    std::fs::write(p("empty.rib"), "WorldBegin\nWorldEnd\n").unwrap();
+    let fails = |args: &[&str], want: &str| {
+        let out = obscura(args);
+        assert!(!out.status.success(), "{args:?}");
+        let err = text(&out.stderr);
+        assert!(err.contains(want), "{args:?}: {err}");
+    };
+    let render = ["render", &p("empty.rib"), "--format", "8x6", "--spp", "1", "-o"];
+    fails(
+        &[&render[..], &[&p("a.exr"), "--overscan", "auto"]].concat(),
+        "--overscan auto sizes the margins from a lens",
+    );
+    fails(
+        &[
+            &render[..],
+            &[&p("a.exr"), "--overscan", "4", "--calibration", &support::fixture("opencv_calibration.yml")],
+        ]
+        .concat(),
+        "--overscan with --calibration needs a 3DEqualizer lens",
+    );
+    fails(
+        &[&render[..], &[&p("a.exr"), "--overscan", "4", "--tile", "0/2"]].concat(),
+        "cannot be used with",
+    );
+    fails(&[&render[..], &[&p("a.tif"), "--overscan", "4"]].concat(), "has no data window");
+    fails(&[&render[..], &[&p("a.exr"), "--overscan", "4,4"]].concat(), "'4,4' is not an overscan");
+}
