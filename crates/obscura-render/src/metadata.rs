@@ -20,6 +20,10 @@
 //! }
 //! ```
 //!
+//! An overscanned render (`obscura render --overscan`, [`with_overscan`]) states the plate as
+//! `image.width`/`height` and `screen_window`, the overscanned box as `data_window` (from a negative
+//! origin) and its margins as `"overscan": [left, top, right, bottom]`.
+//!
 //! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
 //! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a
 //! pinhole-equivalent camera: `PxrPerspective` (its chief rays, `fx = d·W/(r − l)`, `fy = d·H/(t − b)`,
