@@ -28,6 +28,7 @@ mod build_plugin;
 mod check;
 mod farm;
 mod lens;
+mod nuke_export;
 mod overscan;
 mod params;
 mod render;
@@ -81,6 +82,9 @@ enum Command {
     /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
     /// drawing with traced ray fans (--diagram out.svg|png).
     Lens(Box<lens::LensArgs>),
+    /// Write a calibrated camera as a Nuke LD_3DE4_* node (a 3DE lens as it is; COLMAP's and
+    /// OpenCV's pinhole models fitted with 3DE4 Radial - Standard, Degree 4, the residual printed).
+    ExportNuke(Box<nuke_export::ExportNukeArgs>),
     /// A USD stage's cameras as JSON: every UsdGeomCamera attribute (authored or its schema fallback),
     /// the world transform and the lens-distortion model, at Default and at time codes.
     UsdCameras(Box<usd::UsdCamerasArgs>),
@@ -471,6 +475,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
+        Command::ExportNuke(a) => nuke_export::run(a),
         Command::UsdCameras(a) => usd::run(a),
         Command::Merge(a) => farm::merge(a),
         Command::Submit(a) => farm::submit(a),

@@ -296,10 +296,16 @@ fn a_given_overscan_extends_the_scenes_camera_at_the_same_pitch() {
     };
     let want = angle(ray(-2.5, 0.5), ray(0.5, 0.5));
     assert!((angle(b[2 * 24], b[2 * 24 + 3]) - want).abs() <= bound, "{want}");
-    let png = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(p("over.png")).unwrap()))
-        .read_info()
-        .unwrap();
-    assert_eq!((png.info().width, png.info().height), (16, 9), "the preview is the plate");
+    let png = png::Decoder::new(std::io::BufReader::new(
+        std::fs::File::open(p("over.png")).unwrap(),
+    ))
+    .read_info()
+    .unwrap();
+    assert_eq!(
+        (png.info().width, png.info().height),
+        (16, 9),
+        "the preview is the plate"
+    );
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(p("over.camera.json")).unwrap()).unwrap();
     assert_eq!(json["image"]["width"], 16);
@@ -328,7 +334,13 @@ fn overscan_refusals_name_what_is_missing() {
     fails(
         &[
             &render[..],
-            &[&p("a.exr"), "--overscan", "4", "--calibration", &support::fixture("opencv_calibration.yml")],
+            &[
+                &p("a.exr"),
+                "--overscan",
+                "4",
+                "--calibration",
+                &support::fixture("opencv_calibration.yml"),
+            ],
         ]
         .concat(),
         "--overscan with --calibration needs a 3DEqualizer lens",
@@ -337,6 +349,12 @@ fn overscan_refusals_name_what_is_missing() {
         &[&render[..], &[&p("a.exr"), "--overscan", "4", "--tile", "0/2"]].concat(),
         "cannot be used with",
     );
-    fails(&[&render[..], &[&p("a.tif"), "--overscan", "4"]].concat(), "has no data window");
-    fails(&[&render[..], &[&p("a.exr"), "--overscan", "4,4"]].concat(), "'4,4' is not an overscan");
+    fails(
+        &[&render[..], &[&p("a.tif"), "--overscan", "4"]].concat(),
+        "has no data window",
+    );
+    fails(
+        &[&render[..], &[&p("a.exr"), "--overscan", "4,4"]].concat(),
+        "'4,4' is not an overscan",
+    );
 }
