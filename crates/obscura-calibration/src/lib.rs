@@ -15,6 +15,7 @@ mod lift;
 pub mod models;
 pub mod projection;
 mod solve;
+pub mod stmap;
 #[cfg(test)]
 mod tests;
 

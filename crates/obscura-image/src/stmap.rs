@@ -462,5 +462,80 @@ pub fn write_stmap_exr(map: &StMap, attributes: &[(&str, String)], path: &Path) 
     Ok(write_exr_image(image, path)?)
 }
 
+/// An ST-map read from an EXR: the map's size and its R (s) and G (t) samples, row by row from the
+/// top (the layout [`write_stmap_exr`] writes and Nuke's `STMap` node reads).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadStMap {
+    /// Width of the map (the plate it is for), pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Nuke's s (channel R).
+    pub s: Vec<f32>,
+    /// Nuke's t (channel G).
+    pub t: Vec<f32>,
+}
+
+/// An ST-map EXR could not be read: the file and what was expected.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}: {message}")]
+pub struct ReadStMapError {
+    /// The file as named by the caller.
+    pub file: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+/// Reads the ST-map in the first layer of the OpenEXR at `path`: channels `R` and `G` (half or
+/// float), over the layer's data window.
+///
+/// # Errors
+/// A [`ReadStMapError`] naming the file: unreadable, not an OpenEXR, no layer, no `R` or `G`
+/// channel, integer samples.
+pub fn read_stmap_exr(path: &Path) -> Result<ReadStMap, ReadStMapError> {
+    let err = |message: String| ReadStMapError {
+        file: path.display().to_string(),
+        message,
+    };
+    let image = exr::prelude::read_all_flat_layers_from_file(path)
+        .map_err(|e| err(format!("cannot read it as an OpenEXR ST-map: {e}")))?;
+    let layer = image
+        .layer_data
+        .first()
+        .ok_or_else(|| err("the OpenEXR holds no layer; expected an ST-map (R = s, G = t)".into()))?;
+    let channel = |name: &str| -> Result<Vec<f32>, ReadStMapError> {
+        let ch = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .ok_or_else(|| {
+                let have: Vec<String> = layer
+                    .channel_data
+                    .list
+                    .iter()
+                    .map(|c| c.name.to_string())
+                    .collect();
+                err(format!(
+                    "no channel {name}; an ST-map has R = s and G = t (channels present: {})",
+                    have.join(", ")
+                ))
+            })?;
+        match &ch.sample_data {
+            FlatSamples::F32(v) => Ok(v.clone()),
+            FlatSamples::F16(v) => Ok(v.iter().map(|h| h.to_f32()).collect()),
+            FlatSamples::U32(_) => Err(err(format!(
+                "channel {name} holds integer samples; an ST-map's s and t are half or float in [0, 1]"
+            ))),
+        }
+    };
+    Ok(ReadStMap {
+        width: layer.size.0,
+        height: layer.size.1,
+        s: channel("R")?,
+        t: channel("G")?,
+    })
+}
+
 #[cfg(test)]
 mod tests;
