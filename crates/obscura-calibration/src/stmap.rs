@@ -257,6 +257,305 @@ impl StMapLens {
     }
 }
 
+/// An ST-map read from an EXR: the map's size and its R (s) and G (t) samples, row by row from the
+/// top (the layout `obscura stmap` writes and Nuke's `STMap` node reads).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadStMap {
+    /// Width of the map (the plate it is for), pixels.
+    pub width: usize,
+    /// Height, pixels.
+    pub height: usize,
+    /// Nuke's s (channel R).
+    pub s: Vec<f32>,
+    /// Nuke's t (channel G).
+    pub t: Vec<f32>,
+}
+
+/// An ST-map EXR could not be read: the file and what was expected.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}: {message}")]
+pub struct ReadStMapError {
+    /// The file as named by the caller.
+    pub file: String,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+/// Reads the ST-map in the first layer of the OpenEXR at `path`: channels `R` and `G` (half or
+/// float), over the layer's data window.
+///
+/// # Errors
+/// A [`ReadStMapError`] naming the file: unreadable, not an OpenEXR, no layer, no `R` or `G`
+/// channel, integer samples.
+pub fn read_stmap_exr(path: &std::path::Path) -> Result<ReadStMap, ReadStMapError> {
+    let err = |message: String| ReadStMapError {
+        file: path.display().to_string(),
+        message,
+    };
+    let image = exr::prelude::read_all_flat_layers_from_file(path)
+        .map_err(|e| err(format!("cannot read it as an OpenEXR ST-map: {e}")))?;
+    let layer = image
+        .layer_data
+        .first()
+        .ok_or_else(|| err("the OpenEXR holds no layer; expected an ST-map (R = s, G = t)".into()))?;
+    let channel = |name: &str| -> Result<Vec<f32>, ReadStMapError> {
+        let ch = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .ok_or_else(|| {
+                let have: Vec<String> = layer
+                    .channel_data
+                    .list
+                    .iter()
+                    .map(|c| c.name.to_string())
+                    .collect();
+                err(format!(
+                    "no channel {name}; an ST-map has R = s and G = t (channels present: {})",
+                    have.join(", ")
+                ))
+            })?;
+        match &ch.sample_data {
+            exr::prelude::FlatSamples::F32(v) => Ok(v.clone()),
+            exr::prelude::FlatSamples::F16(v) => Ok(v.iter().map(|h| h.to_f32()).collect()),
+            exr::prelude::FlatSamples::U32(_) => Err(err(format!(
+                "channel {name} holds integer samples; an ST-map's s and t are half or float in [0, 1]"
+            ))),
+        }
+    };
+    Ok(ReadStMap {
+        width: layer.size.0,
+        height: layer.size.1,
+        s: channel("R")?,
+        t: channel("G")?,
+    })
+}
+
+/// The name scenes use for the ST-map camera projection.
+pub const PROJECTION: &str = "StMapCamera";
+
+static TABLE: std::sync::LazyLock<Vec<obscura_sdk::ParamDecl>> = std::sync::LazyLock::new(|| {
+    use obscura_sdk::{ParamDecl, ValueRange};
+    vec![
+        ParamDecl::string("map", "")
+            .doc("the ST-map EXR (required): per plate pixel, R = s, G = t of the position in the undistorted image (Nuke's STMap convention)"),
+        ParamDecl::float_array("pinhole", &[0.0, 0.0, 0.0, 0.0])
+            .doc("the undistorted image's pinhole fx fy cx cy, in its pixels (required)"),
+        ParamDecl::int_array("undistortedResolution", &[0, 0])
+            .range(ValueRange::closed(0.0, 1e6))
+            .doc("width and height of the undistorted image the map reads, pixels [default: the map's size]"),
+    ]
+});
+
+/// Creates [`StMapCamera`] projections.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct StMapCameraFactory;
+
+impl obscura_sdk::ProjectionFactory for StMapCameraFactory {
+    fn name(&self) -> &str {
+        PROJECTION
+    }
+
+    fn summary(&self) -> &str {
+        "a lens given as an ST-map (Nuke's redistort map into its undistorted pinhole), exact both ways to the map"
+    }
+
+    fn param_table(&self) -> &[obscura_sdk::ParamDecl] {
+        &TABLE
+    }
+
+    fn create_projection(
+        &self,
+        env: &mut obscura_sdk::ProjectionEnvironment,
+        params: &obscura_sdk::ParamList,
+    ) -> Result<Box<dyn obscura_sdk::Projection>, obscura_sdk::PluginError> {
+        let invalid = |message: String| obscura_sdk::PluginError::Invalid {
+            plugin: PROJECTION.to_string(),
+            message,
+        };
+        let p = obscura_sdk::Params::resolve(PROJECTION, &TABLE, params)?;
+        let file = p.string("map")?;
+        if file.is_empty() {
+            return Err(invalid(
+                "map is required: \"string map\" [\"file.exr\"], the ST-map EXR of the lens".into(),
+            ));
+        }
+        if !p.is_given("pinhole") {
+            return Err(invalid(
+                "pinhole is required: \"float[4] pinhole\" [fx fy cx cy] of the undistorted image, in its pixels"
+                    .into(),
+            ));
+        }
+        let pinhole: Vec<f64> = p.floats("pinhole", 4)?.iter().map(|&v| f64::from(v)).collect();
+        let read = read_stmap_exr(std::path::Path::new(file)).map_err(|e| invalid(e.to_string()))?;
+        let size = match params.get("undistortedResolution").map(|e| &e.value) {
+            Some(obscura_sdk::ParamValue::Ints(v)) if v.len() == 2 && v[0] > 0 && v[1] > 0 => {
+                [f64::from(v[0]), f64::from(v[1])]
+            }
+            _ => [read.width as f64, read.height as f64],
+        };
+        let lens = StMapLens::new(
+            read.width,
+            read.height,
+            &read.s,
+            &read.t,
+            size,
+            [pinhole[0], pinhole[1], pinhole[2], pinhole[3]],
+        )
+        .map_err(|e| invalid(format!("{file}: {e}")))?;
+        env.set_deep_metric(obscura_sdk::DeepMetric::CameraZ);
+        Ok(Box::new(StMapCamera::new(env, lens)))
+    }
+}
+
+/// A projection through an [`StMapLens`]: the plate spans the screen window, screen point
+/// `(sx, sy)` is plate raster position `x = (sx − l)/(r − l)·W`, `y = (t − sy)/(t − b)·H`; its ray is
+/// the lens's, y flipped to Obscura's camera space (y up). Rays leave the origin; `ray_spread` is half
+/// the geometric mean of the angles the ray turns per render pixel along x and y (finite
+/// differences); clipping planes `near/D.z`, `far/D.z` (every ray has z > 0: DeepMetric CameraZ,
+/// DicingHint Perspective).
+#[derive(Debug, Clone)]
+pub struct StMapCamera {
+    lens: StMapLens,
+    /// Plate raster `x = su·sx + ou`, `y = sv·sy + ov`.
+    su: f64,
+    ou: f64,
+    sv: f64,
+    ov: f64,
+    /// Plate pixels per render pixel, x and y.
+    step: [f64; 2],
+    near: f32,
+    far: f32,
+    fov: f32,
+}
+
+impl StMapCamera {
+    /// The camera of `lens` placed on `env`'s screen window.
+    #[must_use]
+    pub fn new(env: &obscura_sdk::ProjectionEnvironment, lens: StMapLens) -> Self {
+        let w = env.screen_window();
+        let (pw, ph) = (lens.width as f64, lens.height as f64);
+        let (l, r, b, t) = (
+            f64::from(w.left),
+            f64::from(w.right),
+            f64::from(w.bottom),
+            f64::from(w.top),
+        );
+        let su = pw / (r - l);
+        let sv = -ph / (t - b);
+        let mut cam = StMapCamera {
+            su,
+            ou: -l * su,
+            sv,
+            ov: t * ph / (t - b),
+            step: [pw / f64::from(env.width()), ph / f64::from(env.height())],
+            near: env.clipping_near(),
+            far: env.clipping_far(),
+            fov: 0.0,
+            lens,
+        };
+        let unit = |p: [f64; 2]| cam.lens.pixel_to_ray(p).map(normalised);
+        let (mx, my) = (0.5 * pw, 0.5 * ph);
+        let ends = if pw <= ph {
+            [[0.0, my], [pw, my]]
+        } else {
+            [[mx, 0.0], [mx, ph]]
+        };
+        cam.fov = match (unit(ends[0]), unit(ends[1])) {
+            (Some(a), Some(b)) => angle(a, b).to_degrees() as f32,
+            _ => 90.0,
+        };
+        cam
+    }
+
+    /// The lens.
+    #[must_use]
+    pub fn lens(&self) -> &StMapLens {
+        &self.lens
+    }
+
+    fn ray(&self, s: obscura_sdk::Point2) -> obscura_sdk::RayGeometry {
+        let p = [
+            self.su * f64::from(s.x) + self.ou,
+            self.sv * f64::from(s.y) + self.ov,
+        ];
+        let Some(d) = self.lens.pixel_to_ray(p).map(normalised) else {
+            return obscura_sdk::RayGeometry::CULLED;
+        };
+        let turn = |k: usize| {
+            let mut q = p;
+            let h = self.step[k];
+            // Step inward so the neighbour stays inside the frame.
+            q[k] += if q[k] + h <= [self.lens.width, self.lens.height][k] as f64 {
+                h
+            } else {
+                -h
+            };
+            self.lens.pixel_to_ray(q).map_or(0.0, |e| angle(d, normalised(e)))
+        };
+        let spread = 0.5 * (turn(0) * turn(1)).sqrt();
+        let direction = obscura_sdk::Vec3::new(d[0] as f32, -d[1] as f32, d[2] as f32);
+        let k = 1.0 / direction.z;
+        obscura_sdk::RayGeometry {
+            origin: obscura_sdk::Vec3::ZERO,
+            origin_radius: 0.0,
+            direction,
+            ray_spread: if spread.is_finite() { spread as f32 } else { 0.0 },
+            min_dist: self.near * k,
+            max_dist: self.far * k,
+        }
+    }
+}
+
+fn normalised(v: [f64; 3]) -> [f64; 3] {
+    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+    [v[0] / n, v[1] / n, v[2] / n]
+}
+
+/// The angle between two unit vectors (atan2 of the cross and dot products: exact for small angles).
+fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let c = [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ];
+    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
+        .sqrt()
+        .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+}
+
+impl obscura_sdk::Projection for StMapCamera {
+    fn property(&self, property: obscura_sdk::ProjectionProperty) -> Option<obscura_sdk::PropertyValue> {
+        use obscura_sdk::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
+        match property {
+            ProjectionProperty::DicingHint => Some(PropertyValue::DicingHint(DicingHint::Perspective)),
+            ProjectionProperty::DeepMetric => Some(PropertyValue::DeepMetric(DeepMetric::CameraZ)),
+            ProjectionProperty::FieldOfView => Some(PropertyValue::Float(self.fov)),
+            _ => None,
+        }
+    }
+
+    fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
+        let c = ctx.parts_mut();
+        obscura_sdk::simd::map_screen(c.rays, c.screen, |s| self.ray(s));
+    }
+
+    fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {
+        if !point.is_finite() {
+            return None;
+        }
+        let p = self
+            .lens
+            .ray_to_pixel([f64::from(point.x), -f64::from(point.y), f64::from(point.z)])?;
+        let s = obscura_sdk::Point2::new(
+            ((p[0] - self.ou) / self.su) as f32,
+            ((p[1] - self.ov) / self.sv) as f32,
+        );
+        (s.x.is_finite() && s.y.is_finite()).then_some(s)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -319,5 +618,61 @@ mod tests {
         assert!(e.contains("needs 48 s and t samples"), "{e}");
         let e = StMapLens::new(w, h, &s, &t, [8.0, 6.0], [0.0, 8.0, 4.0, 3.0]).unwrap_err();
         assert!(e.contains("focal lengths > 0"), "{e}");
+    }
+
+    #[test]
+    fn the_projection_refuses_bad_maps_naming_the_file_and_pixel() {
+        use exr::prelude::{
+            AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, WritableImage,
+        };
+        use obscura_sdk::{Format, ParamList, ProjectionEnvironment, ProjectionFactory};
+        let dir = std::env::temp_dir().join(format!("obscura-stmap-camera-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (w, h) = (8, 6);
+        let (mut s, t) = warp(w, h);
+        s[3 * w + 2] = f32::NAN;
+        let path = dir.join("nan.exr");
+        let channels = vec![
+            AnyChannel::new("R", FlatSamples::F32(s)),
+            AnyChannel::new("G", FlatSamples::F32(t)),
+        ];
+        let layer = Layer::new(
+            (w, h),
+            LayerAttributes::default(),
+            Encoding::UNCOMPRESSED,
+            AnyChannels::sort(channels.into()),
+        );
+        Image::from_layer(layer).write().to_file(&path).unwrap();
+        let create = |list: &[(&str, &str)]| {
+            let mut l = ParamList::new();
+            for (d, v) in list {
+                l.push_text(d, &v.split(' ').collect::<Vec<_>>(), None).unwrap();
+            }
+            let mut env = ProjectionEnvironment::for_format(Format::new(8, 6));
+            StMapCameraFactory
+                .create_projection(&mut env, &l)
+                .map(|_| ())
+                .unwrap_err()
+                .to_string()
+        };
+        let file = path.display().to_string();
+        let e = create(&[("string map", file.as_str()), ("float[4] pinhole", "8 8 4 3")]);
+        assert!(
+            e.contains(&format!("{file}: pixel 2,3:")) && e.contains("must be finite"),
+            "{e}"
+        );
+        let e = create(&[("float[4] pinhole", "8 8 4 3")]);
+        assert!(e.contains("map is required"), "{e}");
+        let e = create(&[("string map", file.as_str())]);
+        assert!(e.contains("pinhole is required"), "{e}");
+        let e = create(&[
+            ("string map", "/nonexistent/map.exr"),
+            ("float[4] pinhole", "8 8 4 3"),
+        ]);
+        assert!(
+            e.contains("/nonexistent/map.exr: cannot read it as an OpenEXR ST-map"),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

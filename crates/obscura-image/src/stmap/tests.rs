@@ -445,7 +445,7 @@ fn written_file_reads_back_and_failures_name_the_path() {
 fn a_camera_through_the_redistort_map_of_a_3de_lens_has_the_lens_rays() {
     use obscura_calibration::lens3de::{Kind, Lens};
     use obscura_calibration::models::CameraModel;
-    use obscura_calibration::stmap::StMapLens;
+    use obscura_calibration::stmap::{StMapLens, read_stmap_exr};
 
     let (w, h) = (320u32, 180u32);
     let plate = Format::new(w, h);
@@ -585,10 +585,53 @@ fn a_camera_through_the_redistort_map_of_a_3de_lens_has_the_lens_rays() {
         worst_cross < bound_cross,
         "model ray through the map's inverse: {worst_cross} px > {bound_cross}"
     );
+
+    // The same map as the StMapCamera projection: its rays through the renderer's stage equal the 3DE
+    // lens's CalibratedCamera rays at every pixel centre (f32 directions: the bound plus 1e-6 rad),
+    // and the shared contract checker passes it.
+    let mut l = ParamList::new();
+    let map_path = path.display().to_string();
+    l.push_text("string map", &[map_path.as_str()], None).unwrap();
+    let p: Vec<&str> = pinhole_text.iter().map(String::as_str).collect();
+    l.push_text("float[4] pinhole", &p, None).unwrap();
+    let mut registry = Registry::new();
+    registry
+        .register(Box::new(obscura_calibration::stmap::StMapCameraFactory), "")
+        .unwrap();
+    let camera_stage = CameraStage::new(&mut registry, "StMapCamera", &l, &CameraDesc::new(plate)).unwrap();
+    let screen: Vec<Point2> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (x, y) = screen_of(plate, f64::from(i) + 0.5, f64::from(j) + 0.5);
+            Point2::new(x as f32, y as f32)
+        })
+        .collect();
+    let (got, got_report) = chief_rays(&camera_stage, &screen);
+    let (want, _) = chief_rays(&to, &screen);
+    assert!(got_report.is_clean(), "{got_report:?}");
+    let mut worst_stage = 0.0f64;
+    for (g, r) in got.iter().zip(&want) {
+        let v = |d: Vec3| [f64::from(d.x), f64::from(d.y), f64::from(d.z)];
+        worst_stage = worst_stage.max(angle(v(g.direction), v(r.direction)));
+    }
+    eprintln!(
+        "StMapCamera stage vs the 3DE CalibratedCamera stage: worst {worst_stage:.3e} rad over {} pixels",
+        got.len()
+    );
+    assert!(worst_stage < bound_rad + 1e-6, "{worst_stage} rad");
+    let opts = obscura_check::CheckOptions {
+        format: plate,
+        samples_per_pixel: 1,
+        ..obscura_check::CheckOptions::default()
+    };
+    let report =
+        obscura_check::check_factory(&obscura_calibration::stmap::StMapCameraFactory, &l, &opts).unwrap();
+    assert!(report.is_clean(), "{:?}\n{}", report.failed(), report.to_json());
 }
 
 #[test]
 fn st_map_files_without_st_channels_are_refused_naming_the_file() {
+    use obscura_calibration::stmap::read_stmap_exr;
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rgb.exr");
     let layer = Layer::new(
