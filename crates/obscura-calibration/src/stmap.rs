@@ -23,6 +23,15 @@
 //! if that fails, from the nearest sample of a coarse grid. A solution is accepted only when its
 //! residual is below 1e-9 undistorted pixels and it lies inside the frame; otherwise `None`.
 //!
+//! # The projection
+//!
+//! [`StMapCamera`] (made by [`StMapCameraFactory`], name [`PROJECTION`]; a host registers it) takes
+//! `string map` (the EXR, read by [`read_stmap_exr`]: channels R and G), `float[4] pinhole`
+//! (`f_x f_y c_x c_y` of the undistorted image, its pixels) and `int[2] undistortedResolution`
+//! (`W_u H_u`, default the map's size: the undistorted image of `obscura stmap --from-undistorted`
+//! is the plate's size, s and t running past [0, 1] into the overscan). The plate spans the screen
+//! window as `CalibratedCamera`'s calibration image does.
+//!
 //! # What a map must be
 //!
 //! [`StMapLens::new`] refuses (naming the pixel) a map whose size does not match its samples, a
