@@ -902,6 +902,23 @@ impl Lens {
         (res <= 1e-12 * (1.0 + q[0].abs() + q[1].abs())).then_some(p)
     }
 
+    /// The pinhole 3DE's model undistorts to, as COLMAP's `PINHOLE` `[fx, fy, cx, cy]` on this
+    /// plate's raster (pixel centres at `i + ½`): the undistorted raster position `q` has the ray
+    /// `((q_x − c_x)/f_x, (q_y − c_y)/f_y, 1)`, with `f_x = fl/(r_fb·a_x)`, `f_y = fl/(r_fb·|a_y|)`
+    /// (`a` the raster → diagonally normalised scale, `r_fb` the half diagonal of the film back)
+    /// and `c` the raster position of the lens centre (`dn = 0`). It is the camera of the plate's
+    /// undistorted image (Nuke's `LD_3DE4_*` node in undistort mode), which an overscanned render
+    /// extends.
+    #[must_use]
+    pub fn pinhole(&self) -> [f64; 4] {
+        [
+            self.focal / (self.r_fb * self.a[0]),
+            -self.focal / (self.r_fb * self.a[1]),
+            -self.b[0] / self.a[0],
+            -self.b[1] / self.a[1],
+        ]
+    }
+
     /// The bounding box (x0, y0, x1, y1), raster, y down, of the undistorted image of the plate's
     /// `width × height` frame: the extremes of [`Lens::undistort`] along the four edges, sampled
     /// densely (the frame's edge points beyond the fold are left out).
@@ -924,6 +941,184 @@ impl Lens {
         }
         bx.iter().all(|v| v.is_finite()).then_some(bx)
     }
+}
+
+/// A 3DE lens fitted to another camera ([`fit_radial_standard`]): its parameters and how far it
+/// stays from the camera.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fit {
+    /// The parameters of [`Kind::RadialStandard4`] in [`Kind::all_params`] order.
+    pub params: Vec<f64>,
+    /// The root mean square distance, in pixels of the plate, between the fitted lens's
+    /// undistorted position and the camera's, over the grid points both map.
+    pub rms_px: f64,
+    /// The largest such distance.
+    pub max_px: f64,
+    /// The grid points used.
+    pub points: usize,
+}
+
+/// The plate width, in cm, of the virtual film back a fitted lens is given (3DE's model is in unit
+/// coordinates: any back with the right aspect and focal length is the same lens).
+const FIT_BACK_WIDTH_CM: f64 = 3.6;
+
+/// Fits `3DE4 Radial - Standard, Degree 4` to a camera on a `width × height` plate: `ray(px)` is
+/// the camera's ray (OpenCV camera space, y down, any length) through raster position `px`, or
+/// `None`, and `pinhole = [fx, fy, cx, cy]` (raster, COLMAP's pixel centres) the pinhole it
+/// undistorts to. The lens's built-ins reproduce that pinhole exactly (film back
+/// `3.6 × 3.6·(H/W)·(fx/fy)` cm, focal `fx·3.6/W` cm, the lens-centre offset of `(cx, cy)` from
+/// the plate's centre, no field-of-view crop, pixel aspect 1); its distortion `c2, u2, v2, c4, u4,
+/// v4` (no cylindric bending) minimises `Σ |undistort(px) − q(px)|²` over a `grid × grid` lattice
+/// of the plate's edges and inside, `q(px) = (fx·d_x/d_z + cx, fy·d_y/d_z + cy)` the camera's
+/// undistorted position. The model's undistort is linear in those six coefficients, so the least
+/// squares problem is linear and solved exactly (normal equations, 6 × 6).
+///
+/// # Errors
+/// A message when the pinhole is not positive and finite, fewer than 6 grid points have a ray in
+/// front of the camera, or the points do not determine the coefficients.
+pub fn fit_radial_standard(
+    pinhole: [f64; 4],
+    width: f64,
+    height: f64,
+    ray: &dyn Fn([f64; 2]) -> Option<[f64; 3]>,
+    grid: usize,
+) -> Result<Fit, String> {
+    let [fx, fy, cx, cy] = pinhole;
+    if !(fx > 0.0 && fy > 0.0 && cx.is_finite() && cy.is_finite() && fx.is_finite() && fy.is_finite()) {
+        return Err(format!(
+            "the pinhole {pinhole:?} (fx, fy, cx, cy) must have positive finite focal lengths"
+        ));
+    }
+    let kind = Kind::RadialStandard4;
+    let k = FIT_BACK_WIDTH_CM / width;
+    let (w_fb, h_fb) = (FIT_BACK_WIDTH_CM, height * k * fx / fy);
+    let builtins = [
+        ("tde4_focal_length_cm", fx * k),
+        ("tde4_filmback_width_cm", w_fb),
+        ("tde4_filmback_height_cm", h_fb),
+        ("tde4_lens_center_offset_x_cm", (cx - 0.5 * width) * k),
+        (
+            "tde4_lens_center_offset_y_cm",
+            (0.5 * height - cy) * h_fb / height,
+        ),
+    ];
+    let coefficients: Vec<&str> = kind.params().iter().take(6).map(|p| p.0).collect();
+    let with = |c: &[f64]| -> Vec<f64> {
+        kind.all_params()
+            .iter()
+            .map(|(n, d)| {
+                builtins
+                    .iter()
+                    .find(|b| b.0 == *n)
+                    .map(|b| b.1)
+                    .or_else(|| coefficients.iter().position(|m| m == n).map(|i| c[i]))
+                    .unwrap_or(*d)
+            })
+            .collect()
+    };
+    let lens_of = |c: &[f64]| Lens::new(kind, &with(c), width, height);
+    let identity = lens_of(&[0.0; 6])?;
+    // Each coefficient's column: the undistort with that coefficient alone, less the identity.
+    let units: Vec<Lens> = (0..6)
+        .map(|i| {
+            let mut c = [0.0; 6];
+            c[i] = 1e-3;
+            lens_of(&c)
+        })
+        .collect::<Result<_, _>>()?;
+    let n = grid.max(2);
+    let mut rows: Vec<([[f64; 6]; 2], [f64; 2])> = Vec::new();
+    let mut targets: Vec<([f64; 2], [f64; 2])> = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let px = [
+                width * i as f64 / (n - 1) as f64,
+                height * j as f64 / (n - 1) as f64,
+            ];
+            let Some(d) = ray(px).filter(|d| d[2] > 0.0 && d.iter().all(|v| v.is_finite())) else {
+                continue;
+            };
+            let q = [fx * d[0] / d[2] + cx, fy * d[1] / d[2] + cy];
+            let (Some(base), Some(cols)) = (
+                identity.undistort(px),
+                units.iter().map(|u| u.undistort(px)).collect::<Option<Vec<_>>>(),
+            ) else {
+                continue;
+            };
+            let mut a = [[0.0; 6]; 2];
+            for (c, col) in cols.iter().enumerate() {
+                a[0][c] = (col[0] - base[0]) / 1e-3;
+                a[1][c] = (col[1] - base[1]) / 1e-3;
+            }
+            rows.push((a, [q[0] - base[0], q[1] - base[1]]));
+            targets.push((px, q));
+        }
+    }
+    if rows.len() < 6 {
+        return Err(format!(
+            "only {} of the {n}x{n} grid points have a ray in front of the camera: too few to fit 6 coefficients",
+            rows.len()
+        ));
+    }
+    let mut m = [[0.0; 7]; 6];
+    for (a, b) in &rows {
+        for r in 0..2 {
+            for i in 0..6 {
+                for j in 0..6 {
+                    m[i][j] += a[r][i] * a[r][j];
+                }
+                m[i][6] += a[r][i] * b[r];
+            }
+        }
+    }
+    let c = solve_6(m).ok_or("the grid points do not determine the 6 coefficients (a singular system)")?;
+    let params = with(&c);
+    let fitted = Lens::new(kind, &params, width, height)?;
+    // The residual of the lens as built (not of the linear system): its own undistort.
+    let (mut sum, mut max) = (0.0, 0.0f64);
+    for (px, q) in &targets {
+        let u = fitted.undistort(*px).ok_or_else(|| {
+            format!("the fitted lens folds before the plate's point {px:?}: the camera is beyond what the model can fit")
+        })?;
+        let d = (u[0] - q[0]).hypot(u[1] - q[1]);
+        sum += d * d;
+        max = max.max(d);
+    }
+    Ok(Fit {
+        params,
+        rms_px: (sum / targets.len() as f64).sqrt(),
+        max_px: max,
+        points: targets.len(),
+    })
+}
+
+/// Solves the augmented 6 × 7 system by Gaussian elimination with partial pivoting.
+fn solve_6(mut m: [[f64; 7]; 6]) -> Option<[f64; 6]> {
+    let scale = m
+        .iter()
+        .flat_map(|r| r[..6].iter())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    for col in 0..6 {
+        let pivot = (col..6).max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))?;
+        if m[pivot][col].abs() <= 1e-13 * scale {
+            return None;
+        }
+        m.swap(col, pivot);
+        let row = m[col];
+        for (r, other) in m.iter_mut().enumerate() {
+            if r != col {
+                let f = other[col] / row[col];
+                for (o, p) in other.iter_mut().zip(row).skip(col) {
+                    *o -= f * p;
+                }
+            }
+        }
+    }
+    let mut x = [0.0; 6];
+    for (i, xi) in x.iter_mut().enumerate() {
+        *xi = m[i][6] / m[i][i];
+    }
+    Some(x)
 }
 
 #[cfg(test)]
@@ -950,6 +1145,64 @@ mod tests {
 
     fn raster_to_unit(p: [f64; 2], w: f64, h: f64) -> [f64; 2] {
         [p[0] / w, 1.0 - p[1] / h]
+    }
+
+    /// Fitting Radial Standard Degree 4 to a Radial Standard lens's own rays gives that lens back
+    /// (its coefficients, and a residual at rounding level); a lens with a cylindric bending the
+    /// fit leaves out is approximated with a residual of the size the bending makes.
+    #[test]
+    fn fitting_a_radial_standard_lens_recovers_it() {
+        let (w, h) = (1920.0, 1080.0);
+        let set = [
+            ("tde4_focal_length_cm", 3.0),
+            ("tde4_filmback_width_cm", 3.6),
+            ("tde4_filmback_height_cm", 2.025),
+            ("tde4_lens_center_offset_x_cm", 0.04),
+            ("tde4_lens_center_offset_y_cm", -0.02),
+            ("Distortion - Degree 2", 0.08),
+            ("U - Degree 2", 0.006),
+            ("V - Degree 2", -0.004),
+            ("Quartic Distortion - Degree 4", 0.02),
+            ("U - Degree 4", -0.003),
+            ("V - Degree 4", 0.002),
+        ];
+        let truth = lens(Kind::RadialStandard4, &set, w, h);
+        let ray = |px: [f64; 2]| truth.ray(px).map(|(v, _)| v);
+        let fit = fit_radial_standard(truth.pinhole(), w, h, &ray, 17).unwrap();
+        assert_eq!(fit.points, 17 * 17);
+        assert!(fit.max_px < 1e-7, "{fit:?}");
+        let want = params(Kind::RadialStandard4, &set);
+        let names = Kind::RadialStandard4.all_params();
+        for (i, (name, _)) in names.iter().enumerate().skip(BUILTINS.len()) {
+            assert!(
+                (fit.params[i] - want[i]).abs() < 1e-9,
+                "{name}: {} vs {}",
+                fit.params[i],
+                want[i]
+            );
+        }
+        // The refitted lens has the same rays (its own built-ins differ: another film back).
+        let back = Lens::new(Kind::RadialStandard4, &fit.params, w, h).unwrap();
+        for px in [[0.0, 0.0], [960.0, 540.0], [1900.0, 30.0]] {
+            let (a, b) = (truth.ray(px).unwrap().0, back.ray(px).unwrap().0);
+            assert!(
+                ((a[0] / a[2]) - (b[0] / b[2])).abs() < 1e-10
+                    && ((a[1] / a[2]) - (b[1] / b[2])).abs() < 1e-10
+            );
+        }
+        // A bending the fit cannot express leaves a residual, reported, not hidden.
+        let bent = lens(
+            Kind::RadialStandard4,
+            &[&set[..], &[("B - Cylindric Bending", 0.05)]].concat(),
+            w,
+            h,
+        );
+        let ray = |px: [f64; 2]| bent.ray(px).map(|(v, _)| v);
+        let fit = fit_radial_standard(bent.pinhole(), w, h, &ray, 17).unwrap();
+        assert!(fit.max_px > 0.5 && fit.rms_px <= fit.max_px, "{fit:?}");
+        // No ray at all: a clear refusal.
+        let e = fit_radial_standard(truth.pinhole(), w, h, &|_| None, 5).unwrap_err();
+        assert!(e.contains("only 0 of the 5x5 grid points"), "{e}");
     }
 
     /// LDPK 2.0's supplement (§2.1.4): Radial Standard Degree 4 with c2 = c4 = 0.1 at the corners.
@@ -1079,6 +1332,49 @@ mod tests {
         // The lens's own undistorted box of the frame (raster, y down) is the same figure.
         let b = l.undistorted_box(w, h).unwrap();
         padded([b[0], h - b[3], b[2], h - b[1]], [-503.0, -377.0, 2502.0, 1877.0]);
+    }
+
+    /// The lens's pinhole gives each plate pixel the ray of its undistorted position, for every
+    /// model (anamorphic with rotation and an off-centre lens included).
+    #[test]
+    fn the_pinhole_is_the_ray_of_the_undistorted_position() {
+        let (w, h) = (1920.0, 1080.0);
+        for (kind, set) in [
+            (
+                Kind::RadialStandard4,
+                vec![
+                    ("Distortion - Degree 2", -0.12),
+                    ("Quartic Distortion - Degree 4", 0.03),
+                    ("tde4_lens_center_offset_x_cm", 0.05),
+                    ("tde4_lens_center_offset_y_cm", -0.03),
+                ],
+            ),
+            (
+                Kind::AnamorphicStandard4,
+                vec![
+                    ("Cx02 - Degree 2", 0.05),
+                    ("Lens Rotation", 3.0),
+                    ("Squeeze-X", 0.9),
+                    ("tde4_pixel_aspect", 2.0),
+                    ("tde4_lens_center_offset_x_cm", -0.04),
+                ],
+            ),
+        ] {
+            let l = lens(kind, &set, w, h);
+            let [fx, fy, cx, cy] = l.pinhole();
+            for px in [[10.5, 20.5], [960.0, 540.0], [1800.25, 1000.75], [300.0, 900.0]] {
+                let q = l.undistort(px).unwrap();
+                let (ray, _) = l.ray(px).unwrap();
+                let want = [(q[0] - cx) / fx, (q[1] - cy) / fy];
+                let got = [ray[0] / ray[2], ray[1] / ray[2]];
+                for k in 0..2 {
+                    assert!(
+                        (got[k] - want[k]).abs() < 1e-12,
+                        "{kind:?} {px:?}: {got:?} vs {want:?}"
+                    );
+                }
+            }
+        }
     }
 
     /// The anamorphic polynomial in its polar form `1 + Σ C_{i,d}·r^d·cos(iφ)`, written

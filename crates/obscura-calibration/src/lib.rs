@@ -2,8 +2,9 @@
 //!
 //! Render through a real camera's calibration: the camera models of COLMAP, OpenCV, Kalibr, OCamCalib,
 //! NVIDIA's f-theta and 3DEqualizer's lens-distortion models ([`lens3de`]) as one Obscura projection,
-//! `CalibratedCamera`, exact in both directions, and readers for the calibration files those tools
-//! write (with Nuke scripts' `LD_3DE*` nodes and 3DE's lens export).
+//! `CalibratedCamera`, exact in both directions, a lens given only as an ST-map ([`stmap`]:
+//! `StMapCamera`), and readers for the calibration files those tools write (with Nuke scripts'
+//! `LD_3DE*` nodes and 3DE's lens export).
 
 #![forbid(unsafe_code)]
 
@@ -15,6 +16,7 @@ mod lift;
 pub mod models;
 pub mod projection;
 mod solve;
+pub mod stmap;
 #[cfg(test)]
 mod tests;
 

@@ -29,6 +29,8 @@ mod check;
 mod dataset;
 mod farm;
 mod lens;
+mod nuke_export;
+mod overscan;
 mod params;
 mod render;
 mod signals;
@@ -81,6 +83,9 @@ enum Command {
     /// A lens prescription's paraxial data, field, distortion and vignetting (--json), and its
     /// drawing with traced ray fans (--diagram out.svg|png).
     Lens(Box<lens::LensArgs>),
+    /// Write a calibrated camera as a Nuke LD_3DE4_* node (a 3DE lens as it is; COLMAP's and
+    /// OpenCV's pinhole models fitted with 3DE4 Radial - Standard, Degree 4, the residual printed).
+    ExportNuke(Box<nuke_export::ExportNukeArgs>),
     /// A USD stage's cameras as JSON: every UsdGeomCamera attribute (authored or its schema fallback),
     /// the world transform and the lens-distortion model, at Default and at time codes.
     UsdCameras(Box<usd::UsdCamerasArgs>),
@@ -208,6 +213,16 @@ struct RenderArgs {
     /// Write the sensor's raw mosaic as a DNG file (needs a sensor).
     #[arg(long, value_name = "OUT.dng")]
     raw: Option<PathBuf>,
+    // Overscan (issue 26): the CG for a plate, larger than the plate.
+    /// Render past the plate (the --format, else the calibration's size) by PIXELS on every side,
+    /// LEFT,TOP,RIGHT,BOTTOM, or auto: the margins of Nuke's LD_3DE4_* bounding box of the
+    /// undistorted plate (needs --calibration with a 3DEqualizer lens). With a 3DE lens the render is
+    /// its undistorted pinhole; otherwise the scene's camera with its screen window pushed out at
+    /// the same pixel pitch. Each EXR's display window is the plate and its data window the
+    /// overscanned box; the PNG preview shows the plate; the camera JSON records both.
+    #[arg(long, value_name = "PIXELS|L,T,R,B|auto", value_parser = overscan::parse_overscan,
+          conflicts_with_all = ["tile", "tiles", "crop", "sensor", "sensor_params", "raw"])]
+    overscan: Option<overscan::OverscanArg>,
 }
 
 #[derive(Args, Debug)]
@@ -466,6 +481,7 @@ fn main() -> ExitCode {
         Command::Render(a) => render::render(a, &search),
         Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
         Command::Lens(a) => lens::run(a),
+        Command::ExportNuke(a) => nuke_export::run(a),
         Command::UsdCameras(a) => usd::run(a),
         Command::Merge(a) => farm::merge(a),
         Command::Submit(a) => farm::submit(a),

@@ -30,6 +30,7 @@ use obscura_shading::integrator::PathOptions;
 
 use crate::args::{crop_window, load_calibration};
 use crate::farm::Tile;
+use crate::overscan::Plan;
 use crate::params::param_list;
 use crate::stdout::outln;
 use crate::{RenderArgs, signals, size_source};
@@ -512,7 +513,8 @@ fn configure(
     search: &PluginSearch,
     scene: &mut Scene,
     calibration: Option<Calibrated>,
-) -> Result<(Registry, Overrides), String> {
+    displays: &[Display],
+) -> Result<(Registry, Overrides, Option<Plan>), String> {
     let mut registry = builtin_registry();
     let mut overrides = Overrides {
         format: a.format,
@@ -539,7 +541,16 @@ fn configure(
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    Ok((registry, overrides))
+    let plan = (a.overscan)
+        .map(|arg| Plan::new(arg, scene, overrides.calibration.as_ref(), displays))
+        .transpose()?;
+    if let Some(p) = &plan {
+        p.apply(scene);
+        if !a.quiet {
+            outln!("{}", p.describe());
+        }
+    }
+    Ok((registry, overrides, plan))
 }
 
 /// What set the image size of `a`'s scene, for the limit messages.
@@ -562,7 +573,8 @@ fn render_image(
     writes: &[FrameWrite<'_>],
     at: Position,
 ) -> Result<Scene, String> {
-    let (mut registry, _) = configure(a, search, &mut scene, calibration)?;
+    let displays = writes.first().map_or(&[][..], |w| w.displays);
+    let (mut registry, _, plan) = configure(a, search, &mut scene, calibration, displays)?;
     let source = scene_size_source(a);
     let opts = render_options(a);
     let job = FrameJob {
@@ -585,6 +597,9 @@ fn render_image(
     let result = render_frame(&job, &mut registry, &reporter).map_err(|e| e.to_string())?;
     drop(reporter);
     let s = &result.output.stats;
+    if let Some(p) = plan.as_ref().filter(|_| !s.cancelled) {
+        p.place(&result.written)?;
+    }
     if !a.quiet {
         print_summary(&scene, &result);
     }
@@ -653,9 +668,9 @@ fn render_animation(
     calibration: Option<Calibrated>,
 ) -> Result<(), String> {
     let mut first = source.frame(1).map_err(|e| e.to_string())?;
-    let (mut registry, overrides) = configure(a, search, &mut first, calibration)?;
-    let projection = first.projection.clone();
     let displays = image_displays(a, &first);
+    let (mut registry, overrides, plan) = configure(a, search, &mut first, calibration, &displays)?;
+    let projection = first.projection.clone();
     let opts = render_options(a);
     let size = scene_size_source(a);
     let frames: Vec<u32> = match &a.frames {
@@ -669,6 +684,9 @@ fn render_animation(
             t.apply(&mut s)?;
         }
         s.projection.clone_from(&projection);
+        if let Some(p) = &plan {
+            p.apply(&mut s);
+        }
         Ok(s)
     };
     let reporter = Terminal::new(a, false);
@@ -713,6 +731,9 @@ fn render_animation(
             return Err(format!(
                 "interrupted in frame {n}: its files are marked incomplete; run the same command again to resume"
             ));
+        }
+        if let Some(p) = &plan {
+            p.place(&result.written)?;
         }
         if !a.quiet {
             let written: Vec<String> = result.written.iter().map(|p| p.display().to_string()).collect();

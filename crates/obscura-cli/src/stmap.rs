@@ -28,6 +28,11 @@ pub struct StmapArgs {
     /// The camera of --from-calibration's file when it holds several (a COLMAP CAMERA_ID, Kalibr's cam0, a Nuke LD node's name, …).
     #[arg(long, value_name = "ID", requires = "from_calibration")]
     from_camera: Option<String>,
+    /// A is the undistorted pinhole of --from-calibration's 3DEqualizer lens (what Nuke's LD_3DE4_*
+    /// node undistorts the plate to, lens-centre offset included): with --to-calibration on the same
+    /// file, the redistort map for an overscanned render (`obscura render --overscan`).
+    #[arg(long, requires = "from_calibration")]
+    from_undistorted: bool,
     /// A parameter of A: 'float fov=60', 'fov=60' or RIB's '"float fov" [60]'. Repeatable; with
     /// --from-calibration, adds to or replaces the calibration's parameters.
     #[arg(long = "from-param", value_name = "PARAM")]
@@ -41,6 +46,10 @@ pub struct StmapArgs {
     /// The camera of --to-calibration's file when it holds several.
     #[arg(long, value_name = "ID", requires = "to_calibration")]
     to_camera: Option<String>,
+    /// B is the undistorted pinhole of --to-calibration's 3DEqualizer lens: with --from-calibration
+    /// on the same file, the plate's undistort map.
+    #[arg(long, requires = "to_calibration")]
+    to_undistorted: bool,
     /// A parameter of B, as --from-param. Repeatable.
     #[arg(long = "to-param", value_name = "PARAM")]
     to_params: Vec<String>,
@@ -79,10 +88,14 @@ fn side(
     flag: &str,
     (name, calibration, camera): (Option<&str>, Option<&Path>, Option<&str>),
     args: &[String],
+    undistorted: bool,
 ) -> Result<Side, String> {
     if let Some(path) = calibration {
-        let calibrated =
+        let mut calibrated =
             load_calibration(path, camera, true).map_err(|e| format!("{flag}-calibration: {e}"))?;
+        if undistorted {
+            calibrated = crate::overscan::undistorted(&calibrated, &format!("{flag}-undistorted"))?;
+        }
         let (c, mut params) = (&calibrated.calibration, calibrated.params.clone());
         if let Some(note) = c.selection_note() {
             eprintln!("note: {}", note.replace("--camera", &format!("{flag}-camera")));
@@ -98,7 +111,11 @@ fn side(
                 Some(id) => format!("{} camera {id}", c.file),
                 None => c.file.clone(),
             },
-            record: c.summary(),
+            record: if undistorted {
+                format!("the undistorted pinhole of {}", c.summary())
+            } else {
+                c.summary()
+            },
         });
     }
     // Clap requires the name when there is no calibration.
@@ -133,13 +150,21 @@ pub fn run(a: &StmapArgs, registry: &mut Registry, search: &PluginSearch) -> Res
             &a.from_calibration,
             &a.from_camera,
             &a.from_params,
+            a.from_undistorted,
         ),
-        ("--to", &a.to, &a.to_calibration, &a.to_camera, &a.to_params),
+        (
+            "--to",
+            &a.to,
+            &a.to_calibration,
+            &a.to_camera,
+            &a.to_params,
+            a.to_undistorted,
+        ),
     ];
     let mut sides = Vec::with_capacity(2);
-    for (flag, name, calibration, camera, params) in options {
+    for (flag, name, calibration, camera, params, undistorted) in options {
         let given = (name.as_deref(), calibration.as_deref(), camera.as_deref());
-        sides.push(side(registry, search, flag, given, params)?);
+        sides.push(side(registry, search, flag, given, params, undistorted)?);
     }
     let (from_side, to_side) = (&sides[0], &sides[1]);
     let (tw, th) = a

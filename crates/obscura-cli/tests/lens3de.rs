@@ -92,3 +92,119 @@ fn an_animated_lens_renders_each_frame_through_its_own_lens() {
     let b = std::fs::read(dir.path().join("zoom.0011.exr")).unwrap();
     assert_ne!(a, b, "frames 1 and 11 rendered the same image");
 }
+
+/// `obscura export-nuke` writes a 3DE lens as a Nuke node that the Nuke reader reads back with the
+/// same model, plate and parameters.
+#[test]
+fn an_exported_nuke_node_reads_back_with_equal_parameters() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("node.nk");
+    let run = obscura(&[
+        "export-nuke",
+        "--calibration",
+        &example("plate_lens.nk"),
+        "--name",
+        "LD_back",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", support::text(&run.stderr));
+    let load = |p: &str, node: Option<&str>| {
+        obscura_calibration::files::load(std::path::Path::new(p), node).unwrap()
+    };
+    let a = load(&example("plate_lens.nk"), None);
+    let b = load(out.to_str().unwrap(), Some("LD_back"));
+    assert_eq!((&a.model, a.width, a.height), (&b.model, b.width, b.height));
+    assert_eq!(a.params.len(), b.params.len());
+    for (x, y) in a.params.iter().zip(&b.params) {
+        assert!(
+            (x.value - y.value).abs() <= 1e-7 * x.value.abs().max(1.0),
+            "{x:?} vs {y:?}"
+        );
+    }
+}
+
+/// A calibration that is not a 3DE lens is fitted with Radial Standard Degree 4: a pinhole gives
+/// zero distortion and no residual; an OpenCV camera gives the residual the command reports, which
+/// the node read back reproduces against the camera's own rays.
+#[test]
+fn export_nuke_fits_radial_standard_to_other_models_and_reports_the_residual() {
+    use obscura_calibration::lens3de::{Kind, Lens};
+    let dir = tempfile::tempdir().unwrap();
+    let cams = dir.path().join("cameras.txt");
+    std::fs::write(
+        &cams,
+        "1 PINHOLE 640 480 500 480 330.5 236.25\n\
+         2 OPENCV 752 480 458.654 457.296 367.215 248.375 -0.2834 0.07396 0.00019359 1.76e-05\n",
+    )
+    .unwrap();
+    let export = |camera: &str| -> (String, obscura_calibration::files::Calibration) {
+        let out = dir.path().join(format!("cam{camera}.nk"));
+        let run = obscura(&[
+            "export-nuke",
+            "--calibration",
+            cams.to_str().unwrap(),
+            "--camera",
+            camera,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", support::text(&run.stderr));
+        let node = obscura_calibration::files::load(&out, None).unwrap();
+        (support::text(&run.stdout), node)
+    };
+    let residual = |text: &str, what: &str| -> f64 {
+        let at = text.find(what).unwrap_or_else(|| panic!("{text}"));
+        let tail = &text[..at];
+        tail.rsplit(' ').find(|w| !w.is_empty()).unwrap().parse().unwrap()
+    };
+    let lens_of = |c: &obscura_calibration::files::Calibration| {
+        let v: Vec<f64> = c.params.iter().map(|n| n.value).collect();
+        (
+            Lens::new(Kind::RadialStandard4, &v, f64::from(c.width), f64::from(c.height)).unwrap(),
+            v,
+        )
+    };
+
+    let (text, node) = export("1");
+    assert!(text.contains("fitted to its PINHOLE model"), "{text}");
+    assert!(residual(&text, " px max") < 1e-6, "{text}");
+    let (lens, values) = lens_of(&node);
+    assert!(values[10..].iter().all(|c| c.abs() < 1e-9), "{values:?}");
+    // Its pinhole is the camera's (to the 7 decimals of the knobs).
+    let [fx, fy, cx, cy] = lens.pinhole();
+    for (got, want) in [fx, fy, cx, cy].iter().zip([500.0, 480.0, 330.5, 236.25]) {
+        assert!((got - want).abs() < 1e-3, "{got} vs {want}");
+    }
+
+    // OpenCV: the reported max residual is the read-back node's distance from the camera's own
+    // undistorted positions (the closed-form OpenCV distortion, inverted here by fixed point).
+    let (text, node) = export("2");
+    let max = residual(&text, " px max");
+    assert!(max > 0.01 && max < 100.0, "{text}");
+    let (lens, _) = lens_of(&node);
+    let (fx, fy, cx, cy) = (458.654, 457.296, 367.215, 248.375); // COLMAP: centres at i + ½
+    let (k1, k2, p1, p2) = (-0.2834, 0.07396, 0.00019359, 1.76e-05);
+    let mut worst = 0.0f64;
+    for j in 0..=32 {
+        for i in 0..=32 {
+            let px = [752.0 * f64::from(i) / 32.0, 480.0 * f64::from(j) / 32.0];
+            let (xd, yd) = ((px[0] - cx) / fx, (px[1] - cy) / fy);
+            let (mut x, mut y) = (xd, yd);
+            for _ in 0..200 {
+                let r2 = x * x + y * y;
+                let radial = 1.0 + k1 * r2 + k2 * r2 * r2;
+                let dx = 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x);
+                let dy = p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y;
+                (x, y) = ((xd - dx) / radial, (yd - dy) / radial);
+            }
+            let q = [fx * x + cx, fy * y + cy];
+            let u = lens.undistort(px).unwrap();
+            worst = worst.max((u[0] - q[0]).hypot(u[1] - q[1]));
+        }
+    }
+    assert!(
+        (worst - max).abs() < 2e-3 * max.max(1.0),
+        "recomputed {worst} vs reported {max}"
+    );
+}

@@ -785,6 +785,22 @@ pub enum OverscanError {
 /// [`OverscanError::Unreadable`], [`OverscanError::WrongSize`] when the file's data window is not
 /// the overscanned frame at the origin, or [`OverscanError::Write`].
 pub fn place_overscan(path: &Path, overscan: Overscan, width: u32, height: u32) -> Result<(), OverscanError> {
+    place_overscan_with(path, overscan, width, height, &|_, _| None)
+}
+
+/// [`place_overscan`] with the text attributes rewritten: `rewrite` receives each text attribute's
+/// name and value and returns the value the placed file carries (`None` keeps it), so a header
+/// that records the image's size (`obscura:camera`) follows the placement.
+///
+/// # Errors
+/// As [`place_overscan`].
+pub fn place_overscan_with(
+    path: &Path,
+    overscan: Overscan,
+    width: u32,
+    height: u32,
+    rewrite: &dyn Fn(&str, &str) -> Option<String>,
+) -> Result<(), OverscanError> {
     let mut image = read_tile(path).map_err(|e| match e {
         MergeError::Unreadable { path, reason } => OverscanError::Unreadable { path, reason },
         other => OverscanError::Unreadable {
@@ -807,7 +823,51 @@ pub fn place_overscan(path: &Path, overscan: Overscan, width: u32, height: u32) 
     }
     image.layer_data.attributes.layer_position = overscan.data_window(width, height).position;
     image.attributes.display_window = IntegerBounds::new((0, 0), (width as usize, height as usize));
+    for (name, value) in &mut image.layer_data.attributes.other {
+        if let AttributeValue::Text(text) = value
+            && let Some(new) = rewrite(&name.to_string(), &text.to_string())
+        {
+            *value = AttributeValue::Text(Text::from(new.as_str()));
+        }
+    }
     Ok(write_exr_image(image, path)?)
+}
+
+/// The plate of an overscanned PNG: the PNG at `path`, rendered as the overscanned frame, is
+/// rewritten atomically holding only the display window (`width × height` pixels from
+/// `(left, top)`). A PNG has no data window, so its preview shows what Nuke's viewer shows: the
+/// plate.
+///
+/// # Errors
+/// [`OverscanError::Unreadable`], [`OverscanError::WrongSize`] when the PNG is not the
+/// overscanned size, or [`OverscanError::Write`].
+pub fn crop_png_to_plate(
+    path: &Path,
+    overscan: Overscan,
+    width: u32,
+    height: u32,
+) -> Result<(), OverscanError> {
+    let (w, h, data) = read_png_tile(path).map_err(|e| OverscanError::Unreadable {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let want = overscan.render_size(width, height);
+    if (w, h) != want {
+        return Err(OverscanError::WrongSize {
+            path: path.to_path_buf(),
+            got: format!("{w}x{h} pixels"),
+            want: format!("{}x{} pixels", want.0, want.1),
+            width,
+            height,
+            overscan,
+        });
+    }
+    let mut plate = Vec::with_capacity(width as usize * height as usize * 3);
+    for y in overscan.top..overscan.top + height {
+        let row = (y as usize * w as usize + overscan.left as usize) * 3;
+        plate.extend_from_slice(&data[row..row + width as usize * 3]);
+    }
+    Ok(write_png_rgb(path, width, height, &plate)?)
 }
 
 #[cfg(test)]

@@ -36,6 +36,10 @@
 //! exports of `obscura-dataset` only format these entries. Intrinsics there are in raster pixels of
 //! the render (top-left pixel centre at (0.5, 0.5)) with OpenCV's camera axes.
 //!
+//! An overscanned render (`obscura render --overscan`, [`with_overscan`]) states the plate as
+//! `image.width`/`height` and `screen_window`, the overscanned box as `data_window` (from a negative
+//! origin) and its margins as `"overscan": [left, top, right, bottom]`.
+//!
 //! Camera space is RenderMan's (+X right, +Y up, looking down +Z); OpenCV's and COLMAP's camera has +Y
 //! down, so their world-to-camera is `diag(1, −1, 1, 1)·M`. `opencv` and `colmap` are present only for a
 //! pinhole-equivalent camera: `PxrPerspective` without a `fovEnd` zoom (its chief rays,
@@ -97,6 +101,65 @@ pub fn with_data_window(text: &str, rect: obscura_host::PixelRect) -> Option<Str
         })
         .collect();
     Some(format!("{}{}{}", &text[..=open], inner.join(","), &text[close..]))
+}
+
+/// The camera JSON `text` (compact as in the EXR header, or pretty as in the sidecar, kept so) of
+/// an overscanned render placed on its `width × height` plate
+/// ([`obscura_image::tiles::place_overscan`]): `image.width`/`height` become the plate's (the
+/// display window), `image.data_window` the overscanned box `[−left, −top, width + right,
+/// height + bottom]` in the plate's pixels, `image.screen_window` the plate's (the rendered window
+/// less the margins, at the same pixel pitch), and `image.overscan` records `[left, top, right,
+/// bottom]`. The `opencv`/`colmap` intrinsics stay those of the rendered pixels, whose `(0, 0)` is
+/// the data window's origin. `None` when `text` is not a camera JSON of the overscanned size.
+#[must_use]
+pub fn with_overscan(
+    text: &str,
+    overscan: obscura_image::tiles::Overscan,
+    width: u32,
+    height: u32,
+) -> Option<String> {
+    let mut v: Value = serde_json::from_str(text).ok()?;
+    let image = v.get_mut("image")?.as_object_mut()?;
+    let (rw, rh) = overscan.render_size(width, height);
+    if image.get("width")?.as_u64()? != u64::from(rw) || image.get("height")?.as_u64()? != u64::from(rh) {
+        return None;
+    }
+    let win: Vec<f64> = (image.get("screen_window")?.as_array()?.iter())
+        .map(Value::as_f64)
+        .collect::<Option<_>>()?;
+    let [l, r, b, t] = win[..] else { return None };
+    let (sx, sy) = ((r - l) / f64::from(rw), (t - b) / f64::from(rh));
+    let o = overscan;
+    image.insert("width".into(), json!(width));
+    image.insert("height".into(), json!(height));
+    image.insert(
+        "screen_window".into(),
+        json!([
+            l + sx * f64::from(o.left),
+            r - sx * f64::from(o.right),
+            b + sy * f64::from(o.bottom),
+            t - sy * f64::from(o.top)
+        ]),
+    );
+    image.insert(
+        "data_window".into(),
+        json!([
+            -i64::from(o.left),
+            -i64::from(o.top),
+            i64::from(width) + i64::from(o.right),
+            i64::from(height) + i64::from(o.bottom)
+        ]),
+    );
+    image.insert("overscan".into(), json!([o.left, o.top, o.right, o.bottom]));
+    if text.contains('\n') {
+        let mut out = serde_json::to_string_pretty(&v).ok()?;
+        if text.ends_with('\n') {
+            out.push('\n');
+        }
+        Some(out)
+    } else {
+        serde_json::to_string(&v).ok()
+    }
 }
 
 /// Writes `value` (pretty-printed, with a final newline) to `path` atomically.

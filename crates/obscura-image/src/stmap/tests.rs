@@ -427,3 +427,230 @@ fn written_file_reads_back_and_failures_name_the_path() {
     let e = write_stmap_exr(&map, &[], bad).unwrap_err().to_string();
     assert!(e.contains("/nonexistent-dir/map.exr"), "{e}");
 }
+
+/// The ST-map camera ([`obscura_calibration::stmap::StMapLens`]) built from the redistort map of a
+/// 3DE lens (A = the lens's undistorted pinhole, B = the lens, on the plate) and read back from the
+/// EXR: its rays equal the 3DE model's, and its inverse is exact.
+///
+/// The bound, from the lens itself: the map holds `(s, t)` in f32 (half an ulp of 1 is 6e-8, 2e-5
+/// px on this 320-pixel plate), computed through `unproject`'s f32 screen position (≤ 1.2e-7 of the
+/// screen window, 4e-5 px): together under 1e-4 px. Between samples, bilinear interpolation of the
+/// undistorted position `q` errs by at most `(h²/8)·(max|∂²q/∂x²| + max|∂²q/∂y²|)` with h = 1 px,
+/// and linear extrapolation in the frame's half-pixel border by `3/8` of the same: the bound is
+/// `e = 1e-4 + (3/8)·(max|q_xx| + max|q_yy|)` px of the undistorted image, the second derivatives
+/// measured on the 3DE model's own `undistort` by central differences over the plate. A ray's
+/// direction is then right to `e/min(f_x, f_y)` rad, and the plate position the map's inverse gives
+/// for the model's ray to `e·max‖J⁻¹‖` px (`J = ∂q/∂(x, y)`, measured likewise).
+#[test]
+fn a_camera_through_the_redistort_map_of_a_3de_lens_has_the_lens_rays() {
+    use obscura_calibration::lens3de::{Kind, Lens};
+    use obscura_calibration::models::CameraModel;
+    use obscura_calibration::stmap::{StMapLens, read_stmap_exr};
+
+    let (w, h) = (320u32, 180u32);
+    let plate = Format::new(w, h);
+    let kind = Kind::RadialStandard4;
+    let set = [
+        ("tde4_focal_length_cm", 2.5),
+        ("tde4_filmback_width_cm", 3.6),
+        ("tde4_filmback_height_cm", 2.025),
+        ("tde4_lens_center_offset_x_cm", 0.03),
+        ("tde4_lens_center_offset_y_cm", -0.02),
+        ("Distortion - Degree 2", -0.12),
+        ("U - Degree 2", 0.01),
+        ("V - Degree 2", -0.008),
+        ("Quartic Distortion - Degree 4", 0.03),
+    ];
+    let values: Vec<f64> = kind
+        .all_params()
+        .iter()
+        .map(|(name, default)| {
+            let v = set.iter().find(|(n, _)| n == name).map_or(*default, |(_, v)| *v);
+            f64::from(v as f32)
+        })
+        .collect();
+    let text: Vec<String> = values.iter().map(|v| format!("{v}")).collect();
+    let lens = Lens::new(kind, &values, f64::from(w), f64::from(h)).unwrap();
+    let pinhole = lens.pinhole().map(|v| f64::from(v as f32));
+    let pinhole_text: Vec<String> = pinhole.iter().map(|v| format!("{v}")).collect();
+    let res = format!("{w} {h}");
+    let stage = |model: &str, p: &[String]| {
+        let mut l = ParamList::new();
+        l.push_text("string model", &[model], None).unwrap();
+        let p: Vec<&str> = p.iter().map(String::as_str).collect();
+        l.push_text("float[] params", &p, None).unwrap();
+        l.push_text("int[2] resolution", &res.split(' ').collect::<Vec<_>>(), None)
+            .unwrap();
+        CameraStage::new(
+            &mut builtin_registry(),
+            "CalibratedCamera",
+            &l,
+            &CameraDesc::new(plate),
+        )
+        .unwrap()
+    };
+    let from = stage("PINHOLE", &pinhole_text);
+    let to = stage(kind.name(), &text);
+    let map = compute_stmap(&from, &to, DEFAULT_DISTANCE).unwrap();
+    assert_eq!(
+        map.stats.culled_by_b + map.stats.unseen_by_a,
+        0,
+        "{:?}",
+        map.stats
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("redistort.exr");
+    write_stmap_exr(&map, &[], &path).unwrap();
+    let read = read_stmap_exr(&path).unwrap();
+    assert_eq!((read.width, read.height), (w as usize, h as usize));
+    let camera = StMapLens::new(
+        read.width,
+        read.height,
+        &read.s,
+        &read.t,
+        [f64::from(w), f64::from(h)],
+        pinhole,
+    )
+    .unwrap();
+    let model = CameraModel::new(kind.name(), &values, &[], &[], f64::from(w), f64::from(h)).unwrap();
+
+    let angle = |a: [f64; 3], b: [f64; 3]| {
+        let n = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        let c = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
+        n(c).atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
+    };
+    let (mut q2, mut jinv) = ([0.0f64; 2], 0.0f64);
+    for j in (1..h - 1).step_by(3) {
+        for i in (1..w - 1).step_by(3) {
+            let u = |dx: f64, dy: f64| lens.undistort([f64::from(i) + dx, f64::from(j) + dy]).unwrap();
+            let (c, xp, xm, yp, ym) = (u(0.0, 0.0), u(1.0, 0.0), u(-1.0, 0.0), u(0.0, 1.0), u(0.0, -1.0));
+            for k in 0..2 {
+                q2[0] = q2[0].max((xp[k] - 2.0 * c[k] + xm[k]).abs());
+                q2[1] = q2[1].max((yp[k] - 2.0 * c[k] + ym[k]).abs());
+            }
+            let jm = [
+                [(xp[0] - xm[0]) / 2.0, (yp[0] - ym[0]) / 2.0],
+                [(xp[1] - xm[1]) / 2.0, (yp[1] - ym[1]) / 2.0],
+            ];
+            let det = jm[0][0] * jm[1][1] - jm[0][1] * jm[1][0];
+            let frob = jm.iter().flatten().map(|v| v * v).sum::<f64>().sqrt();
+            jinv = jinv.max(frob / det.abs());
+        }
+    }
+    let bound_px = 1e-4 + 0.375 * (q2[0] + q2[1]);
+    let bound_rad = bound_px / pinhole[0].min(pinhole[1]);
+    let bound_cross = bound_px * jinv;
+    let (mut worst_rad, mut worst_trip, mut worst_cross) = (0.0f64, 0.0f64, 0.0f64);
+    // Pixel centres on a grid, and positions between them (a fixed LCG), edges included.
+    let mut seed = 0x2545_f491_4f6c_dd1du64;
+    let mut rand = move || {
+        seed = seed
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut points: Vec<[f64; 2]> = Vec::new();
+    for j in (0..h).step_by(7) {
+        for i in (0..w).step_by(9) {
+            points.push([f64::from(i) + 0.5, f64::from(j) + 0.5]);
+        }
+    }
+    points.extend((0..2000).map(|_| [rand() * f64::from(w), rand() * f64::from(h)]));
+    points.extend([
+        [0.0, 0.0],
+        [f64::from(w), f64::from(h)],
+        [0.2, f64::from(h) - 0.1],
+    ]);
+    for p in points {
+        let got = camera.pixel_to_ray(p).unwrap();
+        let want = model.pixel_to_ray(p).unwrap().v;
+        worst_rad = worst_rad.max(angle(got, want));
+        let back = camera.ray_to_pixel(got).unwrap();
+        worst_trip = worst_trip.max((back[0] - p[0]).hypot(back[1] - p[1]));
+        let cross = camera.ray_to_pixel(want).unwrap();
+        worst_cross = worst_cross.max((cross[0] - p[0]).hypot(cross[1] - p[1]));
+    }
+    eprintln!(
+        "ST-map camera vs 3DE model: worst ray angle {worst_rad:.3e} rad (bound {bound_rad:.3e}), \
+         round trip {worst_trip:.3e} px, model ray -> map pixel {worst_cross:.3e} px (bound {bound_cross:.3e})"
+    );
+    assert!(worst_rad < bound_rad, "{worst_rad} rad > {bound_rad}");
+    assert!(worst_trip < 1e-3, "round trip {worst_trip} px");
+    assert!(
+        worst_cross < bound_cross,
+        "model ray through the map's inverse: {worst_cross} px > {bound_cross}"
+    );
+
+    // The same map as the StMapCamera projection: its rays through the renderer's stage equal the 3DE
+    // lens's CalibratedCamera rays at every pixel centre (f32 directions: the bound plus 1e-6 rad),
+    // and the shared contract checker passes it.
+    let mut l = ParamList::new();
+    let map_path = path.display().to_string();
+    l.push_text("string map", &[map_path.as_str()], None).unwrap();
+    let p: Vec<&str> = pinhole_text.iter().map(String::as_str).collect();
+    l.push_text("float[4] pinhole", &p, None).unwrap();
+    let mut registry = Registry::new();
+    registry
+        .register(Box::new(obscura_calibration::stmap::StMapCameraFactory), "")
+        .unwrap();
+    let camera_stage = CameraStage::new(&mut registry, "StMapCamera", &l, &CameraDesc::new(plate)).unwrap();
+    let screen: Vec<Point2> = (0..h)
+        .flat_map(|j| (0..w).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let (x, y) = screen_of(plate, f64::from(i) + 0.5, f64::from(j) + 0.5);
+            Point2::new(x as f32, y as f32)
+        })
+        .collect();
+    let (got, got_report) = chief_rays(&camera_stage, &screen);
+    let (want, _) = chief_rays(&to, &screen);
+    assert!(got_report.is_clean(), "{got_report:?}");
+    let mut worst_stage = 0.0f64;
+    for (g, r) in got.iter().zip(&want) {
+        let v = |d: Vec3| [f64::from(d.x), f64::from(d.y), f64::from(d.z)];
+        worst_stage = worst_stage.max(angle(v(g.direction), v(r.direction)));
+    }
+    eprintln!(
+        "StMapCamera stage vs the 3DE CalibratedCamera stage: worst {worst_stage:.3e} rad over {} pixels",
+        got.len()
+    );
+    assert!(worst_stage < bound_rad + 1e-6, "{worst_stage} rad");
+    let opts = obscura_check::CheckOptions {
+        format: plate,
+        samples_per_pixel: 1,
+        ..obscura_check::CheckOptions::default()
+    };
+    let report =
+        obscura_check::check_factory(&obscura_calibration::stmap::StMapCameraFactory, &l, &opts).unwrap();
+    assert!(report.is_clean(), "{:?}\n{}", report.failed(), report.to_json());
+}
+
+#[test]
+fn st_map_files_without_st_channels_are_refused_naming_the_file() {
+    use obscura_calibration::stmap::read_stmap_exr;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("rgb.exr");
+    let layer = Layer::new(
+        (4, 3),
+        LayerAttributes::default(),
+        Encoding::UNCOMPRESSED,
+        AnyChannels::sort(vec![AnyChannel::new("Y", FlatSamples::F32(vec![0.5; 12]))].into()),
+    );
+    crate::output::write_exr_image(Image::from_layer(layer), &path).unwrap();
+    let e = read_stmap_exr(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("rgb.exr") && e.contains("no channel R") && e.contains("channels present: Y"),
+        "{e}"
+    );
+    let text = dir.path().join("notes.exr");
+    std::fs::write(&text, "not an image").unwrap();
+    let e = read_stmap_exr(&text).unwrap_err().to_string();
+    assert!(
+        e.contains("notes.exr: cannot read it as an OpenEXR ST-map"),
+        "{e}"
+    );
+}

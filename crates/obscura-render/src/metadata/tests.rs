@@ -194,3 +194,50 @@ fn a_projection_without_a_closed_form_says_so_in_every_format() {
         );
     }
 }
+
+/// An overscanned render's camera JSON, placed on its plate, states the plate as its image, the
+/// overscanned box as its data window and the plate's screen window; the margins' screen window
+/// comes back from the plate's through `Overscan::screen_window`.
+#[test]
+fn an_overscanned_camera_json_states_the_plate_and_its_data_window() {
+    use obscura_image::tiles::Overscan;
+    let o = Overscan {
+        left: 7,
+        top: 3,
+        right: 5,
+        bottom: 11,
+    };
+    let (w, h) = (64, 36);
+    let plate = [-16.0 / 9.0, 16.0 / 9.0, -1.0, 1.0];
+    let rendered = o.screen_window(plate, w, h);
+    let (rw, rh) = o.render_size(w, h);
+    let text = serde_json::to_string_pretty(&json!({
+        "schema": SCHEMA,
+        "image": {"width": rw, "height": rh, "pixel_aspect": 1.0,
+                  "screen_window": rendered, "data_window": [0, 0, rw, rh]},
+        "shutter": [0.0, 1.0],
+    }))
+    .unwrap()
+        + "\n";
+    let out = with_overscan(&text, o, w, h).unwrap();
+    assert!(
+        out.ends_with("}\n") && out.contains("\n  "),
+        "stays pretty: {out}"
+    );
+    let v: Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["image"]["width"], 64);
+    assert_eq!(v["image"]["height"], 36);
+    assert_eq!(v["image"]["data_window"], json!([-7, -3, 69, 47]));
+    assert_eq!(v["image"]["overscan"], json!([7, 3, 5, 11]));
+    assert_eq!(v["shutter"], json!([0.0, 1.0]));
+    let win: Vec<f64> = (v["image"]["screen_window"].as_array().unwrap().iter())
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    for (got, want) in win.iter().zip(plate) {
+        assert!((got - want).abs() < 1e-12, "{win:?} vs {plate:?}");
+    }
+    // Compact stays compact; a JSON of another size is not rewritten.
+    let compact = serde_json::to_string(&serde_json::from_str::<Value>(&text).unwrap()).unwrap();
+    assert!(!with_overscan(&compact, o, w, h).unwrap().contains('\n'));
+    assert_eq!(with_overscan(&compact, o, w + 1, h), None);
+}
