@@ -40,6 +40,8 @@
 //! `∂(s, t)/∂(x, y)` (forward differences) must have a negative determinant at every sample, so that
 //! the bilinear map neither folds nor flips and its inverse is unique.
 
+use crate::projection::angle_between as angle;
+
 /// A lens given as an ST-map into its undistorted pinhole (see the module doc for the mapping).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StMapLens {
@@ -520,18 +522,6 @@ impl StMapCamera {
 fn normalised(v: [f64; 3]) -> [f64; 3] {
     let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     [v[0] / n, v[1] / n, v[2] / n]
-}
-
-/// The angle between two unit vectors (atan2 of the cross and dot products: exact for small angles).
-fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let c = [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ];
-    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-        .sqrt()
-        .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
 }
 
 impl obscura_sdk::Projection for StMapCamera {
