@@ -7,7 +7,7 @@ use crate::params::merge_param_args;
 use crate::stdout::outln;
 use clap::Args;
 use obscura_check::{CheckOptions, check_registered};
-use obscura_plugins::builtin_registry;
+use obscura_plugins::cli_registry;
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_render::job::CALIBRATED;
 use obscura_sdk::{Format, ParamList, ScreenWindow};
@@ -151,7 +151,7 @@ fn json_string(s: &str) -> String {
 
 /// Prints the report; `Ok(Some(message))` when a check failed, `Err` when the check could not run.
 fn run_report(a: &CheckArgs, search: &PluginSearch) -> Result<Option<String>, String> {
-    let mut registry = builtin_registry();
+    let mut registry = cli_registry();
     let (name, mut params, calibrated) = match (&a.calibration, &a.projection) {
         (Some(path), _) => {
             let c = load_calibration(path, a.camera.as_deref(), a.json)?;

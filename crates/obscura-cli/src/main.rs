@@ -349,7 +349,7 @@ fn size_source(format: Option<(u32, u32)>, calibration: Option<&Path>, default: 
 
 fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
     limits::check_output(&a.output, OutputKind::Exr).map_err(|e| e.to_string())?;
-    let mut registry = builtin_registry();
+    let mut registry = obscura_plugins::cli_registry();
     let calibration = a
         .calibration
         .as_deref()
@@ -416,7 +416,14 @@ fn rays(a: &RaysArgs, search: &PluginSearch) -> Result<(), String> {
 /// path), or every built-in and every plugin library along the plugin path. A library that does not
 /// load is a warning naming it; the others are still listed.
 fn plugins(name: Option<&str>, names_only: bool, search: &PluginSearch) -> Result<(), String> {
-    let mut registry = builtin_registry();
+    // One projection: any name `rays`/`render`/`check` accept, StMapCamera included. The full
+    // listing (and `--names`, which `.ci/run` checks each of with its defaults) is the built-ins and
+    // plugins only: the file projections have no usable defaults (see FILE_PROJECTIONS).
+    let mut registry = if name.is_some() {
+        obscura_plugins::cli_registry()
+    } else {
+        builtin_registry()
+    };
     let name = match name {
         Some(n) => Some(ensure(&mut registry, n, search).map_err(|e| e.to_string())?),
         None => {
@@ -479,7 +486,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Rays(a) => rays(a, &search),
         Command::Render(a) => render::render(a, &search),
-        Command::Stmap(a) => stmap::run(a, &mut builtin_registry(), &search),
+        Command::Stmap(a) => stmap::run(a, &mut obscura_plugins::cli_registry(), &search),
         Command::Lens(a) => lens::run(a),
         Command::ExportNuke(a) => nuke_export::run(a),
         Command::UsdCameras(a) => usd::run(a),

@@ -12,7 +12,7 @@ use std::sync::Mutex;
 use std::sync::atomic::AtomicBool;
 
 use obscura_host::Registry;
-use obscura_plugins::builtin_registry;
+use obscura_plugins::cli_registry;
 use obscura_plugins::loader::{PluginSearch, ensure};
 use obscura_render::frame::{Neighbours, add_aovs, is_complete, without_backward_flow};
 use obscura_render::job::{self, Calibrated, Overrides};
@@ -515,7 +515,7 @@ fn configure(
     calibration: Option<Calibrated>,
     displays: &[Display],
 ) -> Result<(Registry, Overrides, Option<Plan>), String> {
-    let mut registry = builtin_registry();
+    let mut registry = cli_registry();
     let mut overrides = Overrides {
         format: a.format,
         crop: a.crop.as_deref().map(crop_window),

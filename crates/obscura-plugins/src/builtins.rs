@@ -23,10 +23,49 @@ pub fn builtin_registry() -> Registry {
     r
 }
 
+/// The projections that only work with a file given (they have no usable defaults), registered by
+/// [`cli_registry`] but not by [`register_builtins`]: `StMapCamera` (`string map`, the ST-map EXR,
+/// and `float[4] pinhole` are required).
+///
+/// They are kept out of [`builtin_registry`] on purpose: every loop that runs each built-in with its
+/// default parameters (the map test `every_registered_projection_maps_to_itself`, the fuzz targets,
+/// `.ci/run`'s `obscura check` of each name `obscura plugins --names` prints, the gallery, the Python
+/// listing) would fail on them for the missing file, not for a fault of the projection.
+pub const FILE_PROJECTIONS: &[&str] = &[obscura_calibration::stmap::PROJECTION];
+
+/// The registry `obscura rays`, `render`, `check` and `stmap` resolve projection names in: every
+/// built-in plus the [`FILE_PROJECTIONS`], so `--projection StMapCamera --param 'string map' ...`
+/// works from the command line.
+#[must_use]
+pub fn cli_registry() -> Registry {
+    let mut r = builtin_registry();
+    r.register(Box::new(obscura_calibration::stmap::StMapCameraFactory), "")
+        .expect("file projections' names differ from the built-ins'");
+    r
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use obscura_sdk::{Format, ParamList, ProjectionEnvironment};
+
+    #[test]
+    fn the_cli_registry_adds_exactly_the_file_projections() {
+        let builtins = builtin_registry().names();
+        let cli = cli_registry().names();
+        let extra: Vec<&String> = cli.iter().filter(|n| !builtins.contains(n)).collect();
+        let extra: Vec<&str> = extra.into_iter().map(String::as_str).collect();
+        assert_eq!(extra, FILE_PROJECTIONS);
+        assert_eq!(cli.len(), builtins.len() + FILE_PROJECTIONS.len());
+        // Without its map it is refused naming the missing parameter, not run with defaults.
+        let mut env = ProjectionEnvironment::for_format(Format::new(4, 4));
+        let err = cli_registry()
+            .create(FILE_PROJECTIONS[0], &mut env, &ParamList::new())
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.contains("map is required"), "{err}");
+    }
 
     #[test]
     fn unknown_projection_lists_the_known_ones() {

@@ -31,5 +31,5 @@ pub mod listing;
 pub mod loader;
 pub mod rman;
 
-pub use builtins::{builtin_registry, register_builtins};
+pub use builtins::{FILE_PROJECTIONS, builtin_registry, cli_registry, register_builtins};
 pub use loader::{PluginLoadError, PluginSearch, ensure};
