@@ -64,6 +64,7 @@ mod plugin;
 mod property;
 mod ray;
 pub mod simd;
+mod soa;
 
 pub use context::{ContextLengthError, ContextParts, ProjectionContext};
 pub use environment::{Format, MotionSample, ProjectionEnvironment, ScreenWindow};
@@ -75,3 +76,4 @@ pub use param::{
 pub use plugin::{PluginError, Projection, ProjectionFactory, SyncMessage};
 pub use property::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
 pub use ray::RayGeometry;
+pub use soa::{RaysSoa, SoaContext, SoaLengthError};

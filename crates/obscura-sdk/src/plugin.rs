@@ -5,6 +5,7 @@ use crate::environment::ProjectionEnvironment;
 use crate::geometry::{Point2, Vec3};
 use crate::param::{ParamDecl, ParamError, ParamList};
 use crate::property::{ProjectionProperty, PropertyValue};
+use crate::soa::SoaContext;
 
 /// What the host tells a factory through [`ProjectionFactory::synchronize`] (`RixSCSyncMsg`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -81,6 +82,20 @@ pub trait Projection: Send + Sync {
     /// *modifier* may rewrite only `time` or `tint`. Every direction written must be unit length, or
     /// exactly zero to cull the sample; every time must stay in `[0, 1)`.
     fn project(&self, ctx: &mut ProjectionContext<'_>);
+
+    /// Turns one batch of samples into rays written field by field ([`SoaContext`]): the
+    /// structure-of-arrays form a consumer such as numpy wants, with no per-ray record built and
+    /// copied. Returns `true` when this projection wrote **every field of every ray** (the rays arrive
+    /// unfilled, unlike `project`'s) and `false` when it does not offer this path — the default —
+    /// and then the host runs [`project`](Projection::project) and scatters its records.
+    ///
+    /// The rays written must be the ones `project` writes for the same samples, bit for bit (tests
+    /// hold the built-ins to this); times and tints follow `project`'s rules. A projection that edits
+    /// the host's pre-filled rays (a modifier) must keep the default.
+    fn project_soa(&self, ctx: &mut SoaContext<'_>) -> bool {
+        let _ = ctx;
+        false
+    }
 
     /// The exact inverse of `project` for the ray through a camera-space point: the screen position
     /// whose (lens-centre) ray passes through `point` at shutter-normalised `time`, or `None` when the

@@ -1,0 +1,323 @@
+//! Rays in structure-of-arrays form, for consumers that want each field as its own array.
+//!
+//! RenderMan's contract, and [`Projection::project`](crate::Projection::project), hand a projection an
+//! array of [`RayGeometry`] records (40 bytes each, fields side by side). A consumer such as numpy, a
+//! wavefront tracer or a GPU upload wants the opposite layout: all origins' `x`, then all `y`, … .
+//! [`Projection::project_soa`](crate::Projection::project_soa) lets a projection write that layout
+//! directly, with no per-ray record built and copied; the host falls back to `project` and a scatter
+//! for any projection that does not offer it (plugins, modifiers, the models not vectorised).
+//!
+//! | field of [`RaysSoa`] | [`RayGeometry`] field |
+//! |---|---|
+//! | `origin[0..3]` | `origin.x`, `origin.y`, `origin.z` |
+//! | `origin_radius` | `origin_radius` |
+//! | `direction[0..3]` | `direction.x`, `direction.y`, `direction.z` |
+//! | `ray_spread` | `ray_spread` |
+//! | `min_dist`, `max_dist` | `min_dist`, `max_dist` |
+
+use crate::geometry::{Point2, Vec3};
+use crate::ray::RayGeometry;
+
+/// The ten fields of a batch of [`RayGeometry`], each its own array: ray `i` is
+/// `(origin[0][i], origin[1][i], origin[2][i], origin_radius[i], direction[0][i], …, max_dist[i])`.
+///
+/// Every array has the same length; [`RaysSoa::new`] checks it once.
+#[derive(Debug)]
+pub struct RaysSoa<'a> {
+    /// Origin `x`, `y`, `z` in camera space.
+    pub origin: [&'a mut [f32]; 3],
+    /// Footprint radius at the origin.
+    pub origin_radius: &'a mut [f32],
+    /// Unit direction `x`, `y`, `z` in camera space, or all three zero to cull.
+    pub direction: [&'a mut [f32]; 3],
+    /// Footprint radius growth per unit distance.
+    pub ray_spread: &'a mut [f32],
+    /// Nearest accepted hit distance.
+    pub min_dist: &'a mut [f32],
+    /// Farthest accepted hit distance.
+    pub max_dist: &'a mut [f32],
+}
+
+/// An array handed to [`RaysSoa::new`] or [`SoaContext::new`] had another length than the batch's.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("structure-of-arrays batch: `{field}` has {len} elements, the batch has {expected}")]
+pub struct SoaLengthError {
+    /// The array at fault.
+    pub field: &'static str,
+    /// Its length.
+    pub len: usize,
+    /// The batch's length (the first array's).
+    pub expected: usize,
+}
+
+fn check(expected: usize, arrays: &[(&'static str, usize)]) -> Result<(), SoaLengthError> {
+    match arrays.iter().find(|(_, len)| *len != expected) {
+        Some(&(field, len)) => Err(SoaLengthError { field, len, expected }),
+        None => Ok(()),
+    }
+}
+
+impl<'a> RaysSoa<'a> {
+    /// Bundles ten arrays of one length (the order of [`RayGeometry`]'s fields). Fails naming the
+    /// first array whose length differs from `origin[0]`'s.
+    pub fn new(
+        origin: [&'a mut [f32]; 3],
+        origin_radius: &'a mut [f32],
+        direction: [&'a mut [f32]; 3],
+        ray_spread: &'a mut [f32],
+        min_dist: &'a mut [f32],
+        max_dist: &'a mut [f32],
+    ) -> Result<Self, SoaLengthError> {
+        check(
+            origin[0].len(),
+            &[
+                ("origin.y", origin[1].len()),
+                ("origin.z", origin[2].len()),
+                ("origin_radius", origin_radius.len()),
+                ("direction.x", direction[0].len()),
+                ("direction.y", direction[1].len()),
+                ("direction.z", direction[2].len()),
+                ("ray_spread", ray_spread.len()),
+                ("min_dist", min_dist.len()),
+                ("max_dist", max_dist.len()),
+            ],
+        )?;
+        Ok(RaysSoa {
+            origin,
+            origin_radius,
+            direction,
+            ray_spread,
+            min_dist,
+            max_dist,
+        })
+    }
+
+    /// Splits one buffer of `10·n` floats into the ten arrays of `n` rays, field after field in
+    /// [`RayGeometry`]'s order. `None` when the length is not a multiple of ten.
+    pub fn from_fields(buffer: &'a mut [f32]) -> Option<Self> {
+        if !buffer.len().is_multiple_of(10) {
+            return None;
+        }
+        let n = buffer.len() / 10;
+        let mut it = buffer.chunks_exact_mut(n.max(1));
+        let mut next = || -> &'a mut [f32] {
+            if n == 0 {
+                &mut []
+            } else {
+                it.next().expect("ten chunks of n")
+            }
+        };
+        let origin = [next(), next(), next()];
+        let origin_radius = next();
+        let direction = [next(), next(), next()];
+        let (ray_spread, min_dist, max_dist) = (next(), next(), next());
+        Some(RaysSoa {
+            origin,
+            origin_radius,
+            direction,
+            ray_spread,
+            min_dist,
+            max_dist,
+        })
+    }
+
+    /// The number of rays.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.origin[0].len()
+    }
+
+    /// True when the batch holds no ray.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Ray `i` as a record. Panics when `i` is out of range.
+    #[must_use]
+    pub fn get(&self, i: usize) -> RayGeometry {
+        RayGeometry {
+            origin: Vec3::new(self.origin[0][i], self.origin[1][i], self.origin[2][i]),
+            origin_radius: self.origin_radius[i],
+            direction: Vec3::new(self.direction[0][i], self.direction[1][i], self.direction[2][i]),
+            ray_spread: self.ray_spread[i],
+            min_dist: self.min_dist[i],
+            max_dist: self.max_dist[i],
+        }
+    }
+
+    /// Writes `ray` as ray `i`. Panics when `i` is out of range.
+    #[inline]
+    pub fn set(&mut self, i: usize, ray: &RayGeometry) {
+        self.origin[0][i] = ray.origin.x;
+        self.origin[1][i] = ray.origin.y;
+        self.origin[2][i] = ray.origin.z;
+        self.origin_radius[i] = ray.origin_radius;
+        self.direction[0][i] = ray.direction.x;
+        self.direction[1][i] = ray.direction.y;
+        self.direction[2][i] = ray.direction.z;
+        self.ray_spread[i] = ray.ray_spread;
+        self.min_dist[i] = ray.min_dist;
+        self.max_dist[i] = ray.max_dist;
+    }
+
+    /// Writes `rays` as rays `start..start + rays.len()` (the fallback path's scatter of one
+    /// array-of-structs batch). Panics when the range is out of bounds.
+    pub fn scatter(&mut self, start: usize, rays: &[RayGeometry]) {
+        for (i, ray) in (start..).zip(rays) {
+            self.set(i, ray);
+        }
+    }
+
+    /// The rays `range` of this batch, as a batch of its own (a chunk for one worker thread).
+    pub fn slice(&mut self, range: core::ops::Range<usize>) -> RaysSoa<'_> {
+        let r = range;
+        let [ox, oy, oz] = &mut self.origin;
+        let [dx, dy, dz] = &mut self.direction;
+        RaysSoa {
+            origin: [&mut ox[r.clone()], &mut oy[r.clone()], &mut oz[r.clone()]],
+            origin_radius: &mut self.origin_radius[r.clone()],
+            direction: [&mut dx[r.clone()], &mut dy[r.clone()], &mut dz[r.clone()]],
+            ray_spread: &mut self.ray_spread[r.clone()],
+            min_dist: &mut self.min_dist[r.clone()],
+            max_dist: &mut self.max_dist[r],
+        }
+    }
+}
+
+/// The inputs and outputs of one [`Projection::project_soa`](crate::Projection::project_soa) call:
+/// the inputs of a [`ProjectionContext`](crate::ProjectionContext), the rays as [`RaysSoa`] and the
+/// tint as three arrays.
+///
+/// Unlike [`ProjectionContext`](crate::ProjectionContext), the rays are **not** pre-filled with the
+/// host's default rays: their contents on entry are unspecified, and a projection that takes this
+/// path writes every field of every ray. `time` arrives as the host's shutter-warped times (in/out,
+/// as in `project`) and `tint` pre-filled with white (in/out).
+#[derive(Debug)]
+pub struct SoaContext<'a> {
+    /// Screen samples (in).
+    pub screen: &'a [Point2],
+    /// Canonical lens samples in `[0, 1)²` (in).
+    pub lens: &'a [Point2],
+    /// Aperture samples in `[−1, 1]²` (in).
+    pub aperture: &'a [Point2],
+    /// Shutter-normalised times (in/out).
+    pub time: &'a mut [f32],
+    /// The rays (out: every field of every ray).
+    pub rays: RaysSoa<'a>,
+    /// Per-ray tint `r`, `g`, `b` (in/out, pre-filled with 1).
+    pub tint: [&'a mut [f32]; 3],
+}
+
+impl<'a> SoaContext<'a> {
+    /// Bundles one batch. Fails unless every array has the batch's length (`screen`'s).
+    pub fn new(
+        screen: &'a [Point2],
+        lens: &'a [Point2],
+        aperture: &'a [Point2],
+        time: &'a mut [f32],
+        rays: RaysSoa<'a>,
+        tint: [&'a mut [f32]; 3],
+    ) -> Result<Self, SoaLengthError> {
+        check(
+            screen.len(),
+            &[
+                ("lens", lens.len()),
+                ("aperture", aperture.len()),
+                ("time", time.len()),
+                ("rays", rays.len()),
+                ("tint.r", tint[0].len()),
+                ("tint.g", tint[1].len()),
+                ("tint.b", tint[2].len()),
+            ],
+        )?;
+        Ok(SoaContext {
+            screen,
+            lens,
+            aperture,
+            time,
+            rays,
+            tint,
+        })
+    }
+
+    /// The number of rays in this batch.
+    #[must_use]
+    pub fn num_rays(&self) -> usize {
+        self.screen.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ray(i: usize) -> RayGeometry {
+        let f = |k: usize| (i * 10 + k) as f32;
+        RayGeometry {
+            origin: Vec3::new(f(0), f(1), f(2)),
+            origin_radius: f(3),
+            direction: Vec3::new(f(4), f(5), f(6)),
+            ray_spread: f(7),
+            min_dist: f(8),
+            max_dist: f(9),
+        }
+    }
+
+    #[test]
+    fn fields_land_in_their_own_arrays_in_record_order() {
+        let n = 7;
+        let mut buffer = vec![0.0f32; 10 * n];
+        let rays: Vec<_> = (0..n).map(ray).collect();
+        let mut soa = RaysSoa::from_fields(&mut buffer).unwrap();
+        soa.scatter(0, &rays);
+        for (i, r) in rays.iter().enumerate() {
+            assert_eq!(soa.get(i).to_bits(), r.to_bits());
+        }
+        // Field k of ray i sits at k·n + i, and its value is 10·i + k.
+        for (j, v) in buffer.iter().enumerate() {
+            let (k, i) = (j / n, j % n);
+            assert_eq!(*v, (10 * i + k) as f32, "field {k} of ray {i}");
+        }
+    }
+
+    #[test]
+    fn a_slice_writes_through_to_its_rays_only() {
+        let mut buffer = vec![0.0f32; 10 * 6];
+        let mut soa = RaysSoa::from_fields(&mut buffer).unwrap();
+        soa.slice(2..4).scatter(0, &[ray(2), ray(3)]);
+        assert_eq!(soa.get(3).to_bits(), ray(3).to_bits());
+        assert_eq!(soa.get(1).to_bits(), [0; 10]);
+        assert_eq!(soa.get(4).to_bits(), [0; 10]);
+    }
+
+    #[test]
+    fn mismatched_lengths_name_the_array() {
+        let (mut a, mut b) = (vec![0.0f32; 4], vec![0.0f32; 3]);
+        let mut o = [
+            vec![0.0f32; 4],
+            vec![0.0; 4],
+            vec![0.0; 4],
+            vec![0.0; 4],
+            vec![0.0; 4],
+            vec![0.0; 4],
+        ];
+        let [o0, o1, o2, d0, d1, d2] = &mut o;
+        let err = RaysSoa::new(
+            [o0, o1, o2],
+            &mut a,
+            [d0, d1, d2],
+            &mut b,
+            &mut [0.0; 4],
+            &mut [0.0; 4],
+        )
+        .unwrap_err();
+        assert_eq!((err.field, err.len, err.expected), ("ray_spread", 3, 4));
+        assert!(
+            err.to_string()
+                .contains("`ray_spread` has 3 elements, the batch has 4")
+        );
+        assert!(RaysSoa::from_fields(&mut [0.0; 11]).is_none());
+        assert_eq!(RaysSoa::from_fields(&mut []).unwrap().len(), 0);
+    }
+}
