@@ -161,6 +161,26 @@ impl<'a> RaysSoa<'a> {
         self.max_dist[i] = ray.max_dist;
     }
 
+    /// The ten arrays in [`RayGeometry`]'s field order — `origin.x`, `origin.y`, `origin.z`,
+    /// `origin_radius`, `direction.x`, `direction.y`, `direction.z`, `ray_spread`, `min_dist`,
+    /// `max_dist` — for a kernel that stores field `k` of a block of rays from its own register.
+    pub fn fields_mut(&mut self) -> [&mut [f32]; 10] {
+        let [ox, oy, oz] = &mut self.origin;
+        let [dx, dy, dz] = &mut self.direction;
+        [
+            &mut **ox,
+            &mut **oy,
+            &mut **oz,
+            &mut *self.origin_radius,
+            &mut **dx,
+            &mut **dy,
+            &mut **dz,
+            &mut *self.ray_spread,
+            &mut *self.min_dist,
+            &mut *self.max_dist,
+        ]
+    }
+
     /// Writes `rays` as rays `start..start + rays.len()` (the fallback path's scatter of one
     /// array-of-structs batch). Panics when the range is out of bounds.
     pub fn scatter(&mut self, start: usize, rays: &[RayGeometry]) {
@@ -289,6 +309,20 @@ mod tests {
         assert_eq!(soa.get(3).to_bits(), ray(3).to_bits());
         assert_eq!(soa.get(1).to_bits(), [0; 10]);
         assert_eq!(soa.get(4).to_bits(), [0; 10]);
+    }
+
+    #[test]
+    fn fields_mut_lists_the_arrays_in_record_order() {
+        let n = 3;
+        let mut buffer = vec![0.0f32; 10 * n];
+        let mut soa = RaysSoa::from_fields(&mut buffer).unwrap();
+        for (k, field) in soa.fields_mut().into_iter().enumerate() {
+            field[1] = k as f32;
+        }
+        assert_eq!(
+            soa.get(1).to_bits(),
+            std::array::from_fn(|k| (k as f32).to_bits())
+        );
     }
 
     #[test]

@@ -7,15 +7,16 @@
 //! is not a multiple of 16 ends with masked loads.
 //!
 //! The rays go to a [`Sink`]: [`Aos`] writes RenderMan's 40-byte `RtRayGeometry` records (two stores
-//! per ray from 128-bit lanes shuffled into record order; see `store_records`). A sink writing one
-//! array per field (numpy's layout) fits the same trait; the Python binding does not use one yet.
+//! per ray from 128-bit lanes shuffled into record order; see `store_records`); [`Soa`] writes one
+//! array per field (`project_soa`, numpy's layout): each register straight to its array, ten 64-byte
+//! stores per sixteen rays and no shuffle at all.
 //!
 //! [`quarter_root`]: obscura_sdk::optics::quarter_root
 
 use std::arch::x86_64::*;
 
 use obscura_sdk::optics::PerspectiveRays;
-use obscura_sdk::{Point2, RayGeometry};
+use obscura_sdk::{Point2, RayGeometry, RaysSoa};
 
 /// Sixteen rays, one register per field (`origin.z` and `origin_radius` are 0 for both models).
 pub(crate) struct Lanes {
@@ -52,6 +53,45 @@ impl Sink for Aos<'_> {
             // SAFETY: `tail` holds 16 records.
             unsafe { store_records(tail.as_mut_ptr().cast(), rays) };
             self.0[i..i + n].copy_from_slice(&tail[..n]);
+        }
+    }
+}
+
+/// The ten arrays of a [`RaysSoa`], field `k` of ray `i` at `fields[k] + i`.
+pub(crate) struct Soa<'a> {
+    fields: [*mut f32; 10],
+    len: usize,
+    _rays: std::marker::PhantomData<&'a mut [f32]>,
+}
+
+impl<'a> Soa<'a> {
+    /// The arrays of `rays`, borrowed for as long as the sink lives.
+    pub(crate) fn new(rays: &'a mut RaysSoa<'_>) -> Self {
+        let len = rays.len();
+        Soa {
+            fields: rays.fields_mut().map(<[f32]>::as_mut_ptr),
+            len,
+            _rays: std::marker::PhantomData,
+        }
+    }
+}
+
+impl Sink for Soa<'_> {
+    #[inline(always)]
+    unsafe fn put(&mut self, i: usize, n: usize, r: &Lanes) {
+        debug_assert!(i + n <= self.len);
+        // SAFETY: every array holds `len ≥ i + n` floats (`RaysSoa` checks the ten lengths agree);
+        // a masked store touches lanes `0 .. n` only.
+        unsafe {
+            let zero = _mm512_setzero_ps();
+            let values = [r.ox, r.oy, zero, zero, r.dx, r.dy, r.dz, r.spread, r.min, r.max];
+            for (field, v) in self.fields.iter().zip(values) {
+                if n == 16 {
+                    _mm512_storeu_ps(field.add(i), v);
+                } else {
+                    _mm512_mask_storeu_ps(field.add(i), mask(n), v);
+                }
+            }
         }
     }
 }
