@@ -26,8 +26,8 @@ use std::sync::LazyLock;
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
 use obscura_sdk::{
     DeepMetric, DicingHint, ParamDecl, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, RaysSoa, SoaContext, ValueRange,
-    Vec3,
+    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, RaysSoa, SoaContext, SoaFields,
+    ValueRange, Vec3,
 };
 
 use crate::dof::{self, DepthOfField};
@@ -225,8 +225,8 @@ impl Projection for Perspective {
         let rays = self.rays;
         let d = self.zoom.d;
         match (self.zoom.fov_end.is_some(), self.has_depth_of_field()) {
-            (false, false) => pinhole_soa(&rays, ctx.screen, d, &mut ctx.rays),
-            (false, true) => thin_lens_soa(&rays, ctx.screen, ctx.aperture, d, &mut ctx.rays),
+            (false, false) => pinhole_soa(&rays, ctx.screen, d, ctx.fields(), &mut ctx.rays),
+            (false, true) => thin_lens_soa(&rays, ctx.screen, ctx.aperture, d, ctx.fields(), &mut ctx.rays),
             (true, _) => {
                 let (screen, aperture, time, out) = (ctx.screen, ctx.aperture, &*ctx.time, &mut ctx.rays);
                 let n = out.len();
@@ -310,16 +310,21 @@ fn thin_lens_batch(
 }
 
 /// [`pinhole_batch`] into arrays: the same kernels, with sinks that store each register into its
-/// field's array.
-fn pinhole_soa(rays: &PerspectiveRays, screen: &[Point2], d: f32, out: &mut RaysSoa<'_>) {
+/// field's array — those in `fields` only, and without computing the spread unless it is asked for
+/// (the portable tier writes every field).
+fn pinhole_soa(rays: &PerspectiveRays, screen: &[Point2], d: f32, fields: SoaFields, out: &mut RaysSoa<'_>) {
     let n = screen.len().min(out.len());
     match simd::level() {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `level` only answers Avx512 when the CPU has it; `out` holds at least `n` rays.
-        simd::Level::Avx512 => unsafe { avx512::pinhole(rays, &screen[..n], d, &mut avx512::Soa::new(out)) },
+        simd::Level::Avx512 => unsafe {
+            avx512::pinhole(rays, &screen[..n], d, &mut avx512::Soa::new(out, fields))
+        },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `level` only answers Avx2Fma when the CPU has AVX2 and FMA; `out` holds `n` rays.
-        simd::Level::Avx2Fma => unsafe { avx2::pinhole(rays, &screen[..n], d, n, &mut avx2::Soa(out)) },
+        simd::Level::Avx2Fma => unsafe {
+            avx2::pinhole(rays, &screen[..n], d, n, &mut avx2::Soa(out, fields))
+        },
         level => simd::run_at(
             level,
             #[inline(always)]
@@ -334,6 +339,7 @@ fn thin_lens_soa(
     screen: &[Point2],
     aperture: &[Point2],
     d: f32,
+    fields: SoaFields,
     out: &mut RaysSoa<'_>,
 ) {
     let n = screen.len().min(aperture.len()).min(out.len());
@@ -341,7 +347,13 @@ fn thin_lens_soa(
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `level` only answers Avx512 when the CPU has it; every slice holds `n` items.
         simd::Level::Avx512 => unsafe {
-            avx512::thin_lens(rays, &screen[..n], &aperture[..n], d, &mut avx512::Soa::new(out));
+            avx512::thin_lens(
+                rays,
+                &screen[..n],
+                &aperture[..n],
+                d,
+                &mut avx512::Soa::new(out, fields),
+            );
         },
         level => simd::run_at(
             level,
@@ -576,9 +588,54 @@ mod tests {
             let time: Vec<_> = samples.iter().map(|s| s.4).collect();
             for level in simd::Level::ALL.into_iter().filter(|l| l.is_available()) {
                 let want = simd::with_level(level, || project_points(p.as_ref(), &screen, &aperture, &time));
-                let got = simd::with_level(level, || testing::project_soa_batch(p.as_ref(), &screen, &aperture, &time))
+                let got = simd::with_level(level, || testing::project_soa_batch(p.as_ref(), &screen, &aperture, &time, SoaFields::ALL))
                     .expect("offered").0;
                 prop_assert_eq!(bits(&got), bits(&want), "{} tier {}", label, level);
+            }
+        }
+    }
+
+    /// A consumer asking for some fields only (Mitsuba's set: direction and `max_dist`; with the
+    /// origin; the spread alone; `min_dist` alone) gets those arrays bit for bit at every tier and
+    /// every tail length; every other array holds `project`'s value or was not touched, and on the
+    /// AVX-512 tier (which skips them) it was not touched at all.
+    #[test]
+    fn tiers_project_soa_writes_the_selected_fields() {
+        let (screen, aperture) = samples();
+        let time = vec![0.0; screen.len()];
+        let selections = [
+            SoaFields::DIRECTION | SoaFields::MAX_DIST,
+            SoaFields::ORIGIN | SoaFields::DIRECTION | SoaFields::MAX_DIST,
+            SoaFields::RAY_SPREAD,
+            SoaFields::MIN_DIST,
+        ];
+        for (label, params) in &CONFIGS[..2] {
+            let p = make(params, Format::new(640, 480));
+            for level in simd::Level::ALL.into_iter().filter(|l| l.is_available()) {
+                for n in (0..40).chain([screen.len()]) {
+                    let (s, a, t) = (&screen[..n], &aperture[..n], &time[..n]);
+                    let want = bits(&project_points(p.as_ref(), s, a, t));
+                    for fields in selections {
+                        let got = simd::with_level(level, || {
+                            testing::project_soa_batch(p.as_ref(), s, a, t, fields)
+                        })
+                        .expect("offered")
+                        .0;
+                        for (i, (g, w)) in bits(&got).iter().zip(&want).enumerate() {
+                            for k in 0..10 {
+                                let what =
+                                    format!("{label}, tier {level}, n {n}, {fields:?}, ray {i}, field {k}");
+                                if fields.has(k) {
+                                    assert_eq!(g[k], w[k], "{what}");
+                                } else if level == simd::Level::Avx512 {
+                                    assert_eq!(g[k], testing::UNWRITTEN, "{what}: written");
+                                } else {
+                                    assert!(g[k] == w[k] || g[k] == testing::UNWRITTEN, "{what}");
+                                }
+                            }
+                        }
+                    }
+                }
             }
         }
     }

@@ -6,7 +6,7 @@ use obscura_sdk::simd::{Level, with_level};
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamList, PluginError, Point2, Projection, ProjectionContext,
     ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, RaysSoa, Rgb,
-    ScreenWindow, SoaContext, Vec3,
+    ScreenWindow, SoaContext, SoaFields, Vec3,
 };
 
 use crate::panorama::angle_between;
@@ -267,16 +267,18 @@ pub fn project_batch(
 
 /// A bit pattern no projection writes (a NaN with a payload): `project_soa_batch`'s arrays start
 /// out holding it, so a field `project_soa` leaves unwritten shows in the comparison.
-const UNWRITTEN: u32 = 0x7FA5_5A5A;
+pub const UNWRITTEN: u32 = 0x7FA5_5A5A;
 
 /// `project_soa` of one batch into arrays of [`UNWRITTEN`] floats, the ten of them cut from one buffer
 /// one float past an aligned start (so no array is 16-byte aligned): `None` when the projection does
-/// not offer the path, else the rays read back as records, the output times and the tints.
+/// not offer the path, else the rays read back as records, the output times and the tints. The
+/// context asks for `fields` ([`SoaContext::with_fields`]).
 pub fn project_soa_batch(
     p: &dyn Projection,
     screen: &[Point2],
     aperture: &[Point2],
     time: &[f32],
+    fields: SoaFields,
 ) -> Option<(Vec<RayGeometry>, Vec<f32>, Vec<Rgb>)> {
     let n = screen.len();
     let lens: Vec<Point2> = aperture
@@ -287,8 +289,9 @@ pub fn project_soa_batch(
     let mut buffer = vec![f32::from_bits(UNWRITTEN); 10 * n + 1];
     let [mut r, mut g, mut b] = [(); 3].map(|()| vec![1.0f32; n]);
     let rays = RaysSoa::from_fields(&mut buffer[1..]).unwrap();
-    let mut ctx =
-        SoaContext::new(screen, &lens, aperture, &mut time, rays, [&mut r, &mut g, &mut b]).unwrap();
+    let mut ctx = SoaContext::new(screen, &lens, aperture, &mut time, rays, [&mut r, &mut g, &mut b])
+        .unwrap()
+        .with_fields(fields);
     if !p.project_soa(&mut ctx) {
         return None;
     }
@@ -327,8 +330,9 @@ pub fn assert_soa_is_project(
         );
         for level in Level::ALL.into_iter().filter(|l| l.is_available()) {
             let (want, want_time, want_tint) = with_level(level, || project_batch(p, s, a, t));
-            let (got, got_time, got_tint) = with_level(level, || project_soa_batch(p, s, a, t))
-                .unwrap_or_else(|| panic!("{label}: project_soa is not offered"));
+            let (got, got_time, got_tint) =
+                with_level(level, || project_soa_batch(p, s, a, t, SoaFields::ALL))
+                    .unwrap_or_else(|| panic!("{label}: project_soa is not offered"));
             assert_eq!(bits(&got), bits(&want), "{label}: rays {range:?}, tier {level}");
             assert_eq!(
                 time_bits(&got_time),

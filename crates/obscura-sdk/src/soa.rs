@@ -205,6 +205,48 @@ impl<'a> RaysSoa<'a> {
     }
 }
 
+/// A set of [`RayGeometry`]'s fields, by their index in record order (`origin.x` = 0 … `max_dist` =
+/// 9): which arrays a consumer of [`Projection::project_soa`](crate::Projection::project_soa) asks
+/// for ([`SoaContext::with_fields`]). Combine with `|`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SoaFields(u16);
+
+impl SoaFields {
+    /// Every field (what [`SoaContext::new`] asks for).
+    pub const ALL: SoaFields = SoaFields(0x3FF);
+    /// `origin.x`, `origin.y`, `origin.z`.
+    pub const ORIGIN: SoaFields = SoaFields(0b111);
+    /// `origin_radius`.
+    pub const ORIGIN_RADIUS: SoaFields = SoaFields(1 << 3);
+    /// `direction.x`, `direction.y`, `direction.z`.
+    pub const DIRECTION: SoaFields = SoaFields(0b111 << 4);
+    /// `ray_spread`.
+    pub const RAY_SPREAD: SoaFields = SoaFields(1 << 7);
+    /// `min_dist`.
+    pub const MIN_DIST: SoaFields = SoaFields(1 << 8);
+    /// `max_dist`.
+    pub const MAX_DIST: SoaFields = SoaFields(1 << 9);
+
+    /// True when field `k` (record order, as [`RaysSoa::fields_mut`]) is in the set; false for `k ≥ 10`.
+    #[must_use]
+    pub const fn has(self, k: usize) -> bool {
+        k < 10 && self.0 & (1 << k) != 0
+    }
+
+    /// True when every field of `other` is in the set.
+    #[must_use]
+    pub const fn contains(self, other: SoaFields) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+impl core::ops::BitOr for SoaFields {
+    type Output = SoaFields;
+    fn bitor(self, other: SoaFields) -> SoaFields {
+        SoaFields(self.0 | other.0)
+    }
+}
+
 /// The inputs and outputs of one [`Projection::project_soa`](crate::Projection::project_soa) call:
 /// the inputs of a [`ProjectionContext`](crate::ProjectionContext), the rays as [`RaysSoa`] and the
 /// tint as three arrays.
@@ -213,6 +255,13 @@ impl<'a> RaysSoa<'a> {
 /// host's default rays: their contents on entry are unspecified, and a projection that takes this
 /// path writes every field of every ray. `time` arrives as the host's shutter-warped times (in/out,
 /// as in `project`) and `tint` pre-filled with white (in/out).
+///
+/// **Field selection.** A consumer that reads only some fields (a tracer that needs direction and
+/// `max_dist`, say) may say so with [`SoaContext::with_fields`]. The selected arrays get every ray,
+/// bit for bit as always; the others' contents afterwards are unspecified — a projection may skip
+/// them (`PxrPerspective`'s AVX-512 and AVX2 kernels do, and skip computing an unwanted
+/// `ray_spread`) or write them as if selected (every other projection, and the host's fallback).
+/// The arrays must still have the batch's length: one never written costs address space only.
 #[derive(Debug)]
 pub struct SoaContext<'a> {
     /// Screen samples (in).
@@ -227,6 +276,8 @@ pub struct SoaContext<'a> {
     pub rays: RaysSoa<'a>,
     /// Per-ray tint `r`, `g`, `b` (in/out, pre-filled with 1).
     pub tint: [&'a mut [f32]; 3],
+    /// The fields the consumer reads ([`SoaFields::ALL`] unless [`SoaContext::with_fields`] says).
+    fields: SoaFields,
 }
 
 impl<'a> SoaContext<'a> {
@@ -258,6 +309,7 @@ impl<'a> SoaContext<'a> {
             time,
             rays,
             tint,
+            fields: SoaFields::ALL,
         })
     }
 
@@ -265,6 +317,20 @@ impl<'a> SoaContext<'a> {
     #[must_use]
     pub fn num_rays(&self) -> usize {
         self.screen.len()
+    }
+
+    /// Asks for `fields` only: the other arrays' contents afterwards are unspecified (see the type's
+    /// documentation). `fields` is [`SoaFields::ALL`] for a context from [`SoaContext::new`].
+    #[must_use]
+    pub fn with_fields(mut self, fields: SoaFields) -> Self {
+        self.fields = fields;
+        self
+    }
+
+    /// The fields the consumer reads: a projection must write these arrays and may skip the rest.
+    #[must_use]
+    pub fn fields(&self) -> SoaFields {
+        self.fields
     }
 }
 
@@ -309,6 +375,28 @@ mod tests {
         assert_eq!(soa.get(3).to_bits(), ray(3).to_bits());
         assert_eq!(soa.get(1).to_bits(), [0; 10]);
         assert_eq!(soa.get(4).to_bits(), [0; 10]);
+    }
+
+    #[test]
+    fn field_sets_name_record_positions() {
+        let like_mitsuba = SoaFields::DIRECTION | SoaFields::MAX_DIST;
+        let has: Vec<usize> = (0..12).filter(|&k| like_mitsuba.has(k)).collect();
+        assert_eq!(has, [4, 5, 6, 9]);
+        let every = SoaFields::ORIGIN
+            | SoaFields::ORIGIN_RADIUS
+            | SoaFields::DIRECTION
+            | SoaFields::RAY_SPREAD
+            | SoaFields::MIN_DIST
+            | SoaFields::MAX_DIST;
+        assert_eq!(every, SoaFields::ALL);
+        assert!(SoaFields::ALL.contains(like_mitsuba) && !like_mitsuba.contains(SoaFields::ORIGIN));
+        let (mut t, mut r, mut g, mut b) = (vec![0.0; 2], vec![1.0; 2], vec![1.0; 2], vec![1.0; 2]);
+        let mut buffer = vec![0.0f32; 20];
+        let pts = [Point2::ZERO; 2];
+        let rays = RaysSoa::from_fields(&mut buffer).unwrap();
+        let ctx = SoaContext::new(&pts, &pts, &pts, &mut t, rays, [&mut r, &mut g, &mut b]).unwrap();
+        assert_eq!(ctx.fields(), SoaFields::ALL);
+        assert_eq!(ctx.with_fields(like_mitsuba).fields(), like_mitsuba);
     }
 
     #[test]

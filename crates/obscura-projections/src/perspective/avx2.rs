@@ -11,7 +11,7 @@
 use std::arch::x86_64::*;
 
 use obscura_sdk::optics::{PerspectiveRays, QUARTER_ROOT_SEED};
-use obscura_sdk::{Point2, RayGeometry, RaysSoa, Vec3};
+use obscura_sdk::{Point2, RayGeometry, RaysSoa, SoaFields, Vec3};
 
 /// Eight rays' direction `x`, `y`, `z`, spread, `min_dist` and `max_dist`, one register each (the
 /// pinhole's origin and origin radius are 0).
@@ -26,6 +26,11 @@ pub(crate) trait Sink {
     unsafe fn put(&mut self, i: usize, lanes: &Lanes);
     /// Stores `ray` as ray `i` (the batch's tail, fewer than eight rays).
     fn put_one(&mut self, i: usize, ray: &RayGeometry);
+
+    /// False when the sink never stores `ray_spread`: the kernel then skips computing it.
+    fn wants_spread(&self) -> bool {
+        true
+    }
 }
 
 /// The renderer's array of `RtRayGeometry` records.
@@ -57,8 +62,9 @@ impl Sink for Aos<'_> {
     }
 }
 
-/// The ten arrays of a [`RaysSoa`].
-pub(crate) struct Soa<'s, 'a>(pub &'s mut RaysSoa<'a>);
+/// The ten arrays of a [`RaysSoa`]; the vector stores skip the fields outside the set
+/// ([`obscura_sdk::SoaContext::fields`]).
+pub(crate) struct Soa<'s, 'a>(pub &'s mut RaysSoa<'a>, pub SoaFields);
 
 impl Sink for Soa<'_, '_> {
     #[inline(always)]
@@ -67,16 +73,23 @@ impl Sink for Soa<'_, '_> {
         let zero = unsafe { _mm256_setzero_ps() };
         let [dx, dy, dz, spread, min, max] = *lanes;
         let values = [zero, zero, zero, zero, dx, dy, dz, spread, min, max];
-        for (field, v) in self.0.fields_mut().into_iter().zip(values) {
-            let out = &mut field[i..i + 8];
-            // SAFETY: an unaligned store of eight f32 into a slice of eight.
-            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) };
+        let wanted = self.1;
+        for (k, (field, v)) in self.0.fields_mut().into_iter().zip(values).enumerate() {
+            if wanted.has(k) {
+                let out = &mut field[i..i + 8];
+                // SAFETY: an unaligned store of eight f32 into a slice of eight.
+                unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) };
+            }
         }
     }
 
     #[inline(always)]
     fn put_one(&mut self, i: usize, ray: &RayGeometry) {
         self.0.set(i, ray);
+    }
+
+    fn wants_spread(&self) -> bool {
+        self.1.contains(SoaFields::RAY_SPREAD)
     }
 }
 
@@ -105,6 +118,7 @@ pub(crate) unsafe fn pinhole(
         _mm256_set1_ps(0.25),
         _mm256_set1_ps(1.25),
     );
+    let spread_on = sink.wants_spread();
     for b in 0..blocks {
         let s = &screen[b * 8..b * 8 + 8];
         let xs: [f32; 8] = std::array::from_fn(|i| s[i].x);
@@ -117,29 +131,34 @@ pub(crate) unsafe fn pinhole(
             let sy2 = _mm256_mul_ps(y, y);
             let l = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(sx2, sy2), d2));
             let inv_l = _mm256_div_ps(one, l);
-            let inv_l2 = _mm256_mul_ps(inv_l, inv_l);
-            let w = _mm256_mul_ps(
-                _mm256_mul_ps(_mm256_add_ps(sx2, d2), inv_l2),
-                _mm256_mul_ps(_mm256_add_ps(sy2, d2), inv_l2),
-            );
-            let quarter_w = _mm256_mul_ps(quarter, w);
-            let mut r = _mm256_castsi256_ps(_mm256_sub_epi32(
-                seed,
-                _mm256_srli_epi32::<2>(_mm256_castps_si256(w)),
-            ));
-            for _ in 0..3 {
-                let r2 = _mm256_mul_ps(r, r);
-                r = _mm256_mul_ps(
-                    r,
-                    _mm256_sub_ps(five_quarters, _mm256_mul_ps(_mm256_mul_ps(quarter_w, r2), r2)),
+            let spread = if spread_on {
+                let inv_l2 = _mm256_mul_ps(inv_l, inv_l);
+                let w = _mm256_mul_ps(
+                    _mm256_mul_ps(_mm256_add_ps(sx2, d2), inv_l2),
+                    _mm256_mul_ps(_mm256_add_ps(sy2, d2), inv_l2),
                 );
-            }
-            let root = _mm256_mul_ps(w, _mm256_mul_ps(_mm256_mul_ps(r, r), r));
+                let quarter_w = _mm256_mul_ps(quarter, w);
+                let mut r = _mm256_castsi256_ps(_mm256_sub_epi32(
+                    seed,
+                    _mm256_srli_epi32::<2>(_mm256_castps_si256(w)),
+                ));
+                for _ in 0..3 {
+                    let r2 = _mm256_mul_ps(r, r);
+                    r = _mm256_mul_ps(
+                        r,
+                        _mm256_sub_ps(five_quarters, _mm256_mul_ps(_mm256_mul_ps(quarter_w, r2), r2)),
+                    );
+                }
+                let root = _mm256_mul_ps(w, _mm256_mul_ps(_mm256_mul_ps(r, r), r));
+                _mm256_mul_ps(_mm256_mul_ps(half, root), inv_l)
+            } else {
+                _mm256_setzero_ps()
+            };
             let lanes = [
                 _mm256_mul_ps(x, inv_l),
                 _mm256_mul_ps(y, inv_l),
                 _mm256_mul_ps(vd, inv_l),
-                _mm256_mul_ps(_mm256_mul_ps(half, root), inv_l),
+                spread,
                 _mm256_mul_ps(near, l),
                 _mm256_mul_ps(far, l),
             ];
