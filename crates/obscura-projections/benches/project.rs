@@ -5,6 +5,10 @@
 //! stores the CPU has, computing nothing) and the *streaming roofline* (a batch of 16M rays, 640 MB, far
 //! beyond L2 and L3, written with non-temporal stores, and with ordinary stores).
 //!
+//! `soa_records` and `soa_arrays` run the projections that offer `project_soa` both ways in one run,
+//! batch 4096: `project` into 40-byte records and `project_soa` into ten arrays (the same 40 bytes
+//! a ray), against the same store roofline.
+//!
 //! divan reports items/s: each item is one ray.
 
 use std::hint::black_box;
@@ -321,4 +325,68 @@ mod roofline {
             }
         }
     }
+}
+
+/// The projections that offer `project_soa` (the perspective kernels and the centred panoramas), by
+/// label: `soa_records` and `soa_arrays` run each.
+const SOA: &[Entry] = &[
+    ("pinhole", "PxrPerspective", &[("float fov", "60")]),
+    (
+        "thin_lens",
+        "PxrPerspective",
+        &[
+            ("float fov", "60"),
+            ("float fStop", "2.8"),
+            ("float focalLength", "0.05"),
+            ("float focalDistance", "4"),
+        ],
+    ),
+    ("sphere", "PxrSphereCamera", &[]),
+    ("cylinder", "PxrCylinderCamera", &[]),
+    (
+        "fisheye_equidistant",
+        "Fisheye",
+        &[("string mapping", "equidistant")],
+    ),
+    ("fisheye_equisolid", "Fisheye", &[("string mapping", "equisolid")]),
+    (
+        "fisheye_stereographic",
+        "Fisheye",
+        &[("string mapping", "stereographic")],
+    ),
+    (
+        "fisheye_orthographic",
+        "Fisheye",
+        &[("string mapping", "orthographic")],
+    ),
+    (
+        "fisheye_polynomial",
+        "Fisheye",
+        &[("string mapping", "polynomial")],
+    ),
+    ("mirror_ball", "MirrorBall", &[]),
+    ("cube_face", "EquiangularCubemapFace", &[]),
+    ("octahedral", "Octahedral", &[]),
+];
+
+/// `project` of an `SOA` projection into 40-byte records, batch 4096.
+#[divan::bench(args = SOA.iter().map(|e| e.0))]
+fn soa_records(bencher: Bencher, label: &str) {
+    let (_, name, params) = SOA.iter().find(|e| e.0 == label).expect("a label of SOA");
+    bench_projection(bencher, 4096, name, params);
+}
+
+/// `project_soa` of an `SOA` projection into ten arrays (every field), batch 4096.
+#[divan::bench(args = SOA.iter().map(|e| e.0))]
+fn soa_arrays(bencher: Bencher, label: &str) {
+    let (_, name, params) = SOA.iter().find(|e| e.0 == label).expect("a label of SOA");
+    let p = projection(name, params);
+    let mut batch = Batch::new(4096, Aperture::Square);
+    assert!(
+        batch.run_soa(p.as_ref(), obscura_sdk::SoaFields::ALL),
+        "{label} offers project_soa"
+    );
+    bencher.counter(ItemsCount::new(4096usize)).bench_local(|| {
+        black_box(batch.run_soa(black_box(p.as_ref()), obscura_sdk::SoaFields::ALL));
+    });
 }
