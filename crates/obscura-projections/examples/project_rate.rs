@@ -13,7 +13,7 @@
 //! one line per model and layout: `<model> batch=<b> total=<n> tier=<tier> mrays_per_s=<x>` for
 //! `project` (40-byte records), and `<model>_soa …` for `project_soa` (all ten fields, each its own
 //! array: ten arrays of `--batch` floats cut from one buffer from a 64-byte boundary, so with a batch that is
-//! a multiple of 16 every array starts on a cache line, as numpy's large arrays do), and
+//! a multiple of 16 every array starts on a cache line), and
 //! `<model>_soa_like …` for `project_soa` asked for the fields Mitsuba's `sample_ray` stores
 //! ([`SoaFields`]: direction and `max_dist`, and the origin for the thin lens; the other arrays are
 //! not written).

@@ -20,6 +20,14 @@
 //! Properties: DicingHint Perspective; FieldOfView `fov` (the narrower of `fov`, `fovEnd` during a
 //! zoom, so dicing is fine enough all through the shutter); DeepMetric CameraZ; FStop, FocalLength and
 //! FocalDistance only when depth of field is on.
+//!
+//! Batches: `project` writes 40-byte `RtRayGeometry` records; `project_soa` writes the same rays, bit
+//! for bit, one array per field ([`obscura_sdk::RaysSoa`]). Both run the same kernels at the dispatch
+//! tier — AVX-512 (`perspective/avx512.rs`, pinhole and thin lens), AVX2 + FMA (`perspective/avx2.rs`,
+//! pinhole) or the portable loop — and differ only in the kernel's sink: records take a transpose of
+//! the lanes, arrays take each register as it is (ten stores per sixteen rays, no shuffle). When the
+//! consumer asks for some fields only ([`obscura_sdk::SoaFields`]), the AVX-512 and AVX2 sinks store
+//! only those, and skip the footprint's fourth root when `ray_spread` is not among them.
 
 use std::sync::LazyLock;
 

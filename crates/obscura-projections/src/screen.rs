@@ -3,6 +3,10 @@
 //! in the vectorised loop of [`crate::simd`], and size the footprint by the pixel of the image format
 //! over the screen window, `Δx = (r − l)/W`, `Δy = (t − b)/H` screen units.
 //!
+//! The centred panoramas (every [`CentredLane`] camera) also write their rays one array per field
+//! ([`map_centred_rays_soa`], their `project_soa`): the lanes are already structure-of-arrays, so
+//! that path is one vectorised loop storing each field where it belongs, with no write-out.
+//!
 //! Window coordinates `u, v ∈ [−1, 1]`, the panoramas' normalised form of `s`, are
 //! [`crate::panorama::SweepWindow`]'s.
 

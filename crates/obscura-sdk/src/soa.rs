@@ -7,6 +7,11 @@
 //! directly, with no per-ray record built and copied; the host falls back to `project` and a scatter
 //! for any projection that does not offer it (plugins, modifiers, the models not vectorised).
 //!
+//! A consumer that reads only some fields names them ([`SoaFields`], [`SoaContext::with_fields`]):
+//! `PxrPerspective`'s kernels then store those arrays only — a tracer that wants direction and
+//! `max_dist` gets 16 bytes a ray written instead of 40. Projections that ignore the selection
+//! write every field, which the contract allows.
+//!
 //! | field of [`RaysSoa`] | [`RayGeometry`] field |
 //! |---|---|
 //! | `origin[0..3]` | `origin.x`, `origin.y`, `origin.z` |
