@@ -636,9 +636,9 @@ mod tests {
                                 if fields.has(k) {
                                     assert_eq!(g[k], w[k], "{what}");
                                 } else if level == simd::Level::Avx512 {
-                                    assert_eq!(g[k], testing::UNWRITTEN, "{what}: written");
+                                    assert_eq!(g[k], obscura_sdk::SOA_UNWRITTEN, "{what}: written");
                                 } else {
-                                    assert!(g[k] == w[k] || g[k] == testing::UNWRITTEN, "{what}");
+                                    assert!(g[k] == w[k] || g[k] == obscura_sdk::SOA_UNWRITTEN, "{what}");
                                 }
                             }
                         }

@@ -339,6 +339,106 @@ impl<'a> SoaContext<'a> {
     }
 }
 
+/// A bit pattern no projection writes (a NaN with a payload): [`check_project_soa`]'s arrays start out
+/// holding it, so a field `project_soa` leaves unwritten shows as a difference.
+pub const SOA_UNWRITTEN: u32 = 0x7FA5_5A5A;
+
+/// Runs `p`'s [`project`](crate::Projection::project) and
+/// [`project_soa`](crate::Projection::project_soa) on the same samples (the lens samples are the
+/// aperture samples mapped back to `[0, 1)²`, the tints start white) and compares them bit for bit:
+/// every field of every ray, the output times and the tints. The arrays start as [`SOA_UNWRITTEN`] and are
+/// cut from one buffer one float past its start, so no array is 16-byte aligned.
+///
+/// `Ok(true)`: the two agree; `Ok(false)`: `p` does not offer `project_soa`. A projection's tests
+/// (and a plugin author's) call it at every SIMD tier ([`crate::simd::with_level`]).
+///
+/// # Errors
+/// The first difference, naming the ray, the field and both values, or a length mismatch among the
+/// inputs.
+pub fn check_project_soa(
+    p: &dyn crate::Projection,
+    screen: &[Point2],
+    aperture: &[Point2],
+    time: &[f32],
+) -> Result<bool, String> {
+    let n = screen.len();
+    if aperture.len() != n || time.len() != n {
+        return Err(format!(
+            "check_project_soa: {n} screen samples but {} aperture samples and {} times",
+            aperture.len(),
+            time.len()
+        ));
+    }
+    let lens: Vec<Point2> = aperture
+        .iter()
+        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
+        .collect();
+    let (mut want_time, mut rays, mut tint) = (
+        time.to_vec(),
+        vec![RayGeometry::CULLED; n],
+        vec![crate::Rgb::WHITE; n],
+    );
+    let mut ctx =
+        crate::ProjectionContext::new(screen, &lens, aperture, &mut want_time, &mut rays, &mut tint)
+            .map_err(|e| e.to_string())?;
+    p.project(&mut ctx);
+    let mut got_time = time.to_vec();
+    let mut buffer = vec![f32::from_bits(SOA_UNWRITTEN); 10 * n + 1];
+    let [mut r, mut g, mut b] = [(); 3].map(|()| vec![1.0f32; n]);
+    let soa = RaysSoa::from_fields(&mut buffer[1..]).expect("ten arrays of n");
+    let mut ctx = SoaContext::new(
+        screen,
+        &lens,
+        aperture,
+        &mut got_time,
+        soa,
+        [&mut r, &mut g, &mut b],
+    )
+    .map_err(|e| e.to_string())?;
+    if !p.project_soa(&mut ctx) {
+        return Ok(false);
+    }
+    let got: Vec<RayGeometry> = (0..n).map(|i| ctx.rays.get(i)).collect();
+    const FIELDS: [&str; 10] = [
+        "origin.x",
+        "origin.y",
+        "origin.z",
+        "origin_radius",
+        "direction.x",
+        "direction.y",
+        "direction.z",
+        "ray_spread",
+        "min_dist",
+        "max_dist",
+    ];
+    for (i, (got, want)) in got.iter().zip(&rays).enumerate() {
+        for (k, (g, w)) in got.to_bits().into_iter().zip(want.to_bits()).enumerate() {
+            if g != w {
+                return Err(format!(
+                    "ray {i} of {n}: {} is {:?} (bits {g:#010x}) from project_soa, {:?} (bits {w:#010x}) from project",
+                    FIELDS[k],
+                    f32::from_bits(g),
+                    f32::from_bits(w)
+                ));
+            }
+        }
+        let tints = [(r[i], tint[i].r), (g[i], tint[i].g), (b[i], tint[i].b)];
+        if tints.iter().any(|(x, y)| x.to_bits() != y.to_bits()) {
+            return Err(format!(
+                "ray {i} of {n}: tint ({}, {}, {}) from project_soa, {:?} from project",
+                r[i], g[i], b[i], tint[i]
+            ));
+        }
+        if got_time[i].to_bits() != want_time[i].to_bits() {
+            return Err(format!(
+                "ray {i} of {n}: time {} from project_soa, {} from project",
+                got_time[i], want_time[i]
+            ));
+        }
+    }
+    Ok(true)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -380,6 +480,81 @@ mod tests {
         assert_eq!(soa.get(3).to_bits(), ray(3).to_bits());
         assert_eq!(soa.get(1).to_bits(), [0; 10]);
         assert_eq!(soa.get(4).to_bits(), [0; 10]);
+    }
+
+    /// A pinhole of its own: `D = normalize(sx, sy, 1)`, `max_dist` 100; its `project_soa` forgets
+    /// `min_dist` when `forget` is set.
+    struct Tiny {
+        offer: bool,
+        forget: bool,
+    }
+
+    impl Tiny {
+        fn ray(s: Point2) -> RayGeometry {
+            RayGeometry {
+                direction: Vec3::new(s.x, s.y, 1.0).normalize_or_zero(),
+                min_dist: 0.5,
+                max_dist: 100.0,
+                ..RayGeometry::CULLED
+            }
+        }
+    }
+
+    impl crate::Projection for Tiny {
+        fn property(&self, _: crate::ProjectionProperty) -> Option<crate::PropertyValue> {
+            None
+        }
+
+        fn project(&self, ctx: &mut crate::ProjectionContext<'_>) {
+            let c = ctx.parts_mut();
+            for (r, s) in c.rays.iter_mut().zip(c.screen) {
+                *r = Tiny::ray(*s);
+            }
+        }
+
+        fn project_soa(&self, ctx: &mut SoaContext<'_>) -> bool {
+            if !self.offer {
+                return false;
+            }
+            for (i, s) in ctx.screen.iter().enumerate() {
+                let mut r = Tiny::ray(*s);
+                if self.forget {
+                    r.min_dist = ctx.rays.min_dist[i];
+                }
+                ctx.rays.set(i, &r);
+            }
+            true
+        }
+    }
+
+    #[test]
+    fn check_project_soa_finds_a_field_left_unwritten() {
+        let screen = [
+            Point2::new(0.1, 0.2),
+            Point2::new(-0.3, 0.4),
+            Point2::new(0.0, 0.0),
+        ];
+        let (a, t) = ([Point2::ZERO; 3], [0.0f32; 3]);
+        let check = |offer, forget| check_project_soa(&Tiny { offer, forget }, &screen, &a, &t);
+        assert_eq!(check(true, false), Ok(true));
+        assert_eq!(check(false, false), Ok(false));
+        let err = check(true, true).unwrap_err();
+        assert!(
+            err.starts_with("ray 0 of 3: min_dist is NaN (bits 0x7fa55a5a)"),
+            "{err}"
+        );
+        assert!(
+            check_project_soa(
+                &Tiny {
+                    offer: true,
+                    forget: false
+                },
+                &screen,
+                &a,
+                &t[..2]
+            )
+            .is_err()
+        );
     }
 
     #[test]
