@@ -328,58 +328,44 @@ mod roofline {
 }
 
 /// The projections that offer `project_soa` (the perspective kernels and the centred panoramas), by
-/// label: `soa_records` and `soa_arrays` run each.
-const SOA: &[Entry] = &[
-    ("pinhole", "PxrPerspective", &[("float fov", "60")]),
-    (
-        "thin_lens",
-        "PxrPerspective",
-        &[
-            ("float fov", "60"),
-            ("float fStop", "2.8"),
-            ("float focalLength", "0.05"),
-            ("float focalDistance", "4"),
-        ],
-    ),
-    ("sphere", "PxrSphereCamera", &[]),
-    ("cylinder", "PxrCylinderCamera", &[]),
-    (
-        "fisheye_equidistant",
-        "Fisheye",
-        &[("string mapping", "equidistant")],
-    ),
-    ("fisheye_equisolid", "Fisheye", &[("string mapping", "equisolid")]),
-    (
-        "fisheye_stereographic",
-        "Fisheye",
-        &[("string mapping", "stereographic")],
-    ),
-    (
-        "fisheye_orthographic",
-        "Fisheye",
-        &[("string mapping", "orthographic")],
-    ),
-    (
-        "fisheye_polynomial",
-        "Fisheye",
-        &[("string mapping", "polynomial")],
-    ),
-    ("mirror_ball", "MirrorBall", &[]),
-    ("cube_face", "EquiangularCubemapFace", &[]),
-    ("octahedral", "Octahedral", &[]),
+/// their label in `PERSPECTIVE` or `LIBRARY`: `soa_records` and `soa_arrays` run each.
+const SOA: [&str; 12] = [
+    "pinhole",
+    "thin_lens",
+    "sphere",
+    "cylinder",
+    "fisheye_equidistant",
+    "fisheye_equisolid",
+    "fisheye_stereographic",
+    "fisheye_orthographic",
+    "fisheye_polynomial",
+    "mirror_ball",
+    "cube_face",
+    "octahedral",
 ];
 
+/// The projection and parameters of an `SOA` label.
+fn soa_entry(label: &str) -> (&'static str, &'static [(&'static str, &'static str)]) {
+    match PERSPECTIVE.iter().find(|p| p.0 == label) {
+        Some(p) => ("PxrPerspective", p.1),
+        None => {
+            let e = LIBRARY.iter().find(|e| e.0 == label).expect("a label of LIBRARY");
+            (e.1, e.2)
+        }
+    }
+}
+
 /// `project` of an `SOA` projection into 40-byte records, batch 4096.
-#[divan::bench(args = SOA.iter().map(|e| e.0))]
+#[divan::bench(args = SOA)]
 fn soa_records(bencher: Bencher, label: &str) {
-    let (_, name, params) = SOA.iter().find(|e| e.0 == label).expect("a label of SOA");
+    let (name, params) = soa_entry(label);
     bench_projection(bencher, 4096, name, params);
 }
 
 /// `project_soa` of an `SOA` projection into ten arrays (every field), batch 4096.
-#[divan::bench(args = SOA.iter().map(|e| e.0))]
+#[divan::bench(args = SOA)]
 fn soa_arrays(bencher: Bencher, label: &str) {
-    let (_, name, params) = SOA.iter().find(|e| e.0 == label).expect("a label of SOA");
+    let (name, params) = soa_entry(label);
     let p = projection(name, params);
     let mut batch = Batch::new(4096, Aperture::Square);
     assert!(

@@ -245,6 +245,14 @@ pub fn project_points(
     project_batch(p, screen, aperture, time).0
 }
 
+/// The host's lens samples in `[0, 1)²` behind aperture samples in `[−1, 1]²`.
+fn lens_of(aperture: &[Point2]) -> Vec<Point2> {
+    aperture
+        .iter()
+        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
+        .collect()
+}
+
 /// Projects one batch of hand-made samples and returns the rays, output times and tints.
 pub fn project_batch(
     p: &dyn Projection,
@@ -253,10 +261,7 @@ pub fn project_batch(
     time: &[f32],
 ) -> (Vec<RayGeometry>, Vec<f32>, Vec<Rgb>) {
     let n = screen.len();
-    let lens: Vec<Point2> = aperture
-        .iter()
-        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
-        .collect();
+    let lens = lens_of(aperture);
     let mut time = time.to_vec();
     let mut rays = vec![RayGeometry::CULLED; n];
     let mut tint = vec![Rgb::WHITE; n];
@@ -277,10 +282,7 @@ pub fn project_soa_batch(
     fields: SoaFields,
 ) -> Option<(Vec<RayGeometry>, Vec<f32>, Vec<Rgb>)> {
     let n = screen.len();
-    let lens: Vec<Point2> = aperture
-        .iter()
-        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
-        .collect();
+    let lens = lens_of(aperture);
     let mut time = time.to_vec();
     let mut buffer = vec![f32::from_bits(obscura_sdk::SOA_UNWRITTEN); 10 * n + 1];
     let [mut r, mut g, mut b] = [(); 3].map(|()| vec![1.0f32; n]);

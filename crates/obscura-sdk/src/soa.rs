@@ -63,6 +63,21 @@ fn check(expected: usize, arrays: &[(&'static str, usize)]) -> Result<(), SoaLen
 }
 
 impl<'a> RaysSoa<'a> {
+    /// The fields' names in record order (the order of [`RaysSoa::fields_mut`] and
+    /// [`SoaFields::has`]), for messages.
+    pub const FIELD_NAMES: [&'static str; 10] = [
+        "origin.x",
+        "origin.y",
+        "origin.z",
+        "origin_radius",
+        "direction.x",
+        "direction.y",
+        "direction.z",
+        "ray_spread",
+        "min_dist",
+        "max_dist",
+    ];
+
     /// Bundles ten arrays of one length (the order of [`RayGeometry`]'s fields). Fails naming the
     /// first array whose length differs from `origin[0]`'s.
     pub fn new(
@@ -399,24 +414,12 @@ pub fn check_project_soa(
         return Ok(false);
     }
     let got: Vec<RayGeometry> = (0..n).map(|i| ctx.rays.get(i)).collect();
-    const FIELDS: [&str; 10] = [
-        "origin.x",
-        "origin.y",
-        "origin.z",
-        "origin_radius",
-        "direction.x",
-        "direction.y",
-        "direction.z",
-        "ray_spread",
-        "min_dist",
-        "max_dist",
-    ];
     for (i, (got, want)) in got.iter().zip(&rays).enumerate() {
         for (k, (g, w)) in got.to_bits().into_iter().zip(want.to_bits()).enumerate() {
             if g != w {
                 return Err(format!(
                     "ray {i} of {n}: {} is {:?} (bits {g:#010x}) from project_soa, {:?} (bits {w:#010x}) from project",
-                    FIELDS[k],
+                    RaysSoa::FIELD_NAMES[k],
                     f32::from_bits(g),
                     f32::from_bits(w)
                 ));
