@@ -434,6 +434,30 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Random batches of random length over and far beyond the window (culled samples among
+        /// them), at every tier: every panorama's `project_soa` is its `project` bit for bit.
+        #[test]
+        fn tiers_panoramas_project_soa_is_project_on_random_batches(
+            points in proptest::collection::vec((-3.0f64..4.0, -3.0f64..4.0), 0..50),
+        ) {
+            let format = Format::new(320, 160);
+            let w = ScreenWindow::default_for(format);
+            let screen: Vec<Point2> = points.iter().map(|&(fx, fy)| w.raster_to_screen(format, fx * 320.0, fy * 160.0)).collect();
+            let n = screen.len();
+            let (aperture, time) = (vec![Point2::ZERO; n], vec![0.0; n]);
+            for (label, factory, params) in panoramas() {
+                let p = make(factory.as_ref(), &params, format);
+                for level in Level::ALL.into_iter().filter(|l| l.is_available()) {
+                    let check = with_level(level, || obscura_sdk::check_project_soa(p.as_ref(), &screen, &aperture, &time));
+                    prop_assert_eq!(check, Ok(true), "{} tier {}", label, level);
+                }
+            }
+        }
+    }
+
+    proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
 
         /// Over the whole screen (and far beyond it), at every tier: the ray is the portable tier's
