@@ -116,31 +116,37 @@ impl WideTree {
     /// 4-triangle test cost about the same), areas from the boxes the parents store.
     #[cfg(test)]
     pub(super) fn sah_cost(&self) -> f64 {
+        let (nodes, leaves) = self.sah_cost_parts();
+        nodes + leaves
+    }
+
+    /// [`WideTree::sah_cost`]'s two terms: `(nodes, leaves)`.
+    #[cfg(test)]
+    pub(super) fn sah_cost_parts(&self) -> (f64, f64) {
         if self.nodes.is_empty() {
-            return 0.0;
+            return (0.0, 0.0);
         }
-        let slot_area = |node: &WideNode, k: usize| {
-            Aabb {
-                lo: Vec3A::new(node.lo[0][k], node.lo[1][k], node.lo[2][k]),
-                hi: Vec3A::new(node.hi[0][k], node.hi[1][k], node.hi[2][k]),
-            }
-            .half_area()
+        let slot = |node: &WideNode, k: usize| Aabb {
+            lo: Vec3A::new(node.lo[0][k], node.lo[1][k], node.lo[2][k]),
+            hi: Vec3A::new(node.hi[0][k], node.hi[1][k], node.hi[2][k]),
         };
         let root = &self.nodes[0];
         let mut root_box = Aabb::EMPTY;
         for k in (0..WIDTH).filter(|&k| root.meta[k] != LEAF) {
-            root_box.grow(&Aabb {
-                lo: Vec3A::new(root.lo[0][k], root.lo[1][k], root.lo[2][k]),
-                hi: Vec3A::new(root.hi[0][k], root.hi[1][k], root.hi[2][k]),
-            });
+            root_box.grow(&slot(root, k));
         }
-        let mut cost = root_box.half_area();
+        let (mut nodes, mut leaves) = (root_box.half_area(), 0.0);
         for node in &self.nodes {
             for k in (0..WIDTH).filter(|&k| node.meta[k] != LEAF) {
-                cost += slot_area(node, k);
+                let a = slot(node, k).half_area();
+                if node.meta[k] == 0 {
+                    nodes += a;
+                } else {
+                    leaves += a;
+                }
             }
         }
-        cost / root_box.half_area()
+        (nodes / root_box.half_area(), leaves / root_box.half_area())
     }
 }
 

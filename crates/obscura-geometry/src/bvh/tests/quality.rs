@@ -315,8 +315,8 @@ fn quality_report() {
     let (n, b) = visits(&bvh.wide, &rays, false);
     let (sn, sb) = visits(&bvh.wide, &rays, true);
     println!(
-        "build {ms:.0} ms (debug); shape {:?}; SAH {:.2}; nearest: {n:.2} nodes {b:.2} blocks; any: {sn:.2} nodes {sb:.2} blocks",
+        "build {ms:.0} ms (debug); shape {:?}; SAH (nodes, leaves) {:?}; nearest: {n:.2} nodes {b:.2} blocks; any: {sn:.2} nodes {sb:.2} blocks",
         shape(&bvh.wide),
-        bvh.wide.sah_cost()
+        bvh.wide.sah_cost_parts()
     );
 }
