@@ -20,11 +20,12 @@
 //! eight-wide: each 256-byte node holds its eight children's boxes coordinate by coordinate
 //! (`lo.x[8], lo.y[8], … hi.z[8]`), so one ray/box slab test covers all eight with one AVX2
 //! instruction per operation (detected at run time; without AVX2 a portable loop does the same
-//! operations). The binary tree is collapsed greedily (a node takes its children and opens the
-//! largest interior one until it has eight), which divides the number of levels by up to three, and
-//! any subtree of at most four triangles
-//! becomes one leaf whose triangles are packed coordinate by coordinate (`Tri4`, 160 bytes) and go
-//! through the watertight test four lanes at once. Children are visited nearest entry first; those
+//! operations). The binary tree's SAH counts a leaf's cost in blocks of four triangles (what one leaf
+//! test covers), so leaves come out full; it is collapsed by a dynamic programme over the SAH
+//! (which binary nodes become wide nodes and which are opened into their parent's eight slots, for
+//! the least total area of wide nodes), which divides the number of levels by up to three, and any
+//! subtree of at most four triangles becomes one leaf whose triangles are packed coordinate by
+//! coordinate (`Tri4`, 160 bytes) and go through the watertight test four lanes at once. Children are visited nearest entry first; those
 //! waiting on the stack are prefetched, since an incoherent ray's time is mostly cache misses on
 //! nodes and leaves; any-hit queries (shadow rays) stop at the first hit.
 //!

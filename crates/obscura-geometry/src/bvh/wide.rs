@@ -110,86 +110,234 @@ impl WideTree {
         }
         deepest
     }
+
+    /// The tree's SAH cost: the expected number of node and leaf-block tests for a ray through the
+    /// root's box, `Σ_nodes A(node)/A(root) + Σ_leaves A(leaf)/A(root)` (one 8-box test and one
+    /// 4-triangle test cost about the same), areas from the boxes the parents store.
+    #[cfg(test)]
+    pub(super) fn sah_cost(&self) -> f64 {
+        let (nodes, leaves) = self.sah_cost_parts();
+        nodes + leaves
+    }
+
+    /// [`WideTree::sah_cost`]'s two terms: `(nodes, leaves)`.
+    #[cfg(test)]
+    pub(super) fn sah_cost_parts(&self) -> (f64, f64) {
+        if self.nodes.is_empty() {
+            return (0.0, 0.0);
+        }
+        let slot = |node: &WideNode, k: usize| Aabb {
+            lo: Vec3A::new(node.lo[0][k], node.lo[1][k], node.lo[2][k]),
+            hi: Vec3A::new(node.hi[0][k], node.hi[1][k], node.hi[2][k]),
+        };
+        let root = &self.nodes[0];
+        let mut root_box = Aabb::EMPTY;
+        for k in (0..WIDTH).filter(|&k| root.meta[k] != LEAF) {
+            root_box.grow(&slot(root, k));
+        }
+        let (mut nodes, mut leaves) = (root_box.half_area(), 0.0);
+        for node in &self.nodes {
+            for k in (0..WIDTH).filter(|&k| node.meta[k] != LEAF) {
+                let a = slot(node, k).half_area();
+                if node.meta[k] == 0 {
+                    nodes += a;
+                } else {
+                    leaves += a;
+                }
+            }
+        }
+        (nodes / root_box.half_area(), leaves / root_box.half_area())
+    }
 }
 
-/// Collapses a binary tree into a wide one: each wide node takes a binary node's two children
-/// and, while it has fewer than [`WIDTH`], replaces its interior child of largest surface area by that
-/// child's two children (the greedy rule of Wald et al., "Getting Rid of Packets", 2008). A binary
-/// subtree over at most [`LANES`] triangles becomes one leaf (its triangles are contiguous in leaf
-/// order), whose triangles `tris[i]` / `ids[i]` are packed into one [`Tri4`]. Nodes are laid out
-/// depth first, each node's interior children contiguous.
+/// Cost of testing one wide node's eight boxes, relative to one leaf block's four triangles, in the
+/// collapse's SAH.
+const NODE_COST: f64 = 1.0;
+/// Cost of testing one leaf block.
+const BLOCK_COST: f64 = 1.0;
+
+/// The binary tree seen by the collapse: node `0` is the root, the children of an interior node with
+/// pair index `p` are nodes `1 + 2p` and `2 + 2p` (so a child's index is always above its parent's).
+pub(super) struct Binary<'t> {
+    tree: &'t Tree,
+    /// Each node's triangles in leaf order, `first..end` (a subtree's leaves are contiguous).
+    range: Vec<(u32, u32)>,
+}
+
+impl<'t> Binary<'t> {
+    /// Indexes `tree` and finds each node's triangle range.
+    pub(super) fn new(tree: &'t Tree) -> Self {
+        let n = tree.node_count();
+        let mut binary = Self {
+            tree,
+            range: vec![(0, 0); n],
+        };
+        // Children sit above their parent, so a backward sweep sees them first.
+        for i in (0..n).rev() {
+            let node = binary.node(i);
+            binary.range[i] = if node.count > 0 {
+                (node.first, node.first + node.count)
+            } else {
+                let [l, r] = binary.children(i);
+                debug_assert!(l > i && r > i, "child below its parent");
+                (binary.range[l].0, binary.range[r].1)
+            };
+        }
+        binary
+    }
+
+    /// Binary node `i`.
+    pub(super) fn node(&self, i: usize) -> Node {
+        if i == 0 {
+            self.tree.root
+        } else {
+            self.tree.pairs[(i - 1) / 2].0[(i - 1) % 2]
+        }
+    }
+
+    /// The two children of interior node `i`.
+    pub(super) fn children(&self, i: usize) -> [usize; 2] {
+        let first = self.node(i).first as usize;
+        [1 + 2 * first, 2 + 2 * first]
+    }
+
+    /// True when node `i`'s subtree fits one leaf block: it becomes a leaf (never opened, so leaf
+    /// blocks stay as full as the builder made them).
+    pub(super) fn is_leaf(&self, i: usize) -> bool {
+        let (first, end) = self.range[i];
+        end - first <= LANES as u32
+    }
+
+    /// Half the surface area of node `i`'s box.
+    pub(super) fn area(&self, i: usize) -> f64 {
+        area(&self.node(i))
+    }
+}
+
+/// The collapse's dynamic programme (Ylitie, Karras and Laine, "Efficient Incoherent Ray Traversal
+/// on GPUs Through Compressed Wide BVHs", HPG 2017, adapted to leaves of one block): `cost[i][k−1]`
+/// is the least SAH cost of node `i`'s subtree when it may fill `k` slots of its parent, as one leaf
+/// (`BLOCK_COST·A`), one wide node (`NODE_COST·A` plus its children's best use of eight slots), or
+/// its two children sharing the `k` slots. Subtrees of at most [`LANES`] triangles are always one
+/// leaf, so the leaves' term is the same for every choice and the programme in effect minimises the
+/// total area of the wide nodes (the two costs' ratio does not change the tree). `O(n·WIDTH²)`.
+pub(super) struct Plan<'t> {
+    pub(super) binary: Binary<'t>,
+    pub(super) cost: Vec<[f64; WIDTH]>,
+}
+
+impl<'t> Plan<'t> {
+    /// Runs the programme bottom-up over `tree`.
+    pub(super) fn new(tree: &'t Tree) -> Self {
+        let binary = Binary::new(tree);
+        let n = binary.range.len();
+        let mut cost = vec![[0.0; WIDTH]; n];
+        for i in (0..n).rev() {
+            let a = binary.area(i);
+            cost[i] = if binary.is_leaf(i) {
+                [BLOCK_COST * a; WIDTH]
+            } else {
+                let [l, r] = binary.children(i);
+                // split[k−1]: the two children in at most k slots (k ≥ 2).
+                let mut split = [f64::INFINITY; WIDTH];
+                for k in 2..=WIDTH {
+                    split[k - 1] = (1..k)
+                        .map(|j| cost[l][j - 1] + cost[r][k - j - 1])
+                        .fold(f64::INFINITY, f64::min);
+                }
+                let mut c = [0.0; WIDTH];
+                c[0] = NODE_COST * a + split[WIDTH - 1];
+                for k in 2..=WIDTH {
+                    c[k - 1] = c[k - 2].min(split[k - 1]);
+                }
+                c
+            };
+        }
+        Self { binary, cost }
+    }
+
+    /// Appends the slots node `i` fills when given at most `k` of them: itself (a leaf or a wide
+    /// node) when that is cheapest, else its children's share.
+    fn slots(&self, i: usize, k: usize, out: &mut Vec<usize>) {
+        let mut k = k;
+        while k > 1 && self.cost[i][k - 2] <= self.cost[i][k - 1] {
+            k -= 1;
+        }
+        if k == 1 {
+            out.push(i);
+        } else {
+            self.share(i, k, out);
+        }
+    }
+
+    /// Appends the slots of node `i`'s two children sharing at most `k` slots, as cheaply as the
+    /// programme found.
+    fn share(&self, i: usize, k: usize, out: &mut Vec<usize>) {
+        let [l, r] = self.binary.children(i);
+        let mut best = (f64::INFINITY, 1);
+        for j in 1..k {
+            let c = self.cost[l][j - 1] + self.cost[r][k - j - 1];
+            if c < best.0 {
+                best = (c, j);
+            }
+        }
+        self.slots(l, best.1, out);
+        self.slots(r, k - best.1, out);
+    }
+}
+
+/// Collapses a binary tree into a wide one. Which binary nodes become wide nodes and which are
+/// opened into their parent's slots is chosen by the SAH ([`Plan`]: each wide node costs
+/// [`NODE_COST`] times its area, each leaf block [`BLOCK_COST`] times its area, and the programme
+/// finds the cheapest tree), not by a fixed rule. A binary subtree over at most [`LANES`] triangles
+/// becomes one leaf (its triangles are contiguous in leaf order), whose triangles `tris[i]` /
+/// `ids[i]` are packed into one [`Tri4`]. Nodes are laid out depth first, each node's interior
+/// children contiguous, and a node's leaf blocks are contiguous too.
 pub(super) fn collapse(tree: &Tree, tris: &[[Vec3A; 3]], ids: &[u32]) -> WideTree {
     if tree.root.count == 0 && tree.pairs.is_empty() {
         return WideTree::default();
     }
-    let children = |n: &Node| -> [Node; 2] { tree.pairs[n.first as usize].0 };
-    // A node as a leaf when its subtree holds at most LANES triangles.
-    let as_leaf = |n: Node| -> Node {
-        if n.count > 0 {
-            return n;
-        }
-        let (mut l, mut r) = (n, n);
-        while l.count == 0 {
-            l = children(&l)[0];
-        }
-        while r.count == 0 {
-            r = children(&r)[1];
-        }
-        let (first, end) = (l.first, r.first + r.count);
-        if end - first <= LANES as u32 {
-            Node {
-                first,
-                count: end - first,
-                ..n
-            }
-        } else {
-            n
-        }
-    };
+    let plan = Plan::new(tree);
+    let binary = &plan.binary;
     let mut out = WideTree {
         nodes: vec![WideNode::EMPTY],
         leaves: Vec::new(),
     };
-    let root = as_leaf(tree.root);
-    // (wide node to fill, binary children it gets)
-    let mut todo: Vec<(usize, Vec<Node>)> = vec![(
+    let wide_children = |i: usize| {
+        let mut kids = Vec::with_capacity(WIDTH);
+        plan.share(i, WIDTH, &mut kids);
+        kids
+    };
+    // (wide node to fill, the binary nodes in its slots)
+    let mut todo: Vec<(usize, Vec<usize>)> = vec![(
         0,
-        if root.count > 0 {
-            vec![root]
+        if binary.is_leaf(0) {
+            vec![0]
         } else {
-            children(&root).map(as_leaf).to_vec()
+            wide_children(0)
         },
     )];
-    while let Some((slot, mut kids)) = todo.pop() {
-        while kids.len() < WIDTH {
-            let widest = kids
-                .iter()
-                .enumerate()
-                .filter(|(_, n)| n.count == 0)
-                .max_by(|a, b| area(a.1).total_cmp(&area(b.1)))
-                .map(|(i, _)| i);
-            let Some(i) = widest else { break };
-            let [a, b] = children(&kids[i]).map(as_leaf);
-            kids[i] = a;
-            kids.insert(i + 1, b);
-        }
+    while let Some((slot, kids)) = todo.pop() {
+        debug_assert!(!kids.is_empty() && kids.len() <= WIDTH);
         let mut node = WideNode::EMPTY;
         let mut pending = Vec::new();
-        for (k, n) in kids.iter().enumerate() {
+        for (k, &i) in kids.iter().enumerate() {
+            let n = binary.node(i);
             for axis in 0..3 {
                 node.lo[axis][k] = n.lo[axis];
                 node.hi[axis][k] = n.hi[axis];
             }
-            if n.count > 0 {
+            if binary.is_leaf(i) {
+                let (first, end) = binary.range[i];
                 node.child[k] = out.leaves.len() as u32;
-                node.meta[k] = LEAF | n.count;
+                node.meta[k] = LEAF | (end - first);
                 out.leaves
-                    .push(pack(tris, ids, n.first as usize, n.count as usize));
+                    .push(pack(tris, ids, first as usize, (end - first) as usize));
             } else {
                 let index = out.nodes.len() + pending.len();
                 node.child[k] = index as u32;
                 node.meta[k] = 0;
-                pending.push(children(n).map(as_leaf).to_vec());
+                pending.push(wide_children(i));
             }
         }
         let base = out.nodes.len();

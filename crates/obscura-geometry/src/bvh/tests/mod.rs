@@ -2,6 +2,7 @@
 //! any hit, proptest strategies for triangles and rays, and a deterministic generator.
 
 mod mesh;
+mod quality;
 mod scene;
 mod triangle;
 mod visibility;
