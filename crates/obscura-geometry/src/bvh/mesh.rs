@@ -432,6 +432,8 @@ struct WideAny<'a, K> {
 }
 
 impl<K: WideKernel> LeafVisitor for WideAny<'_, K> {
+    const ANY_HIT: bool = true;
+
     #[inline(always)]
     fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
         let (mask, _) = self
