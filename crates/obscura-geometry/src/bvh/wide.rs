@@ -244,10 +244,14 @@ pub(super) trait WideKernel: Copy {
     /// Tests the [`WIDTH`] boxes of `node` against `[t_min, t_far]`: a mask (bit `k` for child `k`) and
     /// the entry distances.
     fn test(self, ray: &Self::Ray, node: &WideNode, t_far: f32) -> (u32, [f32; WIDTH]);
+    /// The per-ray constants of the leaf test.
+    type LeafRay;
+    /// Precomputes them from the triangle test's constants.
+    fn prepare_leaf(self, ray: TriRay) -> Self::LeafRay;
     /// The watertight test ([`TriRay::intersect_det`]) on the first `count` triangles of `block`
     /// with `t_min < t < lim`: a mask of the lanes hit and each lane's `(t, u, v, det)`, bit for bit
     /// what the scalar test gives.
-    fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits);
+    fn leaf(self, ray: &Self::LeafRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits);
 }
 
 /// Per-lane `t`, `u`, `v`, `det` of a leaf test (meaningful in the lanes of its mask).
@@ -286,6 +290,12 @@ pub(super) struct PortableWideRay {
 
 impl WideKernel for PortableWide {
     type Ray = PortableWideRay;
+    type LeafRay = TriRay;
+
+    #[inline(always)]
+    fn prepare_leaf(self, ray: TriRay) -> TriRay {
+        ray
+    }
 
     #[inline(always)]
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> PortableWideRay {
@@ -358,9 +368,36 @@ pub(super) struct Avx2WideRay {
     t_min: core::arch::x86_64::__m256,
 }
 
+/// Per-ray constants of [`Avx2Wide`]'s leaf test: the origin's and the shear's components (in
+/// [`TriRay::sheared`]'s order: `kx`, `ky`, `kz`) broadcast to four lanes, and the offsets (in
+/// `f32`s from a vertex's rows) of the rows `kx`, `ky`, `kz`.
+#[cfg(target_arch = "x86_64")]
+pub(super) struct Avx2LeafRay {
+    tri: TriRay,
+    origin: [core::arch::x86_64::__m128; 3],
+    shear: [core::arch::x86_64::__m128; 3],
+    rows: [usize; 3],
+}
+
 #[cfg(target_arch = "x86_64")]
 impl WideKernel for Avx2Wide {
     type Ray = Avx2WideRay;
+    type LeafRay = Avx2LeafRay;
+
+    #[inline(always)]
+    fn prepare_leaf(self, ray: TriRay) -> Avx2LeafRay {
+        use core::arch::x86_64::_mm_set1_ps;
+        let axes = ray.axes;
+        // SAFETY: SSE is part of the x86-64 baseline; these intrinsics only touch registers.
+        unsafe {
+            Avx2LeafRay {
+                origin: axes.map(|k| _mm_set1_ps(ray.origin[k])),
+                shear: ray.shear.map(|s| _mm_set1_ps(s)),
+                rows: axes.map(|k| LANES * k),
+                tri: ray,
+            }
+        }
+    }
 
     #[inline(always)]
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> Avx2WideRay {
@@ -443,7 +480,7 @@ impl WideKernel for Avx2Wide {
     /// tests). A lane with an edge function exactly zero and no two others of opposite signs goes
     /// through the scalar test (it redoes the edges in `f64`).
     #[inline(always)]
-    fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
+    fn leaf(self, ray: &Avx2LeafRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
         use core::arch::x86_64::{
             __m128, _mm_add_ps, _mm_and_ps, _mm_cmpeq_ps, _mm_cmpgt_ps, _mm_cmplt_ps, _mm_cmpneq_ps,
             _mm_div_ps, _mm_load_ps, _mm_movemask_ps, _mm_mul_ps, _mm_or_ps, _mm_set1_ps, _mm_setzero_ps,
@@ -451,20 +488,19 @@ impl WideKernel for Avx2Wide {
         };
         let lanes = (1u32 << count) - 1;
         let mut hits = [[0.0; LANES]; 4];
-        let [kx, ky, kz] = ray.axes;
-        debug_assert!(kx < 3 && ky < 3 && kz < 3);
+        let [kx, ky, kz] = ray.rows;
+        debug_assert!(kx <= 2 * LANES && ky <= 2 * LANES && kz <= 2 * LANES);
         // SAFETY: SSE is part of the x86-64 baseline; `block` is 16-byte aligned and every row of
-        // four `f32` in it is too; the axes are below 3 (`TriRay::new` makes them so), so every row
-        // pointer is inside the block.
+        // four `f32` in it is too; the row offsets are `LANES·k` with `k < 3` (`TriRay::new` makes
+        // the axes so), so every row pointer is inside the vertex's three rows.
         unsafe {
-            let o = ray.origin;
-            let (ox, oy, oz) = (_mm_set1_ps(o[kx]), _mm_set1_ps(o[ky]), _mm_set1_ps(o[kz]));
-            let [sx, sy, sz] = ray.shear.map(|s| _mm_set1_ps(s));
+            let [ox, oy, oz] = ray.origin;
+            let [sx, sy, sz] = ray.shear;
             let sheared = |j: usize| -> [__m128; 3] {
-                let v = block.v.as_ptr().add(j).cast::<[f32; LANES]>();
-                let x = _mm_sub_ps(_mm_load_ps(v.add(kx).cast()), ox);
-                let y = _mm_sub_ps(_mm_load_ps(v.add(ky).cast()), oy);
-                let z = _mm_sub_ps(_mm_load_ps(v.add(kz).cast()), oz);
+                let v = block.v.as_ptr().add(j).cast::<f32>();
+                let x = _mm_sub_ps(_mm_load_ps(v.add(kx)), ox);
+                let y = _mm_sub_ps(_mm_load_ps(v.add(ky)), oy);
+                let z = _mm_sub_ps(_mm_load_ps(v.add(kz)), oz);
                 [
                     _mm_sub_ps(x, _mm_mul_ps(sx, z)),
                     _mm_sub_ps(y, _mm_mul_ps(sy, z)),
@@ -519,7 +555,7 @@ impl WideKernel for Avx2Wide {
                 }
             }
             if exact != 0 {
-                mask |= leaf_scalar(ray, block, exact, t_min, lim, &mut hits);
+                mask |= leaf_scalar(&ray.tri, block, exact, t_min, lim, &mut hits);
             }
             (mask, hits)
         }
