@@ -249,7 +249,7 @@ fn segment_scene(bencher: Bencher) {
 const PASSES: usize = 5;
 
 /// Times both layouts on the primary, incoherent and shadow rays (fastest of [`PASSES`] passes,
-/// this thread only), prints `layout set Mrays/s` lines, and writes the mesh, the rays and the wide
+/// this thread only, in the thread's CPU time as `trace_embree` measures too), prints `layout set Mrays/s` lines, and writes the mesh, the rays and the wide
 /// BVH's answers to `path` for `bench/embree/trace_embree` (format in `bench/embree/README.md`).
 fn vs_embree(path: &Path) {
     let s = &*SCENE;
@@ -283,14 +283,14 @@ fn vs_embree(path: &Path) {
         for (set, rays, shadow) in sets {
             let best = (0..PASSES)
                 .map(|_| {
-                    let start = std::time::Instant::now();
+                    let start = thread_seconds();
                     let n = if shadow {
                         rays.iter().filter(|r| bvh.occluded(r)).count()
                     } else {
                         rays.iter().filter(|r| bvh.intersect(r).is_some()).count()
                     };
                     std::hint::black_box(n);
-                    start.elapsed().as_secs_f64()
+                    thread_seconds() - start
                 })
                 .fold(f64::INFINITY, f64::min);
             println!("{name} {set} {:.3} Mrays/s", rays.len() as f64 / best / 1e6);
@@ -331,6 +331,31 @@ fn vs_embree(path: &Path) {
     }
     std::fs::write(path, out).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     println!("wrote {}", path.display());
+}
+
+/// This thread's CPU time in seconds (`CLOCK_THREAD_CPUTIME_ID`): on a machine shared with other
+/// jobs, time the thread spends descheduled does not count (`trace_embree` reads the same clock).
+#[cfg(target_os = "linux")]
+fn thread_seconds() -> f64 {
+    #[repr(C)]
+    struct Timespec {
+        sec: i64,
+        nsec: i64,
+    }
+    unsafe extern "C" {
+        fn clock_gettime(clock: i32, out: *mut Timespec) -> i32;
+    }
+    let mut ts = Timespec { sec: 0, nsec: 0 };
+    // SAFETY: CLOCK_THREAD_CPUTIME_ID is 3 on Linux; `ts` is a valid out-pointer.
+    unsafe { clock_gettime(3, &mut ts) };
+    ts.sec as f64 + ts.nsec as f64 * 1e-9
+}
+
+/// Wall-clock seconds since the first call (off Linux, where the thread clock is not wired up).
+#[cfg(not(target_os = "linux"))]
+fn thread_seconds() -> f64 {
+    static START: LazyLock<std::time::Instant> = LazyLock::new(std::time::Instant::now);
+    START.elapsed().as_secs_f64()
 }
 
 // ---------------------------------------------------------------------------------------------------
