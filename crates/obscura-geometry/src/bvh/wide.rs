@@ -591,7 +591,8 @@ pub(super) fn prefetch<T>(value: &T) {
 /// Stack-based traversal of `tree` over `[t_min, t_far]` (`t_min` is in `ray`): at each node the
 /// children the ray enters are visited nearest entry first (the others wait on the stack, and are
 /// dropped when popped if a hit has since moved `t_far` in front of them); `leaf` may stop the
-/// traversal (any-hit queries stop at the first hit).
+/// traversal. Any-hit visitors ([`LeafVisitor::ANY_HIT`]) stop at the first hit, so for them the
+/// children are taken in index order, unsorted.
 #[inline(always)]
 pub(super) fn traverse<K: WideKernel, L: LeafVisitor>(
     tree: &WideTree,
