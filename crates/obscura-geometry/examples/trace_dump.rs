@@ -82,18 +82,7 @@ fn main() {
             };
             differ += usize::from(got.0.to_bits() != e.0.to_bits() || got.1 != e.1);
         }
-        let best = (0..passes)
-            .map(|_| {
-                let start = thread_seconds();
-                let n = if shadow {
-                    rays.iter().filter(|r| bvh.occluded(r)).count()
-                } else {
-                    rays.iter().filter(|r| bvh.intersect(r).is_some()).count()
-                };
-                std::hint::black_box(n);
-                thread_seconds() - start
-            })
-            .fold(f64::INFINITY, f64::min);
+        let best = fastest_trace_pass(&bvh, rays, shadow, passes);
         println!(
             "obscura-wide {name} {:.3} Mrays/s (differ from dump: {differ})",
             rays.len() as f64 / best / 1e6
@@ -101,27 +90,4 @@ fn main() {
     }
 }
 
-/// This thread's CPU time in seconds (`CLOCK_THREAD_CPUTIME_ID`): time the thread was descheduled
-/// by other processes on a loaded machine does not count.
-#[cfg(target_os = "linux")]
-fn thread_seconds() -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, out: *mut Timespec) -> i32;
-    }
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: CLOCK_THREAD_CPUTIME_ID is 3 on Linux; `ts` is a valid out-pointer.
-    unsafe { clock_gettime(3, &mut ts) };
-    ts.sec as f64 + ts.nsec as f64 * 1e-9
-}
-
-/// Wall-clock seconds since the first call (off Linux, where the thread clock is not wired up).
-#[cfg(not(target_os = "linux"))]
-fn thread_seconds() -> f64 {
-    static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
-    START.get_or_init(std::time::Instant::now).elapsed().as_secs_f64()
-}
+include!("../../../bench/thread_clock.rs");

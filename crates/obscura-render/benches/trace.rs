@@ -281,18 +281,7 @@ fn vs_embree(path: &Path) {
             ("shadow", &s.shadow, true),
         ];
         for (set, rays, shadow) in sets {
-            let best = (0..PASSES)
-                .map(|_| {
-                    let start = thread_seconds();
-                    let n = if shadow {
-                        rays.iter().filter(|r| bvh.occluded(r)).count()
-                    } else {
-                        rays.iter().filter(|r| bvh.intersect(r).is_some()).count()
-                    };
-                    std::hint::black_box(n);
-                    thread_seconds() - start
-                })
-                .fold(f64::INFINITY, f64::min);
+            let best = fastest_trace_pass(&bvh, rays, shadow, PASSES);
             println!("{name} {set} {:.3} Mrays/s", rays.len() as f64 / best / 1e6);
         }
     }
@@ -333,30 +322,7 @@ fn vs_embree(path: &Path) {
     println!("wrote {}", path.display());
 }
 
-/// This thread's CPU time in seconds (`CLOCK_THREAD_CPUTIME_ID`): on a machine shared with other
-/// jobs, time the thread spends descheduled does not count (`trace_embree` reads the same clock).
-#[cfg(target_os = "linux")]
-fn thread_seconds() -> f64 {
-    #[repr(C)]
-    struct Timespec {
-        sec: i64,
-        nsec: i64,
-    }
-    unsafe extern "C" {
-        fn clock_gettime(clock: i32, out: *mut Timespec) -> i32;
-    }
-    let mut ts = Timespec { sec: 0, nsec: 0 };
-    // SAFETY: CLOCK_THREAD_CPUTIME_ID is 3 on Linux; `ts` is a valid out-pointer.
-    unsafe { clock_gettime(3, &mut ts) };
-    ts.sec as f64 + ts.nsec as f64 * 1e-9
-}
-
-/// Wall-clock seconds since the first call (off Linux, where the thread clock is not wired up).
-#[cfg(not(target_os = "linux"))]
-fn thread_seconds() -> f64 {
-    static START: LazyLock<std::time::Instant> = LazyLock::new(std::time::Instant::now);
-    START.elapsed().as_secs_f64()
-}
+include!("../../../bench/thread_clock.rs");
 
 // ---------------------------------------------------------------------------------------------------
 // Mesh sources
