@@ -249,7 +249,7 @@ fn segment_scene(bencher: Bencher) {
 const PASSES: usize = 5;
 
 /// Times both layouts on the primary, incoherent and shadow rays (fastest of [`PASSES`] passes,
-/// this thread only), prints `layout set Mrays/s` lines, and writes the mesh, the rays and the wide
+/// this thread only, in the thread's CPU time as `trace_embree` measures too), prints `layout set Mrays/s` lines, and writes the mesh, the rays and the wide
 /// BVH's answers to `path` for `bench/embree/trace_embree` (format in `bench/embree/README.md`).
 fn vs_embree(path: &Path) {
     let s = &*SCENE;
@@ -281,18 +281,7 @@ fn vs_embree(path: &Path) {
             ("shadow", &s.shadow, true),
         ];
         for (set, rays, shadow) in sets {
-            let best = (0..PASSES)
-                .map(|_| {
-                    let start = std::time::Instant::now();
-                    let n = if shadow {
-                        rays.iter().filter(|r| bvh.occluded(r)).count()
-                    } else {
-                        rays.iter().filter(|r| bvh.intersect(r).is_some()).count()
-                    };
-                    std::hint::black_box(n);
-                    start.elapsed().as_secs_f64()
-                })
-                .fold(f64::INFINITY, f64::min);
+            let best = fastest_trace_pass(&bvh, rays, shadow, PASSES);
             println!("{name} {set} {:.3} Mrays/s", rays.len() as f64 / best / 1e6);
         }
     }
@@ -332,6 +321,8 @@ fn vs_embree(path: &Path) {
     std::fs::write(path, out).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     println!("wrote {}", path.display());
 }
+
+include!("../../../bench/thread_clock.rs");
 
 // ---------------------------------------------------------------------------------------------------
 // Mesh sources

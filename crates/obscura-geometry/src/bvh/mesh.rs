@@ -257,7 +257,7 @@ impl MeshBvh {
                 let mut visitor = WideClosest {
                     blocks: &self.wide.leaves,
                     kernel: k,
-                    ray,
+                    ray: k.prepare_leaf(ray),
                     t_min,
                     lim: t_lim,
                     best: None,
@@ -305,7 +305,7 @@ impl MeshBvh {
                 let mut visitor = WideAny {
                     blocks: &self.wide.leaves,
                     kernel: k,
-                    ray,
+                    ray: k.prepare_leaf(ray),
                     t_min,
                     t_max,
                     found: false,
@@ -386,10 +386,10 @@ impl LeafVisitor for MeshAny<'_> {
 }
 
 /// [`MeshClosest`] for the wide layout: a leaf is one [`Tri4`] block, tested four lanes at once.
-struct WideClosest<'a, K, F> {
+struct WideClosest<'a, K: WideKernel, F> {
     blocks: &'a [Tri4],
     kernel: K,
-    ray: TriRay,
+    ray: K::LeafRay,
     t_min: f32,
     lim: f32,
     best: Option<(f32, u32, f32, f32)>,
@@ -422,16 +422,18 @@ impl<K: WideKernel, F: Fn(f32, f32) -> bool> LeafVisitor for WideClosest<'_, K, 
 }
 
 /// [`MeshAny`] for the wide layout.
-struct WideAny<'a, K> {
+struct WideAny<'a, K: WideKernel> {
     blocks: &'a [Tri4],
     kernel: K,
-    ray: TriRay,
+    ray: K::LeafRay,
     t_min: f32,
     t_max: f32,
     found: bool,
 }
 
 impl<K: WideKernel> LeafVisitor for WideAny<'_, K> {
+    const ANY_HIT: bool = true;
+
     #[inline(always)]
     fn visit(&mut self, first: usize, count: usize, _: &mut f32) -> bool {
         let (mask, _) = self

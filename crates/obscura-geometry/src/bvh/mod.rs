@@ -27,7 +27,7 @@
 //! subtree of at most four triangles becomes one leaf whose triangles are packed coordinate by
 //! coordinate (`Tri4`, 160 bytes) and go through the watertight test four lanes at once. Children are visited nearest entry first; those
 //! waiting on the stack are prefetched, since an incoherent ray's time is mostly cache misses on
-//! nodes and leaves; any-hit queries (shadow rays) stop at the first hit.
+//! nodes and leaves; any-hit queries (shadow rays) stop at the first hit and so skip the ordering.
 //!
 //! The wide layout gives the same hits as the binary one bit for bit: the boxes are the binary
 //! tree's, the slab test does the same operations in the same order (`maxps`/`minps` keep the NaN

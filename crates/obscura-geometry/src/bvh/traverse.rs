@@ -105,6 +105,9 @@ impl BoxKernel for ScalarKernel {
 /// What a traversal does at a leaf. Implementations inline completely (`visit` is
 /// `#[inline(always)]`), so inside an AVX2 entry point all of the traversal is AVX2 code.
 pub(super) trait LeafVisitor {
+    /// True when the first hit ends the query (any-hit): the wide traversal then skips ordering
+    /// the children by distance.
+    const ANY_HIT: bool = false;
     /// Tests primitives `first..first + count`; may shrink `t_far`; returns `true` to stop.
     fn visit(&mut self, first: usize, count: usize, t_far: &mut f32) -> bool;
     /// Hints that the leaf starting at `first` will be visited soon (the wide traversal calls it for

@@ -1,18 +1,22 @@
 //! Triangles: the watertight ray/triangle test ([`TriRay`], two-sided, with the facing it found), which triangles are skipped
 //! ([`triangle_vertices`]), and the hit record ([`SceneHit`]) that becomes a world-space [`Hit`].
 
-use glam::{Affine3A, Mat3A, Vec3A};
+use glam::{Affine3A, Vec3A};
 
 use crate::ray::{Hit, Ray, TriangleMesh};
 
-/// Per-ray constants of the watertight test: the ray origin and the shear that maps `v - origin` to
-/// `(A[kx] - Sx·A[kz], A[ky] - Sy·A[kz], Sz·A[kz])` (Woop et al. 2013, with `kz` the dominant axis).
-/// As a matrix product each row has one unit entry, one shear entry and one exact zero, so it rounds
-/// exactly like the paper's scalar formulas.
+/// Per-ray constants of the watertight test (Woop et al. 2013): the ray origin, the axes `kx`, `ky`,
+/// `kz` (`kz` the direction's dominant axis; `kx`, `ky` swapped when `D[kz] < 0`, which keeps the
+/// triangles' winding) and the shear `(Sx, Sy, Sz) = (D[kx]/D[kz], D[ky]/D[kz], 1/D[kz])`, which
+/// maps `A = v − origin` to `(A[kx] − Sx·A[kz], A[ky] − Sy·A[kz], Sz·A[kz])`: the ray becomes the
+/// `+z` axis.
 #[derive(Clone, Copy)]
 pub(super) struct TriRay {
     pub(super) origin: Vec3A,
-    pub(super) shear: Mat3A,
+    /// `[kx, ky, kz]`.
+    pub(super) axes: [usize; 3],
+    /// `[Sx, Sy, Sz]`.
+    pub(super) shear: [f32; 3],
 }
 
 impl TriRay {
@@ -32,17 +36,22 @@ impl TriRay {
         if dz < 0.0 {
             core::mem::swap(&mut kx, &mut ky);
         }
-        let mut rows = [[0.0f32; 3]; 3];
-        rows[0][kx] = 1.0;
-        rows[0][kz] = -(direction[kx] / dz);
-        rows[1][ky] = 1.0;
-        rows[1][kz] = -(direction[ky] / dz);
-        rows[2][kz] = 1.0 / dz;
-        let col = |j: usize| Vec3A::new(rows[0][j], rows[1][j], rows[2][j]);
         Self {
             origin,
-            shear: Mat3A::from_cols(col(0), col(1), col(2)),
+            axes: [kx, ky, kz],
+            shear: [direction[kx] / dz, direction[ky] / dz, 1.0 / dz],
         }
+    }
+
+    /// `v − origin` sheared: `(A[kx] − Sx·A[kz], A[ky] − Sy·A[kz], Sz·A[kz])`, one rounding per
+    /// operation in this order (the SIMD leaf tests repeat it lane by lane).
+    #[inline(always)]
+    pub(super) fn sheared(&self, v: Vec3A) -> Vec3A {
+        let [kx, ky, kz] = self.axes;
+        let [sx, sy, sz] = self.shear;
+        let d = v - self.origin;
+        let z = d[kz];
+        Vec3A::new(d[kx] - sx * z, d[ky] - sy * z, sz * z)
     }
 
     /// Two-sided watertight test: `(t, u, v)` with `t_min < t < t_max`, where the hit point is
@@ -63,9 +72,9 @@ impl TriRay {
         t_min: f32,
         t_max: f32,
     ) -> Option<(f32, f32, f32, f32)> {
-        let a = self.shear * (tri[0] - self.origin);
-        let b = self.shear * (tri[1] - self.origin);
-        let c = self.shear * (tri[2] - self.origin);
+        let a = self.sheared(tri[0]);
+        let b = self.sheared(tri[1]);
+        let c = self.sheared(tri[2]);
         let mut e0 = c.x * b.y - c.y * b.x;
         let mut e1 = a.x * c.y - a.y * c.x;
         let mut e2 = b.x * a.y - b.y * a.x;

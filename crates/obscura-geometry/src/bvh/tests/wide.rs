@@ -141,3 +141,58 @@ fn wide_layout_on_a_single_leaf_and_an_empty_mesh() {
     assert_eq!(empty.intersect(&r), None);
     assert!(!empty.occluded(&r));
 }
+
+#[test]
+fn one_leaf_block_decides_zero_edge_functions_as_the_scalar_test_does() {
+    // Four triangles in one leaf block, the ray along +z through the origin:
+    // 0. an edge function f32 rounds to 0 while its exact value is +2⁻⁴⁶ and the other two are
+    //    negative (from `edge_signs_are_exact_when_f32_rounds_them_to_zero`): a miss, decided by
+    //    the exact redo;
+    // 1. the same triangle moved 2⁻²⁰ across that edge and back to z = 1.5: a hit;
+    // 2. an edge on the line x = 0 through the ray (its edge function exactly 0) with the other two
+    //    of opposite signs (the ray meets the line outside the edge): a miss, dropped before the
+    //    redo;
+    // 3. a plain triangle at z = 2: a hit, but farther than 1.
+    let e = f32::EPSILON;
+    let exact = [
+        Vec3A::new(1.0, -1.0, 1.0),
+        Vec3A::new(1.0 + e, 1.0, 1.0),
+        Vec3A::new(-(1.0 + 2.0 * e), -(1.0 + e), 1.0),
+    ];
+    let inside = exact.map(|p| p - Vec3A::new(2f32.powi(-20), -(2f32.powi(-20)), -0.5));
+    let mixed = [
+        Vec3A::new(0.0, 1.0, 0.75),
+        Vec3A::new(0.0, 2.0, 0.75),
+        Vec3A::new(1.0, 1.5, 0.75),
+    ];
+    let plain = [
+        Vec3A::new(-1.0, -1.0, 2.0),
+        Vec3A::new(1.0, -1.0, 2.0),
+        Vec3A::new(0.0, 1.0, 2.0),
+    ];
+    let (wide, binary) = both(&soup(&[exact, inside, mixed, plain], 1.0));
+    assert_eq!(
+        wide.wide.leaves.len(),
+        1,
+        "the four triangles share one leaf block"
+    );
+    let r = Ray::new(Vec3A::ZERO, Vec3A::Z);
+    for scalar in KERNELS {
+        let hit = wide.intersect_with(&r, scalar).expect("triangle 1 is hit");
+        assert_eq!((hit.0, hit.1), (1.5, 1), "scalar kernel only: {scalar}");
+        assert!(wide.occluded_with(&r, scalar));
+        // Without the nearer two, triangle 3 is what the ray meets.
+        let far = Ray { t_min: 1.6, ..r };
+        assert_eq!(
+            wide.intersect_with(&far, scalar).map(|h| (h.0, h.1)),
+            Some((2.0, 3))
+        );
+        // Short of every hit: nothing, though lanes 0 and 2 need the zero-edge rules.
+        let short = Ray { t_max: 1.4, ..r };
+        assert_eq!(wide.intersect_with(&short, scalar), None);
+        assert!(!wide.occluded_with(&short, scalar));
+    }
+    for ray in [r, Ray { t_max: 1.4, ..r }, Ray { t_min: 1.6, ..r }] {
+        same_bits(&wide, &binary, &ray).unwrap();
+    }
+}
