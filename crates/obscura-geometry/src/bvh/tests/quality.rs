@@ -34,17 +34,23 @@ impl WideKernel for Counting<'_> {
         PortableWide.test(ray, node, t_far)
     }
 
-    fn leaf(self, ray: &TriRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
+    type LeafRay = <PortableWide as WideKernel>::LeafRay;
+
+    fn prepare_leaf(self, ray: TriRay) -> Self::LeafRay {
+        PortableWide.prepare_leaf(ray)
+    }
+
+    fn leaf(self, ray: &Self::LeafRay, block: &Tri4, count: usize, t_min: f32, lim: f32) -> (u32, LeafHits) {
         self.blocks.set(self.blocks.get() + 1);
         PortableWide.leaf(ray, block, count, t_min, lim)
     }
 }
 
 /// Nearest hit's `t` (the lowest over a leaf's lanes), for counting only.
-struct Nearest<'a, K> {
+struct Nearest<'a, K: WideKernel> {
     tree: &'a WideTree,
     kernel: K,
-    ray: TriRay,
+    ray: K::LeafRay,
     t_min: f32,
     lim: f32,
     any: bool,
@@ -76,7 +82,7 @@ fn visits(tree: &WideTree, rays: &[Ray], any: bool) -> (f64, f64) {
         let mut v = Nearest {
             tree,
             kernel,
-            ray: TriRay::new(r.origin, r.direction),
+            ray: kernel.prepare_leaf(TriRay::new(r.origin, r.direction)),
             t_min: r.t_min,
             lim: r.t_max,
             any,
