@@ -7,6 +7,7 @@ use glam::{Affine3A, Quat, Vec3, Vec3A};
 use obscura_scene::Sides;
 use proptest::prelude::*;
 
+use super::scene::cuboid;
 use super::{SplitMix, config, make_ray, ray_spec, solid_triangle, soup, still};
 use crate::bvh::{Instance, RayVisibility, SceneAccel, SceneLayout};
 use crate::ray::{Hit, Ray, Tracer, TriangleMesh};
@@ -154,30 +155,10 @@ proptest! {
 /// and the shading read), for 3 × 12 × 8 rays.
 #[test]
 fn flattened_hits_keep_their_instance_and_triangle() {
-    let cube = crate::testing::CUBE_QUADS;
-    let corners = |lo: Vec3A, hi: Vec3A| -> Vec<Vec3A> {
-        (0..8)
-            .map(|i| {
-                Vec3A::new(
-                    if i & 1 == 0 { lo.x } else { hi.x },
-                    if i & 2 == 0 { lo.y } else { hi.y },
-                    if i & 4 == 0 { lo.z } else { hi.z },
-                )
-            })
-            .collect()
-    };
-    let box_mesh = |lo, hi| TriangleMesh {
-        positions: corners(lo, hi),
-        normals: None,
-        triangles: cube
-            .iter()
-            .flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]])
-            .collect(),
-    };
     let meshes = vec![
-        box_mesh(Vec3A::splat(-0.5), Vec3A::splat(0.5)),
-        box_mesh(Vec3A::new(-1.0, -0.2, -0.3), Vec3A::new(1.0, 0.2, 0.3)),
-        box_mesh(Vec3A::splat(0.0), Vec3A::new(0.4, 0.7, 0.2)),
+        cuboid(Vec3A::splat(-0.5), Vec3A::splat(0.5)),
+        cuboid(Vec3A::new(-1.0, -0.2, -0.3), Vec3A::new(1.0, 0.2, 0.3)),
+        cuboid(Vec3A::splat(0.0), Vec3A::new(0.4, 0.7, 0.2)),
     ];
     let instances = vec![
         still(0, Affine3A::from_translation(Vec3::new(-4.0, 0.0, 0.0))),
@@ -207,7 +188,7 @@ fn flattened_hits_keep_their_instance_and_triangle() {
             let w = tri.map(|i| m.transform_point3a(mesh.positions[i as usize]));
             let centroid = (w[0] + w[1] + w[2]) / 3.0;
             let outward = (w[1] - w[0]).cross(w[2] - w[0]).normalize();
-            // The cube quads wind outward; aim from outside, off the normal by a random tilt.
+            // Aim from outside the box, off the face normal by a random tilt.
             let out = if (centroid - centre).dot(outward) > 0.0 {
                 outward
             } else {
