@@ -622,7 +622,7 @@ fn print_summary(scene: &Scene, result: &FrameResult) {
     let thread_time = (s.camera_stage_seconds + s.sampling_seconds + s.shading_seconds).max(1e-9);
     outln!(
         "rendered {}x{} through {} in {:.2} s (+{:.2} s setup: {} triangles): {} camera samples, {} culled, {} lost to failed project calls, \
-         {:.1} Mrays/s traced (camera, bounce and shadow rays); \
+         {:.2} Mrays/s traced ({:.2} M camera, {:.2} M bounce, {:.2} M shadow rays); \
          camera stage {:.1} % of thread time (+{:.1} % generating samples){}",
         scene.camera.pixels().width(),
         scene.camera.pixels().height(),
@@ -634,6 +634,9 @@ fn print_summary(scene: &Scene, result: &FrameResult) {
         s.contract.culled,
         s.contract.lost(),
         s.rays_traced as f64 / frame * 1e-6,
+        s.rays.camera as f64 * 1e-6,
+        s.rays.bounce as f64 * 1e-6,
+        s.rays.shadow as f64 * 1e-6,
         100.0 * s.camera_stage_seconds / thread_time,
         100.0 * s.sampling_seconds / thread_time,
         if s.cancelled {

@@ -12,12 +12,23 @@
 //! 3. the density on cell i is `p = wᵢ / I` (so `∫₀¹ p = 1`), the probability of cell i is `wᵢ / (n·I)`;
 //! 4. sampling inverts the CDF, which is linear on each cell because the density is constant there: for
 //!    `u ∈ [0, 1)` the cell i with `Fᵢ ≤ u < F_{i+1}` is found by binary search, and
-//!    `x = (i + (u − Fᵢ)/(F_{i+1} − Fᵢ)) / n`. This is the exact inverse of the tabulated CDF, so
+//!    `x = (i + (u − Fᵢ)/(F_{i+1} − Fᵢ)) / n`. The search is narrowed by a guide table (below); it
+//!    finds the same cell as a search over the whole table. This is the exact inverse of the tabulated CDF, so
 //!    `F(x) = u` up to rounding, and the map from u to x is monotone (stratified samples stay
 //!    stratified).
 //!
 //! A caller with cell *masses* `mᵢ` (integrals over cells of width `1/n`) passes `wᵢ = mᵢ·n`; when n is a
 //! power of two that scaling is exact, and the table's running sums are those of the masses bit for bit.
+//!
+//! # The guide table
+//!
+//! With `G = min(n, 2¹⁶)` buckets `[j/G, (j+1)/G)` of `u`, `gⱼ` (for `j = 0..=G`) is the first
+//! index `k` with `F_k > j/G`. For `u` in bucket `j` (`j = ⌊u·G⌋`), every entry before `g_{j−1}` is
+//! `≤ (j−1)/G ≤ u` and every entry from `g_{j+2}` on is `> (j+2)/G > u`, so the cell lies between
+//! them and the binary search runs over `F[g_{j−1} .. g_{j+2}]` only (one bucket of margin on each
+//! side covers the rounding of `u·G` and of `j/G`, which is far below `1/G`). A lamp of 10⁴
+//! emissive triangles is then searched over a handful of entries instead of 14 levels of a table
+//! that does not fit in L1.
 //!
 //! # Precision
 //!
@@ -141,7 +152,12 @@ pub struct Distribution1D<T: Real = f64> {
     integral: T,
     /// `I` is a positive finite number: the table is normalised by it (otherwise it is uniform).
     normalised: bool,
+    /// The guide table `g₀ … g_G` (see the [module documentation](self)).
+    guide: Vec<u32>,
 }
+
+/// Most buckets of the guide table: `1/G` stays far above the rounding of `u·G` even in `f32`.
+const GUIDE_BUCKETS: usize = 1 << 16;
 
 impl<T: Real> Distribution1D<T> {
     /// Tabulates the CDF of the piecewise-constant function whose value on cell i of `n = weights.len()`
@@ -189,11 +205,13 @@ impl<T: Real> Distribution1D<T> {
         if let Some(last) = cdf.last_mut() {
             *last = T::ONE;
         }
+        let guide = guide_table(&cdf, n.min(GUIDE_BUCKETS));
         Ok(Distribution1D {
             func: weights,
             cdf,
             integral,
             normalised,
+            guide,
         })
     }
 
@@ -307,7 +325,13 @@ impl<T: Real> Distribution1D<T> {
         // and the second one stops at the first entry equal to 1, so zero-weight trailing cells are
         // never chosen.
         let after = if u < T::ONE {
-            self.cdf.partition_point(|&c| c <= u)
+            // The same index as `self.cdf.partition_point(|&c| c <= u)`, searched between the guide
+            // table's bounds (module documentation).
+            let buckets = self.guide.len() - 1;
+            let j = (u * T::from_usize(buckets)).to_usize().min(buckets - 1);
+            let lo = self.guide[j.saturating_sub(1)] as usize;
+            let hi = (self.guide[(j + 2).min(buckets)] as usize).max(lo);
+            lo + self.cdf[lo..hi].partition_point(|&c| c <= u)
         } else {
             self.cdf.partition_point(|&c| c < T::ONE)
         };
@@ -321,6 +345,21 @@ impl<T: Real> Distribution1D<T> {
         };
         (i, within)
     }
+}
+
+/// `gⱼ` for `j = 0..=buckets`: the first index `k` of `cdf` (non-decreasing) with `F_k > j/buckets`
+/// (`cdf.len()` when there is none).
+fn guide_table<T: Real>(cdf: &[T], buckets: usize) -> Vec<u32> {
+    let mut guide = Vec::with_capacity(buckets + 1);
+    let mut k = 0usize;
+    for j in 0..=buckets {
+        let bound = T::from_usize(j) / T::from_usize(buckets);
+        while k < cdf.len() && cdf[k] <= bound {
+            k += 1;
+        }
+        guide.push(k as u32);
+    }
+    guide
 }
 
 /// `v` clamped to `[0, 1]` (NaN stays NaN, as with `f32::clamp`).
@@ -542,6 +581,32 @@ mod tests {
             // And the integral is the weights' mean.
             let mean = w.iter().sum::<f64>() / n as f64;
             prop_assert!((d.integral() - mean).abs() <= 1e-12 * mean);
+        }
+
+        /// The guided search finds the cell a search over the whole table finds, for `f64` and `f32`
+        /// tables, at random `u` and at `u` within an ulp of the bucket bounds `j/G`.
+        #[test]
+        fn the_guide_table_finds_the_cell_the_full_search_finds(
+            w in proptest::collection::vec(prop_oneof![Just(0.0), 1e-6f64..1e6], 1..300),
+            us in proptest::collection::vec(0.0f64..1.0, 64),
+            edges in proptest::collection::vec(any::<prop::sample::Index>(), 16),
+        ) {
+            let d64 = Distribution1D::new(w.clone()).expect("valid by construction");
+            let d32 = Distribution1D::new(w.iter().map(|&v| v as f32).collect()).expect("valid");
+            let g = w.len().min(GUIDE_BUCKETS);
+            let near_edges = edges.iter().flat_map(|e| {
+                let b = e.index(g + 1) as f64 / g as f64;
+                [b, b.next_down(), b.next_up(), f64::from((b as f32).next_down()), f64::from((b as f32).next_up())]
+            });
+            for u in us.iter().copied().chain(near_edges).filter(|u| (0.0..1.0).contains(u)) {
+                let full = d64.cdf().partition_point(|&c| c <= u).saturating_sub(1).min(w.len() - 1);
+                prop_assert_eq!(d64.sample_discrete(u).0, full, "f64, u = {}", u);
+                let u32_ = u as f32;
+                if u32_ < 1.0 {
+                    let full = d32.cdf().partition_point(|&c| c <= u32_).saturating_sub(1).min(w.len() - 1);
+                    prop_assert_eq!(d32.sample_discrete(u32_).0, full, "f32, u = {}", u32_);
+                }
+            }
         }
 
         #[test]

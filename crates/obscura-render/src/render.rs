@@ -37,7 +37,7 @@ use obscura_scene::Scene;
 use obscura_sdk::{DeepMetric, RayGeometry, Rgb};
 use rayon::prelude::*;
 
-use obscura_geometry::bvh::{Instance, SceneAccel};
+use obscura_geometry::bvh::{Instance, RayVisibility, SceneAccel, SceneLayout};
 use obscura_geometry::dice::{DiceError, DicingContext, TriangleBudget, dice_with_st};
 use obscura_geometry::motion::Motion;
 use obscura_geometry::motion::{camera_motion, object_motion};
@@ -99,6 +99,9 @@ pub struct RenderOptions {
     pub max_triangles: u64,
     /// How textures are filtered (by the camera ray's footprint unless a comparison asks otherwise).
     pub texture_lookup: TextureLookup,
+    /// How the accelerator stores static objects; `None`: as `OBSCURA_SCENE_LAYOUT` says
+    /// ([`SceneLayout::from_env`], flattened into one world-space hierarchy by default).
+    pub scene_layout: Option<SceneLayout>,
 }
 
 impl Default for RenderOptions {
@@ -111,6 +114,7 @@ impl Default for RenderOptions {
             tile_size: 16,
             max_triangles: obscura_geometry::dice::DEFAULT_SCENE_TRIANGLES,
             texture_lookup: TextureLookup::Footprint,
+            scene_layout: None,
         }
     }
 }
@@ -131,6 +135,8 @@ pub struct RenderStats {
     pub sampling_seconds: f64,
     /// Rays traced through the BVH: camera rays, bounces and shadow rays.
     pub rays_traced: u64,
+    /// [`RenderStats::rays_traced`] by kind.
+    pub rays: RayCounts,
     /// Seconds spent tracing and shading (summed over threads).
     pub shading_seconds: f64,
     /// Wall-clock seconds of the flow pass (0 when no flow was asked for).
@@ -143,6 +149,26 @@ pub struct RenderStats {
     pub cancelled: bool,
     /// The tiles a cancelled render did not render, in tile order (empty when it finished).
     pub missing_tiles: Vec<PixelRect>,
+}
+
+/// Rays traced through the BVH, by kind (a ray passing a cut-out surface is traced again and counts
+/// again).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct RayCounts {
+    /// Camera rays (nearest hit as camera rays see the scene).
+    pub camera: u64,
+    /// Bounce rays (nearest hit).
+    pub bounce: u64,
+    /// Shadow rays (any hit, or the nearest hit past surfaces that cast no shadow).
+    pub shadow: u64,
+}
+
+impl RayCounts {
+    /// All of them.
+    #[must_use]
+    pub fn total(&self) -> u64 {
+        self.camera + self.bounce + self.shadow
+    }
 }
 
 impl RenderStats {
@@ -207,25 +233,50 @@ fn mix64(mut x: u64) -> u64 {
     x ^ (x >> 31)
 }
 
-/// Counts the rays one tile traces (nearest-hit and shadow queries); tile-local, so the count is free
-/// of contention.
+/// Counts the rays one tile traces by kind (camera, bounce and shadow queries); tile-local, so the
+/// counts are free of contention.
 struct CountingTracer<'a> {
     inner: &'a SceneAccel,
-    rays: AtomicU64,
+    camera: AtomicU64,
+    bounce: AtomicU64,
+    shadow: AtomicU64,
+}
+
+impl<'a> CountingTracer<'a> {
+    fn new(inner: &'a SceneAccel) -> Self {
+        CountingTracer {
+            inner,
+            camera: AtomicU64::new(0),
+            bounce: AtomicU64::new(0),
+            shadow: AtomicU64::new(0),
+        }
+    }
+
+    fn counts(self) -> RayCounts {
+        RayCounts {
+            camera: self.camera.into_inner(),
+            bounce: self.bounce.into_inner(),
+            shadow: self.shadow.into_inner(),
+        }
+    }
 }
 
 impl Tracer for CountingTracer<'_> {
     fn intersect(&self, ray: &Ray) -> Option<obscura_geometry::ray::Hit> {
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.bounce.fetch_add(1, Ordering::Relaxed);
         self.inner.intersect(ray)
     }
     fn occluded(&self, ray: &Ray) -> bool {
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.shadow.fetch_add(1, Ordering::Relaxed);
         self.inner.occluded(ray)
     }
     fn intersect_camera(&self, ray: &Ray) -> Option<obscura_geometry::ray::Hit> {
-        self.rays.fetch_add(1, Ordering::Relaxed);
+        self.camera.fetch_add(1, Ordering::Relaxed);
         self.inner.intersect_camera(ray)
+    }
+    fn intersect_shadow(&self, ray: &Ray) -> Option<obscura_geometry::ray::Hit> {
+        self.shadow.fetch_add(1, Ordering::Relaxed);
+        self.inner.intersect_shadow(ray)
     }
 }
 
@@ -309,20 +360,16 @@ pub fn prepare(
             .collect::<Vec<_>>(),
         &texturing,
     );
-    let accel = SceneAccel::build(meshes, instances)
-        .with_camera_visibility(camera_sides(scene), &clip_planes(scene, &camera_to_world))
-        .with_ray_visibility(
-            &scene
-                .objects
-                .iter()
-                .map(|o| o.visibility.camera)
-                .collect::<Vec<_>>(),
-            &scene
-                .objects
-                .iter()
-                .map(|o| o.visibility.shadows)
-                .collect::<Vec<_>>(),
-        );
+    // Static objects go into one world-space hierarchy (`SceneLayout::Flat`) unless some rays do not
+    // see them; moving ones stay instances. Object IDs are the instance indices either way.
+    let visibility = RayVisibility {
+        sides: camera_sides(scene),
+        camera: scene.objects.iter().map(|o| o.visibility.camera).collect(),
+        shadows: scene.objects.iter().map(|o| o.visibility.shadows).collect(),
+        clip_planes: clip_planes(scene, &camera_to_world),
+    };
+    let layout = opts.scene_layout.unwrap_or_else(SceneLayout::from_env);
+    let accel = SceneAccel::build_with(meshes, instances, visibility, layout);
     let shading = ShadingScene {
         materials: scene.materials.clone(),
         instance_material: scene.objects.iter().map(|o| o.material).collect(),
@@ -584,7 +631,7 @@ struct Accumulator {
     report: Mutex<ContractReport>,
     /// Tiles finished.
     done: AtomicUsize,
-    rays_traced: AtomicU64,
+    rays: [AtomicU64; 3],
     sampling_ns: AtomicU64,
     camera_ns: AtomicU64,
     shading_ns: AtomicU64,
@@ -599,7 +646,7 @@ impl Accumulator {
             deep: deep.then(|| Mutex::new(vec![(Vec::new(), 0); crop.len()])),
             report: Mutex::new(ContractReport::default()),
             done: AtomicUsize::new(0),
-            rays_traced: AtomicU64::new(0),
+            rays: Default::default(),
             sampling_ns: AtomicU64::new(0),
             camera_ns: AtomicU64::new(0),
             shading_ns: AtomicU64::new(0),
@@ -617,7 +664,10 @@ impl Accumulator {
     /// Adds a finished tile; returns how many tiles are finished now.
     fn merge(&self, tile: FinishedTile) -> usize {
         let add = |counter: &AtomicU64, value: u64| counter.fetch_add(value, Ordering::Relaxed);
-        add(&self.rays_traced, tile.rays_traced);
+        let rays = [tile.rays.camera, tile.rays.bounce, tile.rays.shadow];
+        for (counter, n) in self.rays.iter().zip(rays) {
+            add(counter, n);
+        }
         add(&self.sampling_ns, tile.sampling.as_nanos() as u64);
         add(&self.camera_ns, tile.camera.as_nanos() as u64);
         add(&self.shading_ns, tile.shading.as_nanos() as u64);
@@ -669,6 +719,12 @@ impl Accumulator {
                 })
                 .collect(),
         });
+        let [camera, bounce, shadow] = self.rays.map(AtomicU64::into_inner);
+        let rays = RayCounts {
+            camera,
+            bounce,
+            shadow,
+        };
         let mut film = self.film.into_inner().expect("no panics while holding the film");
         film.set_exposure(prepared.exposure);
         RenderOutput {
@@ -680,7 +736,8 @@ impl Accumulator {
                 render_seconds: start.elapsed().as_secs_f64(),
                 camera_stage_seconds: seconds(self.camera_ns),
                 sampling_seconds: seconds(self.sampling_ns),
-                rays_traced: self.rays_traced.into_inner(),
+                rays_traced: rays.total(),
+                rays,
                 shading_seconds: seconds(self.shading_ns),
                 flow_seconds: 0.0,
                 contract: self
@@ -729,7 +786,7 @@ struct FinishedTile {
     film: FilmTile,
     deep: Vec<(usize, Option<DeepSample>)>,
     report: ContractReport,
-    rays_traced: u64,
+    rays: RayCounts,
     /// Generating the Sobol samples.
     sampling: Duration,
     /// In the camera stage.
@@ -796,10 +853,7 @@ impl<'a> TileIntegrator<'a> {
         let mut tile = TileState {
             film: accumulator.film_tile(rect),
             deep: Vec::new(),
-            tracer: CountingTracer {
-                inner: &self.prepared.accel,
-                rays: AtomicU64::new(0),
-            },
+            tracer: CountingTracer::new(&self.prepared.accel),
             report: ContractReport::default(),
             sampling: Duration::ZERO,
             camera: Duration::ZERO,
@@ -815,7 +869,7 @@ impl<'a> TileIntegrator<'a> {
         let elapsed = start.elapsed();
         FinishedTile {
             shading: elapsed.saturating_sub(tile.sampling + tile.camera),
-            rays_traced: tile.tracer.rays.into_inner(),
+            rays: tile.tracer.counts(),
             film: tile.film,
             deep: tile.deep,
             report: tile.report,

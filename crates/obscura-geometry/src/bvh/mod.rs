@@ -36,8 +36,10 @@
 //! `f64`), and ties in `t` go to the lowest triangle index whatever the visiting order.
 //!
 //! The binary layout ([`BvhLayout::Binary`], or `OBSCURA_BVH_LAYOUT=binary` for [`MeshBvh::build`])
-//! is kept as the reference the benchmarks and tests compare against, and the scene's top level
-//! (a handful of instances) stays binary: nodes are 32 bytes (`min`, child-or-first, `max`, count),
+//! is kept as the reference the benchmarks and tests compare against. Static objects placed once
+//! are flattened into one world-space mesh hierarchy ([`SceneLayout::Flat`], the default; see
+//! `scene`), so a ray pays no top level and no ray transform for them; the scene's top level over
+//! the remaining instances (moving or shared meshes) stays binary: nodes are 32 bytes (`min`, child-or-first, `max`, count),
 //! the two children of a node sit side by side in one 64-byte-aligned pair, and with AVX2 (detected
 //! at run time) one `vpermps` per child selects the near and far planes by the ray's direction signs
 //! so both boxes go through the slab test in one 8-lane register. Without AVX2 the same test runs in
@@ -61,7 +63,7 @@
 //! | `wide` | the eight-wide node and the four-triangle leaf block, the collapse, the eight-box and four-triangle kernels, the wide traversal |
 //! | `triangle` | the watertight ray/triangle test, skipped triangles, world-space hit records |
 //! | `mesh` | [`MeshBvh`]: one mesh's hierarchy, nearest hit and any hit |
-//! | `scene` | [`SceneAccel`] and [`Instance`]: the two-level, motion-blurred accelerator |
+//! | `scene` | [`SceneAccel`] and [`Instance`]: the two-level, motion-blurred accelerator; [`SceneLayout`] (static objects flattened into one world-space hierarchy) and [`RayVisibility`] |
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
@@ -76,4 +78,4 @@ mod triangle;
 mod wide;
 
 pub use mesh::{BvhLayout, MeshBvh};
-pub use scene::{Instance, SceneAccel};
+pub use scene::{Instance, RayVisibility, SceneAccel, SceneLayout};

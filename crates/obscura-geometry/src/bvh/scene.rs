@@ -2,6 +2,26 @@
 //! of [`Instance`]s, each placing a [`MeshBvh`] by a [`Motion`] over the shutter; world rays are
 //! moved into object space (direction not renormalised, so `t` carries over) and traced there.
 //!
+//! # Flattened static instances
+//!
+//! In the default [`SceneLayout::Flat`], an instance that does not move (one transform sample,
+//! finite, invertible), whose mesh no other instance places, and that every ray sees (both sides,
+//! seen by camera rays, casting shadows) is *flattened*: its vertices are taken to world space
+//! (`p_w = M·p`) and its triangles join one shared [`MeshBvh`] over all flattened instances, in
+//! instance order. A ray is traced through that hierarchy first, in world space (no top level, no
+//! ray transform), then through the top level over the remaining instances, bounded by the nearest
+//! hit so far. Each world triangle keeps `(instance, triangle)`, so a hit reports the same instance
+//! and triangle index as the instanced layout, and the world-space [`Hit`] is assembled on the
+//! object-space mesh with the instance's transform, as before. Because the flattened triangles are
+//! ordered by instance, then triangle, the hierarchy's tie rule (lowest triangle at equal `t`) is
+//! the scene's (lowest instance, then lowest triangle), between flattened and traced instances too.
+//!
+//! The triangle test then runs on `M·p` rounded to `f32` against the world ray, where the instanced
+//! layout runs it on `p` against `M⁻¹·ray` rounded to `f32`: the two differ by rounding only (`t`
+//! by a few ulps; a ray within ~10⁻⁶ of a shared edge may pick the other triangle). Under the
+//! identity both are exactly the same test, bit for bit. A triangle that only degenerates (zero
+//! area, non-finite) after the transform is skipped in the flattened layout.
+//!
 //! Camera rays may see less than other rays: one-sided instances show them one side, clipping
 //! planes hide half-spaces ([`SceneAccel::with_camera_visibility`]). Such hits are refused inside
 //! the leaf test, so the traversal goes on to the next hit; a scene with neither traces camera rays
@@ -61,23 +81,116 @@ pub struct Instance {
     pub transform: Vec<(f32, Affine3A)>,
 }
 
+/// How [`SceneAccel`] stores static objects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SceneLayout {
+    /// The static instances whose mesh is placed once and which every ray sees (both sides, seen by
+    /// camera rays, casting shadows) are flattened: their triangles, moved to world space, share one
+    /// [`MeshBvh`] traced without a top level or a ray transform, each triangle remembering its
+    /// instance and its index in that instance's mesh. Moving instances, meshes placed more than
+    /// once and instances that some rays do not see stay instances under the top level (the
+    /// default: the faster one). Hits differ from [`SceneLayout::Instanced`]'s by rounding only
+    /// (the triangle test on `M·p` against the world ray rather than on `p` against `M⁻¹·ray`;
+    /// bit for bit the same under the identity), with the same instance and triangle indices.
+    #[default]
+    Flat,
+    /// Every instance under the top level, its ray moved to object space. Kept as the reference
+    /// the tests and benchmarks compare the flat layout against.
+    Instanced,
+}
+
+impl SceneLayout {
+    /// [`SceneLayout::Instanced`] when the environment variable `OBSCURA_SCENE_LAYOUT` is
+    /// `instanced`, else the default.
+    #[must_use]
+    pub fn from_env() -> Self {
+        match std::env::var("OBSCURA_SCENE_LAYOUT") {
+            Ok(v) if v.eq_ignore_ascii_case("instanced") => Self::Instanced,
+            _ => Self::default(),
+        }
+    }
+}
+
+/// What each kind of ray sees of each instance, indexed like the instances given to
+/// [`SceneAccel::build_with`]; missing entries take the default (both sides, seen, casting shadows).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RayVisibility {
+    /// Which sides of each instance camera rays see ([`SceneAccel::with_camera_visibility`]).
+    pub sides: Vec<Sides>,
+    /// Whether camera rays see each instance at all (`Attribute "visibility" "int camera"`).
+    pub camera: Vec<bool>,
+    /// Whether each instance blocks shadow rays (`Attribute "visibility" "int transmission"`).
+    pub shadows: Vec<bool>,
+    /// World-space clipping planes `(point, normal)` for camera rays: what lies on the side the
+    /// normal points to is hidden. Planes that are not finite or have a zero normal are ignored.
+    pub clip_planes: Vec<(Vec3A, Vec3A)>,
+}
+
+impl RayVisibility {
+    /// True when every ray sees instance `i` whole: both sides, seen by camera rays, casting shadows.
+    fn sees_all_of(&self, i: usize) -> bool {
+        self.sides.get(i).is_none_or(|s| *s == Sides::Both)
+            && self.camera.get(i).copied().unwrap_or(true)
+            && self.shadows.get(i).copied().unwrap_or(true)
+    }
+}
+
 /// One instance as the accelerator keeps it.
 #[derive(Debug, Clone)]
 pub(super) struct Placement {
     /// Index into `SceneAccel::meshes`, if valid.
     pub(super) mesh: Option<usize>,
     motion: Motion,
+    /// Flattened into the world-space mesh ([`SceneLayout::Flat`]) rather than traced as an instance.
+    pub(super) flat: bool,
+    /// A static placement by the identity: its rays need no transform.
+    identity: bool,
+}
+
+/// A mesh of the scene, in object space: with its own hierarchy when some instance traces it, bare
+/// when only flattened instances place it (hits are still assembled on it).
+// One per mesh, looked up once per instance visit: unboxed, the hierarchy is one load closer.
+#[allow(clippy::large_enum_variant)]
+pub(super) enum SceneMesh {
+    /// Traced per instance.
+    Traced(MeshBvh),
+    /// Placed only by flattened instances.
+    Bare(TriangleMesh),
+}
+
+impl SceneMesh {
+    /// The object-space triangles.
+    pub(super) fn mesh(&self) -> &TriangleMesh {
+        match self {
+            SceneMesh::Traced(bvh) => bvh.mesh(),
+            SceneMesh::Bare(mesh) => mesh,
+        }
+    }
+}
+
+/// The flattened instances: one hierarchy over their world-space triangles.
+struct FlatMeshes {
+    bvh: MeshBvh,
+    /// `(instance, triangle of that instance's mesh)` of each world-space triangle; ordered by
+    /// instance, then triangle, so the hierarchy's tie rule (lowest triangle) is the scene's (lowest
+    /// instance, then lowest triangle).
+    source: Vec<(u32, u32)>,
 }
 
 /// The scene accelerator: a top-level binned-SAH BVH over instance boxes (conservative over the
-/// shutter for moving instances), each instance referring to a [`MeshBvh`].
+/// shutter for moving instances), each instance referring to a [`MeshBvh`], and (in the
+/// [`SceneLayout::Flat`] layout) one world-space [`MeshBvh`] over the flattened static instances.
 pub struct SceneAccel {
-    pub(super) meshes: Vec<MeshBvh>,
+    pub(super) meshes: Vec<SceneMesh>,
     pub(super) placements: Vec<Placement>,
+    layout: SceneLayout,
+    flat: Option<FlatMeshes>,
     top: Tree,
     /// Instance index of each top-level leaf entry.
     top_ids: Vec<u32>,
     triangle_count: usize,
+    /// What each kind of ray sees, as given.
+    visibility: RayVisibility,
     /// What camera rays may not see (see [`SceneAccel::with_camera_visibility`]).
     camera: CameraVisibility,
     shadow: ShadowVisibility,
@@ -98,6 +211,30 @@ struct CameraVisibility {
     any: bool,
 }
 
+impl CameraVisibility {
+    fn new(v: &RayVisibility) -> Self {
+        let clip_planes: Vec<(Vec3A, f32)> = (v.clip_planes.iter())
+            .filter(|(p, n)| p.is_finite() && n.is_finite() && *n != Vec3A::ZERO)
+            .map(|&(p, n)| (n, n.dot(p)))
+            .collect();
+        let hidden: Vec<bool> = v.camera.iter().map(|&seen| !seen).collect();
+        let any =
+            !clip_planes.is_empty() || v.sides.iter().any(|s| *s != Sides::Both) || hidden.iter().any(|&h| h);
+        CameraVisibility {
+            sides: v.sides.clone(),
+            hidden,
+            clip_planes,
+            any,
+        }
+    }
+
+    /// True when camera rays see point `p` (no clipping plane hides it).
+    #[inline(always)]
+    fn unclipped(&self, p: Vec3A) -> bool {
+        self.clip_planes.iter().all(|&(n, c)| n.dot(p) <= c)
+    }
+}
+
 /// Which instances shadow rays pass through (they cast no shadow).
 #[derive(Debug, Clone, Default)]
 struct ShadowVisibility {
@@ -108,6 +245,14 @@ struct ShadowVisibility {
 }
 
 impl ShadowVisibility {
+    fn new(v: &RayVisibility) -> Self {
+        let none: Vec<bool> = v.shadows.iter().map(|&casts| !casts).collect();
+        ShadowVisibility {
+            any: none.iter().any(|&n| n),
+            none,
+        }
+    }
+
     #[inline(always)]
     fn skips(&self, instance: u32) -> bool {
         self.any && self.none.get(instance as usize).copied().unwrap_or(false)
@@ -115,25 +260,126 @@ impl ShadowVisibility {
 }
 
 impl SceneAccel {
-    /// Builds one [`MeshBvh`] per mesh (in parallel) and the top-level hierarchy over `instances`.
+    /// Builds the accelerator over `instances` of `meshes`, every ray seeing every instance, in the
+    /// layout `OBSCURA_SCENE_LAYOUT` asks for ([`SceneLayout::from_env`]; flat by default).
     ///
     /// Instances whose mesh index is out of range, or whose world box is not finite (non-finite or
     /// singular motion samples), are kept — their indices still count — but never hit.
     #[must_use]
     pub fn build(meshes: Vec<TriangleMesh>, instances: Vec<Instance>) -> Self {
-        let meshes: Vec<MeshBvh> = meshes.into_par_iter().map(MeshBvh::build).collect();
+        Self::build_with(
+            meshes,
+            instances,
+            RayVisibility::default(),
+            SceneLayout::from_env(),
+        )
+    }
+
+    /// [`SceneAccel::build`] with what each kind of ray sees given at once (an instance that some
+    /// rays do not see is not flattened, so giving this here rather than through
+    /// [`SceneAccel::with_camera_visibility`] and [`SceneAccel::with_ray_visibility`] saves
+    /// rebuilding the flattened hierarchy) and the layout chosen. Both layouts give the same hits
+    /// up to the rounding of the triangle test in object or world space ([`SceneLayout::Flat`]
+    /// says which instances are flattened). The per-mesh hierarchies and the flattened one are
+    /// built in parallel (rayon).
+    #[must_use]
+    pub fn build_with(
+        meshes: Vec<TriangleMesh>,
+        instances: Vec<Instance>,
+        visibility: RayVisibility,
+        layout: SceneLayout,
+    ) -> Self {
+        let n_meshes = meshes.len();
         let placements: Vec<Placement> = instances
             .iter()
-            .map(|inst| Placement {
-                mesh: ((inst.mesh as usize) < meshes.len()).then_some(inst.mesh as usize),
-                motion: Motion::new(&inst.transform),
+            .map(|inst| {
+                let motion = Motion::new(&inst.transform);
+                Placement {
+                    mesh: ((inst.mesh as usize) < n_meshes).then_some(inst.mesh as usize),
+                    identity: matches!(motion, Motion::Static { to_world, .. } if to_world == Affine3A::IDENTITY),
+                    motion,
+                    flat: false,
+                }
             })
             .collect();
+        Self::assemble(
+            meshes.into_iter().map(SceneMesh::Bare).collect(),
+            placements,
+            visibility,
+            layout,
+        )
+    }
+
+    /// Decides which placements are flattened, builds the hierarchies that are missing and the
+    /// top level. Meshes that already have a hierarchy keep it.
+    fn assemble(
+        meshes: Vec<SceneMesh>,
+        mut placements: Vec<Placement>,
+        visibility: RayVisibility,
+        layout: SceneLayout,
+    ) -> Self {
         let n = placements.len().min(u32::MAX as usize);
-        let boxes: Vec<Aabb> = placements[..n]
+        placements.truncate(n);
+        let mut uses = vec![0usize; meshes.len()];
+        for p in &placements {
+            if let Some(m) = p.mesh {
+                uses[m] += 1;
+            }
+        }
+        // Vertex and triangle indices of the flattened mesh are `u32`: past that, instances stay.
+        let (mut flat_vertices, mut flat_triangles) = (0usize, 0usize);
+        for (i, p) in placements.iter_mut().enumerate() {
+            p.flat = false;
+            let Some(m) = p.mesh.filter(|&m| uses[m] == 1) else {
+                continue;
+            };
+            let eligible = layout == SceneLayout::Flat
+                && matches!(p.motion, Motion::Static { to_world, to_object }
+                    if to_world.is_finite() && to_object.is_finite())
+                && visibility.sees_all_of(i);
+            let mesh = meshes[m].mesh();
+            let (v, t) = (
+                flat_vertices + mesh.positions.len(),
+                flat_triangles + mesh.triangles.len(),
+            );
+            if eligible && v < u32::MAX as usize && t < u32::MAX as usize {
+                (flat_vertices, flat_triangles) = (v, t);
+                p.flat = true;
+            }
+        }
+        let mut traced = vec![false; meshes.len()];
+        for p in placements.iter().filter(|p| !p.flat) {
+            if let Some(m) = p.mesh {
+                traced[m] = true;
+            }
+        }
+        // The flattened mesh is gathered before the meshes move into their builder.
+        let flattened = placements
+            .iter()
+            .any(|p| p.flat)
+            .then(|| flatten(&meshes, &placements));
+        let build_meshes = || -> Vec<SceneMesh> {
+            meshes
+                .into_par_iter()
+                .zip(traced)
+                .map(|(mesh, traced)| match mesh {
+                    SceneMesh::Bare(mesh) if traced => SceneMesh::Traced(MeshBvh::build(mesh)),
+                    other => other,
+                })
+                .collect()
+        };
+        let (meshes, flat) = if let Some((world, source)) = flattened {
+            let (meshes, bvh) = rayon::join(build_meshes, || MeshBvh::build(world));
+            (meshes, Some(FlatMeshes { bvh, source }))
+        } else {
+            (build_meshes(), None)
+        };
+        let boxes: Vec<Aabb> = placements
             .iter()
             .map(|p| match p.mesh.map(|m| &meshes[m]) {
-                Some(mesh) if mesh.triangle_count() > 0 => world_bounds(&p.motion, &mesh.root_bounds()),
+                Some(SceneMesh::Traced(mesh)) if !p.flat && mesh.triangle_count() > 0 => {
+                    world_bounds(&p.motion, &mesh.root_bounds())
+                }
                 _ => Aabb::EMPTY,
             })
             .collect();
@@ -141,18 +387,39 @@ impl SceneAccel {
         let triangle_count = top_ids
             .iter()
             .filter_map(|&i| placements[i as usize].mesh)
-            .map(|m| meshes[m].triangle_count())
-            .sum();
+            .map(|m| match &meshes[m] {
+                SceneMesh::Traced(bvh) => bvh.triangle_count(),
+                SceneMesh::Bare(_) => 0,
+            })
+            .sum::<usize>()
+            + flat.as_ref().map_or(0, |f| f.bvh.triangle_count());
         let top = build_tree(&boxes, &mut top_ids, INSTANCE_LEAF_SIZE);
         Self {
             meshes,
             placements,
+            layout,
+            flat,
             top,
             top_ids,
             triangle_count,
-            camera: CameraVisibility::default(),
-            shadow: ShadowVisibility::default(),
+            camera: CameraVisibility::new(&visibility),
+            shadow: ShadowVisibility::new(&visibility),
+            visibility,
         }
+    }
+
+    /// The accelerator with `visibility`: the same one when every flattened instance is still seen
+    /// by every ray, otherwise rebuilt so that the instances some rays do not see are instances.
+    fn with_visibility(mut self, visibility: RayVisibility) -> Self {
+        let unflatten =
+            (self.placements.iter().enumerate()).any(|(i, p)| p.flat && !visibility.sees_all_of(i));
+        if unflatten {
+            return Self::assemble(self.meshes, self.placements, visibility, self.layout);
+        }
+        self.camera = CameraVisibility::new(&visibility);
+        self.shadow = ShadowVisibility::new(&visibility);
+        self.visibility = visibility;
+        self
     }
 
     /// Sets what camera rays ([`Tracer::intersect_camera`]) may not see: `sides[i]` says which sides
@@ -161,39 +428,46 @@ impl SceneAccel {
     /// [`Sides::Back`] only the other side — and each plane `(point, normal)` (world space) hides
     /// what lies on the side its normal points to. A hit camera rays may not see is passed: the ray
     /// goes on to the next. Other rays ([`Tracer::intersect`], [`Tracer::occluded`]) see everything.
-    /// Planes that are not finite or have a zero normal are ignored.
+    /// Planes that are not finite or have a zero normal are ignored. A flattened instance made
+    /// one-sided here is taken out of the flattened hierarchy, which is rebuilt
+    /// ([`SceneAccel::build_with`] avoids that).
     #[must_use]
-    pub fn with_camera_visibility(mut self, sides: Vec<Sides>, clip_planes: &[(Vec3A, Vec3A)]) -> Self {
-        let clip_planes: Vec<(Vec3A, f32)> = clip_planes
-            .iter()
-            .filter(|(p, n)| p.is_finite() && n.is_finite() && *n != Vec3A::ZERO)
-            .map(|&(p, n)| (n, n.dot(p)))
-            .collect();
-        let any = !clip_planes.is_empty()
-            || sides.iter().any(|s| *s != Sides::Both)
-            || self.camera.hidden.iter().any(|&h| h);
-        self.camera = CameraVisibility {
+    pub fn with_camera_visibility(self, sides: Vec<Sides>, clip_planes: &[(Vec3A, Vec3A)]) -> Self {
+        let visibility = RayVisibility {
             sides,
-            hidden: std::mem::take(&mut self.camera.hidden),
-            clip_planes,
-            any,
+            clip_planes: clip_planes.to_vec(),
+            ..self.visibility.clone()
         };
-        self
+        self.with_visibility(visibility)
     }
 
     /// Per instance (missing entries: seen, casting shadows): whether camera rays see it at all
     /// (`camera`) and whether shadow rays ([`Tracer::occluded`], [`Tracer::intersect_shadow`]) are
-    /// blocked by it (`shadows`). Reflection and bounce rays see every instance.
+    /// blocked by it (`shadows`). Reflection and bounce rays see every instance. As for
+    /// [`SceneAccel::with_camera_visibility`], a flattened instance that some rays do not see is
+    /// taken out of the flattened hierarchy.
     #[must_use]
-    pub fn with_ray_visibility(mut self, camera: &[bool], shadows: &[bool]) -> Self {
-        self.camera.hidden = camera.iter().map(|&seen| !seen).collect();
-        self.camera.any |= self.camera.hidden.iter().any(|&h| h);
-        let none: Vec<bool> = shadows.iter().map(|&casts| !casts).collect();
-        self.shadow = ShadowVisibility {
-            any: none.iter().any(|&n| n),
-            none,
+    pub fn with_ray_visibility(self, camera: &[bool], shadows: &[bool]) -> Self {
+        let visibility = RayVisibility {
+            camera: camera.to_vec(),
+            shadows: shadows.to_vec(),
+            ..self.visibility.clone()
         };
-        self
+        self.with_visibility(visibility)
+    }
+
+    /// The layout the static instances are stored in.
+    #[must_use]
+    pub fn layout(&self) -> SceneLayout {
+        self.layout
+    }
+
+    /// How many instances are flattened into the world-space hierarchy (0 in the
+    /// [`SceneLayout::Instanced`] layout) and how many are traced as instances under the top level.
+    #[must_use]
+    pub fn instance_counts(&self) -> (usize, usize) {
+        let flat = self.placements.iter().filter(|p| p.flat).count();
+        (flat, self.top_ids.len())
     }
 
     /// The number of triangles that can be hit, summed over instances (a mesh placed twice counts
@@ -207,7 +481,10 @@ impl SceneAccel {
     /// scene gives an empty box: `min = +∞`, `max = −∞`.
     #[must_use]
     pub fn bounds(&self) -> (Vec3A, Vec3A) {
-        let b = self.top.root_bounds();
+        let mut b = self.top.root_bounds();
+        if let Some(flat) = &self.flat {
+            b.grow(&flat.bvh.root_bounds());
+        }
         (b.lo, b.hi)
     }
 
@@ -291,6 +568,9 @@ impl SceneAccel {
     fn object_ray(&self, instance: u32, ray: &Ray) -> Option<(usize, Vec3A, Vec3A)> {
         let placement = &self.placements[instance as usize];
         let mesh = placement.mesh?;
+        if placement.identity {
+            return Some((mesh, ray.origin, ray.direction));
+        }
         let to_object = placement.motion.world_to_object(ray.time);
         Some((
             mesh,
@@ -308,16 +588,46 @@ impl SceneAccel {
         ray: &Ray,
         shadow: bool,
     ) -> Option<SceneHit> {
+        let mut best = None;
+        let mut lim = ray.t_max;
+        if let Some(flat) = &self.flat {
+            // Flattened instances cast shadows and show camera rays both sides; only clipping
+            // planes can hide their hits.
+            let found = if CAMERA && !self.camera.clip_planes.is_empty() {
+                let camera = &self.camera;
+                (flat.bvh).closest_accepted(kernel, ray.origin, ray.direction, ray.t_min, lim, |t, _| {
+                    camera.unclipped(ray.at(t))
+                })
+            } else {
+                flat.bvh
+                    .closest(kernel, ray.origin, ray.direction, ray.t_min, lim)
+            };
+            if let Some((t, id, u, v)) = found {
+                let (instance, primitive) = flat.source[id as usize];
+                best = Some(SceneHit {
+                    t,
+                    instance,
+                    mesh: self.placements[instance as usize].mesh.unwrap_or_default(),
+                    primitive,
+                    u,
+                    v,
+                });
+                lim = t.next_up();
+            }
+        }
+        if self.top_ids.is_empty() {
+            return best;
+        }
         let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
         let mut visitor = SceneClosest::<K, CAMERA> {
             accel: self,
             kernel,
             ray,
-            lim: ray.t_max,
-            best: None,
+            lim,
+            best,
             shadow,
         };
-        traverse(&self.top, kernel, &box_ray, ray.t_max, &mut visitor);
+        traverse(&self.top, kernel, &box_ray, lim, &mut visitor);
         visitor.best
     }
 
@@ -343,6 +653,16 @@ impl SceneAccel {
 
     #[inline(always)]
     fn any<K: BoxKernel>(&self, kernel: K, ray: &Ray) -> bool {
+        if let Some(flat) = &self.flat
+            && flat
+                .bvh
+                .any(kernel, ray.origin, ray.direction, ray.t_min, ray.t_max)
+        {
+            return true;
+        }
+        if self.top_ids.is_empty() {
+            return false;
+        }
         let box_ray = kernel.prepare(ray.origin, ray.direction, ray.t_min);
         let mut visitor = SceneAny {
             accel: self,
@@ -380,7 +700,10 @@ impl<K: BoxKernel, const CAMERA: bool> SceneClosest<'_, K, CAMERA> {
     /// current limit that this visitor's rays see.
     #[inline(always)]
     fn mesh_hit(&self, instance: u32, mesh: usize, o: Vec3A, d: Vec3A) -> Option<(f32, u32, f32, f32)> {
-        let (ray, bvh) = (self.ray, &self.accel.meshes[mesh]);
+        let ray = self.ray;
+        let SceneMesh::Traced(bvh) = &self.accel.meshes[mesh] else {
+            return None;
+        };
         if !CAMERA {
             return bvh.closest(self.kernel, o, d, ray.t_min, self.lim);
         }
@@ -408,10 +731,7 @@ impl<K: BoxKernel, const CAMERA: bool> SceneClosest<'_, K, CAMERA> {
                 Sides::Front => det > 0.0,
                 Sides::Back => det < 0.0,
             };
-            facing && {
-                let p = ray.at(t);
-                planes.iter().all(|&(n, c)| n.dot(p) <= c)
-            }
+            facing && self.accel.camera.unclipped(ray.at(t))
         };
         bvh.closest_accepted(self.kernel, o, d, ray.t_min, self.lim, visible)
     }
@@ -465,7 +785,9 @@ impl<K: BoxKernel> LeafVisitor for SceneAny<'_, K> {
             let Some((mesh, o, d)) = self.accel.object_ray(instance, ray) else {
                 continue;
             };
-            if self.accel.meshes[mesh].any(self.kernel, o, d, ray.t_min, ray.t_max) {
+            if let SceneMesh::Traced(bvh) = &self.accel.meshes[mesh]
+                && bvh.any(self.kernel, o, d, ray.t_min, ray.t_max)
+            {
                 self.found = true;
                 return true;
             }
@@ -499,10 +821,36 @@ impl fmt::Debug for SceneAccel {
         f.debug_struct("SceneAccel")
             .field("meshes", &self.meshes.len())
             .field("instances", &self.placements.len())
+            .field("layout", &self.layout)
+            .field("flattened", &self.instance_counts().0)
             .field("triangles", &self.triangle_count)
             .field("bounds", &self.bounds())
             .finish()
     }
+}
+
+/// The world-space triangles of the flattened placements, in placement order (each mesh's triangles
+/// in its order), and the `(instance, triangle)` each came from. A vertex index out of its mesh's
+/// range stays out of range (the triangle is skipped, as it is in the mesh's own hierarchy).
+fn flatten(meshes: &[SceneMesh], placements: &[Placement]) -> (TriangleMesh, Vec<(u32, u32)>) {
+    let mut world = TriangleMesh::default();
+    let mut source = Vec::new();
+    for (i, p) in placements.iter().enumerate() {
+        let (true, Some(m), Motion::Static { to_world, .. }) = (p.flat, p.mesh, &p.motion) else {
+            continue;
+        };
+        let mesh = meshes[m].mesh();
+        let base = world.positions.len() as u32;
+        let len = mesh.positions.len() as u32;
+        world
+            .positions
+            .extend(mesh.positions.iter().map(|&x| to_world.transform_point3a(x)));
+        world
+            .triangles
+            .extend((mesh.triangles.iter()).map(|t| t.map(|v| if v < len { base + v } else { u32::MAX })));
+        source.extend((0..mesh.triangles.len() as u32).map(|k| (i as u32, k)));
+    }
+    (world, source)
 }
 
 /// A world box containing the object box `b` at every time under `motion` (see the module docs).

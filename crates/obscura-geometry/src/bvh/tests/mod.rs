@@ -1,6 +1,7 @@
 //! Tests of the hierarchies against brute force, and the helpers they share: brute-force closest and
 //! any hit, proptest strategies for triangles and rays, and a deterministic generator.
 
+mod flatten;
 mod mesh;
 mod quality;
 mod scene;

@@ -237,7 +237,7 @@ proptest! {
 }
 
 /// A box-shaped mesh (12 triangles) spanning `lo..hi`.
-fn cuboid(lo: Vec3A, hi: Vec3A) -> TriangleMesh {
+pub(super) fn cuboid(lo: Vec3A, hi: Vec3A) -> TriangleMesh {
     let b = Aabb { lo, hi };
     TriangleMesh {
         positions: b.corners().to_vec(),
