@@ -26,7 +26,7 @@ use obscura_sdk::contract::{Violation, expected_type, value_domain, value_in_dom
 use obscura_sdk::optics::{OrthographicRays, PerspectiveRays, screen_distance};
 use obscura_sdk::{
     DeepMetric, DicingHint, Point2, Projection, ProjectionContext, ProjectionEnvironment, ProjectionProperty,
-    PropertyValue, RayGeometry,
+    PropertyValue, RayGeometry, SoaContext,
 };
 
 /// The widest field of view, in degrees, of the host's pinhole default ray (a pinhole cannot show 180°;
@@ -335,11 +335,22 @@ impl Loss {
 /// # Errors
 /// The [`Loss`] of the batch.
 pub fn call_project(p: &dyn Projection, ctx: &mut ProjectionContext<'_>) -> Result<(), Loss> {
-    catch_unwind(AssertUnwindSafe(|| p.project(ctx))).map_err(|payload| {
-        match payload.downcast_ref::<ProjectFailed>() {
-            Some(f) => Loss::Failed(f.0.clone()),
-            None => Loss::Panicked(panic_message(payload.as_ref())),
-        }
+    catch_loss(|| p.project(ctx))
+}
+
+/// Calls `project_soa`, catching a panic as [`call_project`] does: `Ok(true)` when the projection
+/// wrote the batch, `Ok(false)` when it does not offer the structure-of-arrays path.
+///
+/// # Errors
+/// The [`Loss`] of the batch.
+pub fn call_project_soa(p: &dyn Projection, ctx: &mut SoaContext<'_>) -> Result<bool, Loss> {
+    catch_loss(|| p.project_soa(ctx))
+}
+
+fn catch_loss<R>(call: impl FnOnce() -> R) -> Result<R, Loss> {
+    catch_unwind(AssertUnwindSafe(call)).map_err(|payload| match payload.downcast_ref::<ProjectFailed>() {
+        Some(f) => Loss::Failed(f.0.clone()),
+        None => Loss::Panicked(panic_message(payload.as_ref())),
     })
 }
 
