@@ -296,6 +296,38 @@ impl DefaultRays {
         }
         ray
     }
+
+    /// [`DefaultRays::ray`] of every `screen[i]` through `aperture[i]` into `rays[i]` (the three of
+    /// one length), the same bits: the kind of ray and the lens chosen once for the batch, so each
+    /// case is a plain loop the vectoriser can widen (callers run it inside `obscura_sdk::simd::run`).
+    #[inline(always)]
+    pub fn fill(&self, screen: &[Point2], aperture: &[Point2], rays: &mut [RayGeometry]) {
+        match self {
+            DefaultRays::Perspective { rays: p, d, spheres } => {
+                let (d, spheres) = (*d, *spheres);
+                let clip = move |mut r: RayGeometry| {
+                    if spheres {
+                        (r.min_dist, r.max_dist) = (p.near, p.far);
+                    }
+                    r
+                };
+                if p.lens_radius > 0.0 {
+                    for ((r, s), a) in rays.iter_mut().zip(screen).zip(aperture) {
+                        *r = clip(p.thin_lens(*s, *a, d));
+                    }
+                } else {
+                    for (r, s) in rays.iter_mut().zip(screen) {
+                        *r = clip(p.pinhole(*s, d));
+                    }
+                }
+            }
+            DefaultRays::Orthographic { .. } => {
+                for ((r, s), a) in rays.iter_mut().zip(screen).zip(aperture) {
+                    *r = self.ray(*s, *a);
+                }
+            }
+        }
+    }
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -433,6 +465,52 @@ mod tests {
         let r = DefaultRays::new(&props, &env).ray(s, Point2::ZERO);
         let (near, far) = clipping_distances(r.origin, r.direction, DeepMetric::CameraZ, 0.5, 20.0).unwrap();
         assert!((r.min_dist - near).abs() <= 1e-6 * near && (r.max_dist - far).abs() <= 1e-5 * far);
+    }
+
+    #[test]
+    fn fill_gives_the_bits_of_ray_at_every_simd_tier() {
+        let env = ProjectionEnvironment::new(
+            Format::new(64, 48),
+            ScreenWindow::default_for(Format::new(64, 48)),
+            (0.0, 1.0),
+            (0.5, 20.0),
+            Vec::new(),
+        );
+        let screen: Vec<Point2> = (0..203)
+            .map(|i| Point2::new((i % 17) as f32 / 8.0 - 1.0, (i % 13) as f32 / 6.0 - 1.0))
+            .collect();
+        let aperture: Vec<Point2> = (0..203)
+            .map(|i| Point2::new((i % 7) as f32 / 3.5 - 1.0, (i % 5) as f32 / 2.5 - 1.0))
+            .collect();
+        for (hint, metric, lens) in [
+            (DicingHint::Perspective, DeepMetric::CameraZ, false),
+            (DicingHint::Perspective, DeepMetric::CameraZ, true),
+            (DicingHint::Perspective, DeepMetric::RayLength, true),
+            (DicingHint::Orthographic, DeepMetric::CameraZ, true),
+            (DicingHint::Orthographic, DeepMetric::RayLength, false),
+        ] {
+            let props = Properties {
+                dicing_hint: hint,
+                deep_metric: metric,
+                field_of_view: Some(50.0),
+                f_stop: lens.then_some(2.0),
+                focal_length: lens.then_some(0.1),
+                focal_distance: lens.then_some(4.0),
+            };
+            let defaults = DefaultRays::new(&props, &env);
+            for level in obscura_sdk::simd::Level::ALL {
+                let mut rays = vec![RayGeometry::CULLED; screen.len()];
+                obscura_sdk::simd::run_at(level, || defaults.fill(&screen, &aperture, &mut rays));
+                for (i, r) in rays.iter().enumerate() {
+                    let want = defaults.ray(screen[i], aperture[i]);
+                    assert_eq!(
+                        r.to_bits(),
+                        want.to_bits(),
+                        "{hint:?} {metric:?} lens {lens} {level:?} ray {i}"
+                    );
+                }
+            }
+        }
     }
 
     struct Fails;

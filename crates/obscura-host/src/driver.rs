@@ -444,7 +444,7 @@ impl CameraStage {
             }
             return report;
         }
-        validate(batch, &mut report);
+        validate_batch(batch, &mut report);
         report
     }
 }
@@ -469,11 +469,7 @@ impl CameraStage {
         let defaults = &self.defaults;
         simd::run(
             #[inline(always)]
-            || {
-                for ((r, s), a) in rays.iter_mut().zip(screen).zip(aperture) {
-                    *r = defaults.ray(*s, *a);
-                }
-            },
+            || defaults.fill(screen, aperture, rays),
         );
     }
 
@@ -716,7 +712,11 @@ impl Projection for Chain {
     }
 }
 
-fn validate(batch: &mut Batch, report: &mut ContractReport) {
+/// Validates every ray of `batch` (after `project`) by the contract's per-ray rules, as the stage does:
+/// a ray that breaks one is culled (direction set to zero) and counted in `report` by kind with the
+/// first offending sample kept; rays the projection culled itself are counted in `report.culled`.
+/// A ray that keeps every rule costs one branch-free test ([`check_ray`] runs only on the others).
+pub fn validate_batch(batch: &mut Batch, report: &mut ContractReport) {
     for i in 0..batch.rays.len() {
         let (r, time, tint) = (&mut batch.rays[i], batch.time[i], batch.tint[i]);
         let o = r.origin;
