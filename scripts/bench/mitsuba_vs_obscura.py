@@ -21,10 +21,19 @@ so a burst of load from other processes on the core does not decide the ratio.
 
 - Obscura: the `project_rate` example (a release binary, started by this script on the same core):
   the same frame in batches of 4096 (the renderer's batch, in L2) and as one batch of the whole
-  frame (written to memory like Mitsuba's wavefront). It reports which SIMD tier ran.
+  frame (written to memory like Mitsuba's wavefront), through `project` (40-byte `RtRayGeometry`
+  records), through `project_soa` (the same ten fields, 40 bytes a ray, each field its own array)
+  and through `project_soa` asked for Mitsuba's fields only (`SoaFields`: direction and max
+  distance, 16 bytes a ray; the thin lens adds its origin, 28 bytes). It reports which SIMD tier ran.
 
-Prints Mrays/s per side and the ratio Obscura / Mitsuba. Benchmarks are not timed tests: this is
-not part of CI.
+What each side stores per ray: Mitsuba's kernel evaluates `ray.o`, `ray.d`, `ray.maxt` and the
+weight, but the pinhole's origin and both weights are constants that Dr.Jit keeps as literals, so
+it writes direction and maxt: 16 bytes a ray (the thin lens adds its varying origin: 28 bytes).
+Obscura's `records` and `SoA` rows write every field of every ray (40 bytes); its `like` rows
+write what Mitsuba writes.
+
+Prints Mrays/s per side and the ratio Obscura / Mitsuba, for every repeat and then the best of
+each. Benchmarks are not timed tests: this is not part of CI.
 """
 
 import argparse
@@ -105,18 +114,27 @@ def main():
         sys.exit("mitsuba is not installed: pip install mitsuba")
 
     best = lambda a, b: {k: max(a.get(k, 0.0), b[k]) for k in b}  # noqa: E731
+    rows = [(m, layout) for layout in ("", "_soa", "_soa_like") for m in ("pinhole", "thin_lens")]
+    names = {"": "records", "_soa": "SoA", "_soa_like": "like"}
     ob_batch, mi, ob_frame, tier = {}, {}, {}, "?"
-    for _ in range(args.repeat):
-        rates, tier = obscura_rates(args.width, args.height, 4096, args.binary)
-        ob_batch = best(ob_batch, rates)
-        mi = best(mi, mitsuba_rates(args.width, args.height, args.rounds))
-        ob_frame = best(ob_frame, obscura_rates(args.width, args.height, args.width * args.height, args.binary)[0])
-    print(f"one core (cpu {args.core}), {args.width}x{args.height} pixel-centre rays, Obscura tier {tier}")
-    print(f"{'model':<10} {'Mitsuba':>9} {'Obscura b4096':>14} {'ratio':>6} {'Obscura frame':>14} {'ratio':>6}")
-    for model in ("pinhole", "thin_lens"):
-        m, b, f = mi[model], ob_batch[model], ob_frame[model]
-        print(f"{model:<10} {m:9.1f} {b:14.1f} {b / m:6.2f} {f:14.1f} {f / m:6.2f}")
 
+    def table(title, mi, ob_batch, ob_frame):
+        print(title)
+        print(f"{'model':<10} {'layout':<8} {'Mitsuba':>9} {'Obscura b4096':>14} {'ratio':>6} {'Obscura frame':>14} {'ratio':>6}")
+        for model, layout in rows:
+            m, b, f = mi[model], ob_batch[model + layout], ob_frame[model + layout]
+            name = names[layout]
+            print(f"{model:<10} {name:<8} {m:9.1f} {b:14.1f} {b / m:6.2f} {f:14.1f} {f / m:6.2f}")
+
+    for k in range(args.repeat):
+        rates, tier = obscura_rates(args.width, args.height, 4096, args.binary)
+        mrates = mitsuba_rates(args.width, args.height, args.rounds)
+        frates = obscura_rates(args.width, args.height, args.width * args.height, args.binary)[0]
+        table(f"repeat {k + 1}", mrates, rates, frates)
+        ob_batch, mi, ob_frame = best(ob_batch, rates), best(mi, mrates), best(ob_frame, frates)
+    load = os.getloadavg()
+    table(f"best of {args.repeat}: one core (cpu {args.core}), {args.width}x{args.height} pixel-centre rays, "
+          f"Obscura tier {tier}, load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}", mi, ob_batch, ob_frame)
 
 if __name__ == "__main__":
     main()

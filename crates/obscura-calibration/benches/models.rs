@@ -7,7 +7,7 @@
 use obscura_calibration::CalibratedCameraFactory;
 use obscura_sdk::{
     Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, ProjectionFactory,
-    RayGeometry, Rgb, ScreenWindow,
+    RayGeometry, RaysSoa, Rgb, ScreenWindow, SoaContext,
 };
 
 const BATCH: usize = 4096;
@@ -200,8 +200,8 @@ fn labels() -> Vec<&'static str> {
         .collect()
 }
 
-#[divan::bench(args = labels())]
-fn project(bencher: divan::Bencher, label: &str) {
+/// The projection of case `label` and its batch of screen samples.
+fn setup(label: &str) -> (Box<dyn Projection>, Vec<Point2>) {
     let (_, model, params, pol, inv) = *CASES.iter().find(|c| c.0 == label).unwrap();
     let format = Format::new(640, 480);
     let mut env = ProjectionEnvironment::for_format(format);
@@ -216,6 +216,12 @@ fn project(bencher: divan::Bencher, label: &str) {
             w.raster_to_screen(format, fx * 640.0, fy * 480.0)
         })
         .collect();
+    (p, screen)
+}
+
+#[divan::bench(args = labels())]
+fn project(bencher: divan::Bencher, label: &str) {
+    let (p, screen) = setup(label);
     let lens = vec![Point2::new(0.5, 0.5); BATCH];
     let aperture = vec![Point2::ZERO; BATCH];
     let mut time = vec![0.0f32; BATCH];
@@ -227,5 +233,27 @@ fn project(bencher: divan::Bencher, label: &str) {
             let mut ctx =
                 ProjectionContext::new(&screen, &lens, &aperture, &mut time, &mut rays, &mut tint).unwrap();
             p.project(divan::black_box(&mut ctx));
+        });
+}
+
+/// `project_soa` of the same batch into ten arrays (every field) cut from one buffer at a 64-byte
+/// boundary, so each array starts on a cache line.
+#[divan::bench(args = labels())]
+fn project_soa(bencher: divan::Bencher, label: &str) {
+    let (p, screen) = setup(label);
+    let lens = vec![Point2::new(0.5, 0.5); BATCH];
+    let aperture = vec![Point2::ZERO; BATCH];
+    let mut time = vec![0.0f32; BATCH];
+    let mut buffer = vec![0.0f32; 10 * BATCH + 16];
+    let skip = buffer.as_ptr().align_offset(64);
+    let mut tint = vec![1.0f32; 3 * BATCH];
+    bencher
+        .counter(divan::counter::ItemsCount::new(BATCH))
+        .bench_local(|| {
+            let rays = RaysSoa::from_fields(&mut buffer[skip..skip + 10 * BATCH]).unwrap();
+            let (r, gb) = tint.split_at_mut(BATCH);
+            let (g, b) = gb.split_at_mut(BATCH);
+            let mut ctx = SoaContext::new(&screen, &lens, &aperture, &mut time, rays, [r, g, b]).unwrap();
+            assert!(p.project_soa(divan::black_box(&mut ctx)));
         });
 }

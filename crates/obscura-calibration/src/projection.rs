@@ -112,7 +112,7 @@ use std::sync::LazyLock;
 use obscura_sdk::{
     DeepMetric, DicingHint, ParamDecl, ParamList, ParamValue, Params, PluginError, Point2, Projection,
     ProjectionContext, ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue,
-    RayGeometry, ValueRange, Vec3, simd,
+    RayGeometry, RaysSoa, SoaContext, ValueRange, Vec3, simd,
 };
 
 use crate::NAME;
@@ -386,11 +386,66 @@ impl CalibratedCamera {
     }
 }
 
-/// One `project` batch, run with the model's specialised pixel → ray map.
-struct Batch<'a> {
+/// One `project` (or `project_soa`) batch, run with the model's specialised pixel → ray map.
+struct Batch<'a, O: RaysOut> {
     camera: &'a CalibratedCamera,
     screen: &'a [Point2],
-    rays: &'a mut [RayGeometry],
+    rays: O,
+}
+
+/// Where a batch's rays go: RenderMan's records (`project`) or one array per field (`project_soa`).
+trait RaysOut {
+    /// The number of rays.
+    fn len(&self) -> usize;
+
+    /// Writes rays `start .. start + n` (`n ≤ CHUNK`) from a chunk's lanes: where `valid`, origin and
+    /// origin radius 0 and `out` = (direction x, y, z, spread, min, max); elsewhere the culled ray.
+    fn put(&mut self, start: usize, n: usize, valid: &[bool; CHUNK], out: &[[f32; CHUNK]; 6]);
+}
+
+impl RaysOut for &mut [RayGeometry] {
+    fn len(&self) -> usize {
+        <[RayGeometry]>::len(self)
+    }
+
+    #[inline(always)]
+    fn put(&mut self, start: usize, n: usize, valid: &[bool; CHUNK], out: &[[f32; CHUNK]; 6]) {
+        for (i, ray) in self[start..start + n].iter_mut().enumerate() {
+            *ray = if valid[i] {
+                RayGeometry {
+                    origin: Vec3::ZERO,
+                    origin_radius: 0.0,
+                    direction: Vec3::new(out[0][i], out[1][i], out[2][i]),
+                    ray_spread: out[3][i],
+                    min_dist: out[4][i],
+                    max_dist: out[5][i],
+                }
+            } else {
+                RayGeometry::CULLED
+            };
+        }
+    }
+}
+
+impl RaysOut for &mut RaysSoa<'_> {
+    fn len(&self) -> usize {
+        RaysSoa::len(self)
+    }
+
+    #[inline(always)]
+    fn put(&mut self, start: usize, n: usize, valid: &[bool; CHUNK], out: &[[f32; CHUNK]; 6]) {
+        let culled = RayGeometry::CULLED.to_bits().map(f32::from_bits);
+        for (k, field) in self.fields_mut().into_iter().enumerate() {
+            // Fields 0–3 (origin, origin radius) are 0 on every ray, culled or not; 4–9 from `out`.
+            for (i, f) in field[start..start + n].iter_mut().enumerate() {
+                *f = if k >= 4 && valid[i] {
+                    out[k - 4][i]
+                } else {
+                    culled[k]
+                };
+            }
+        }
+    }
 }
 
 /// A chunk of model rays, structure-of-arrays: `v[k][i]` is component k of lane i's ray, `dv[2k + c]`
@@ -414,7 +469,7 @@ impl Lanes {
     }
 }
 
-impl Batch<'_> {
+impl<O: RaysOut> Batch<'_, O> {
     /// The batch loop: per chunk, the model pixels, then the model rays of every lane (`fill`: a
     /// branch-free loop over lanes that vectorises, or a whole-chunk kernel; lanes flagged `redo`
     /// recomputed with `scalar`), then
@@ -430,7 +485,8 @@ impl Batch<'_> {
         scalar: impl Fn([f64; 2]) -> Option<PixelRay>,
     ) {
         let c = self.camera;
-        let (rays, screen) = (self.rays, self.screen);
+        let (mut rays, screen) = (self.rays, self.screen);
+        let screen = &screen[..screen.len().min(rays.len())];
         let ps = c.pixel_scale as f32;
         let (near, far, planar) = (c.near, c.far, c.clip_planes);
         simd::run(
@@ -445,7 +501,7 @@ impl Batch<'_> {
                 let (mut u, mut v) = ([0.0f64; CHUNK], [0.0f64; CHUNK]);
                 let mut out = [[0.0f32; CHUNK]; 6];
                 let mut valid = [false; CHUNK];
-                for (rays, screen) in rays.chunks_mut(CHUNK).zip(screen.chunks(CHUNK)) {
+                for (start, screen) in (0..).step_by(CHUNK).zip(screen.chunks(CHUNK)) {
                     for ((u, v), s) in u.iter_mut().zip(v.iter_mut()).zip(screen) {
                         *u = c.su * s.x as f64 + c.ou;
                         *v = c.sv * s.y as f64 + c.ov;
@@ -484,27 +540,14 @@ impl Batch<'_> {
                         out[4][i] = if planar { near * k } else { near };
                         out[5][i] = if planar { far * k } else { far };
                     }
-                    for (i, ray) in rays.iter_mut().enumerate() {
-                        *ray = if valid[i] {
-                            RayGeometry {
-                                origin: Vec3::ZERO,
-                                origin_radius: 0.0,
-                                direction: Vec3::new(out[0][i], out[1][i], out[2][i]),
-                                ray_spread: out[3][i],
-                                min_dist: out[4][i],
-                                max_dist: out[5][i],
-                            }
-                        } else {
-                            RayGeometry::CULLED
-                        };
-                    }
+                    rays.put(start, screen.len(), &valid, &out);
                 }
             },
         );
     }
 }
 
-impl RayKernel for Batch<'_> {
+impl<O: RaysOut> RayKernel for Batch<'_, O> {
     #[inline(always)]
     fn visit(self, kernel: impl Fn([f64; 2]) -> Option<PixelRay>) {
         const NONE: PixelRay = LaneRay::NONE.ray;
@@ -597,6 +640,18 @@ impl Projection for CalibratedCamera {
             rays: c.rays,
         };
         self.model.with_kernel(batch);
+    }
+
+    /// The rays of `project`, bit for bit, written one array per field by the same batch loop (only
+    /// the chunk's write-out differs).
+    fn project_soa(&self, ctx: &mut SoaContext<'_>) -> bool {
+        let batch = Batch {
+            camera: self,
+            screen: ctx.screen,
+            rays: &mut ctx.rays,
+        };
+        self.model.with_kernel(batch);
+        true
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {
@@ -695,6 +750,19 @@ mod tests {
                 .map_or(RayGeometry::CULLED, |p| cam.geometry(p));
             assert_eq!(*r, expected, "{model} at {s:?}");
             valid += usize::from(!r.is_culled());
+        }
+        // `project_soa` writes the same rays bit for bit at every tier, for every tail of the
+        // 32-lane chunks and for the whole batch (the culled samples beyond the frame included).
+        for level in simd::Level::ALL.into_iter().filter(|l| l.is_available()) {
+            for m in (0..=CHUNK + 2).chain([n]).filter(|&m| m <= n) {
+                let (s, l, t) = (&screen[..m], &lens[..m], &time[..m]);
+                let check = simd::with_level(level, || obscura_sdk::check_project_soa(&cam, s, l, t));
+                assert_eq!(
+                    check,
+                    Ok(true),
+                    "{model}: project_soa of {m} samples, tier {level}"
+                );
+            }
         }
         valid
     }

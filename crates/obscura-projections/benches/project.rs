@@ -5,6 +5,10 @@
 //! stores the CPU has, computing nothing) and the *streaming roofline* (a batch of 16M rays, 640 MB, far
 //! beyond L2 and L3, written with non-temporal stores, and with ordinary stores).
 //!
+//! `soa_records` and `soa_arrays` run the projections that offer `project_soa` both ways in one run,
+//! batch 4096: `project` into 40-byte records and `project_soa` into ten arrays (the same 40 bytes
+//! a ray), against the same store roofline.
+//!
 //! divan reports items/s: each item is one ray.
 
 use std::hint::black_box;
@@ -321,4 +325,54 @@ mod roofline {
             }
         }
     }
+}
+
+/// The projections that offer `project_soa` (the perspective kernels and the centred panoramas), by
+/// their label in `PERSPECTIVE` or `LIBRARY`: `soa_records` and `soa_arrays` run each.
+const SOA: [&str; 12] = [
+    "pinhole",
+    "thin_lens",
+    "sphere",
+    "cylinder",
+    "fisheye_equidistant",
+    "fisheye_equisolid",
+    "fisheye_stereographic",
+    "fisheye_orthographic",
+    "fisheye_polynomial",
+    "mirror_ball",
+    "cube_face",
+    "octahedral",
+];
+
+/// The projection and parameters of an `SOA` label.
+fn soa_entry(label: &str) -> (&'static str, &'static [(&'static str, &'static str)]) {
+    match PERSPECTIVE.iter().find(|p| p.0 == label) {
+        Some(p) => ("PxrPerspective", p.1),
+        None => {
+            let e = LIBRARY.iter().find(|e| e.0 == label).expect("a label of LIBRARY");
+            (e.1, e.2)
+        }
+    }
+}
+
+/// `project` of an `SOA` projection into 40-byte records, batch 4096.
+#[divan::bench(args = SOA)]
+fn soa_records(bencher: Bencher, label: &str) {
+    let (name, params) = soa_entry(label);
+    bench_projection(bencher, 4096, name, params);
+}
+
+/// `project_soa` of an `SOA` projection into ten arrays (every field), batch 4096.
+#[divan::bench(args = SOA)]
+fn soa_arrays(bencher: Bencher, label: &str) {
+    let (name, params) = soa_entry(label);
+    let p = projection(name, params);
+    let mut batch = Batch::new(4096, Aperture::Square);
+    assert!(
+        batch.run_soa(p.as_ref(), obscura_sdk::SoaFields::ALL),
+        "{label} offers project_soa"
+    );
+    bencher.counter(ItemsCount::new(4096usize)).bench_local(|| {
+        black_box(batch.run_soa(black_box(p.as_ref()), obscura_sdk::SoaFields::ALL));
+    });
 }

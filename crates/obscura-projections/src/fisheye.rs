@@ -75,7 +75,7 @@ use std::sync::LazyLock;
 
 use obscura_sdk::{
     DeepMetric, ParamDecl, PluginError, Point2, Projection, ProjectionContext, ProjectionEnvironment,
-    ProjectionProperty, PropertyValue, ValueRange, Vec3,
+    ProjectionProperty, PropertyValue, SoaContext, ValueRange, Vec3,
 };
 
 use crate::panorama::{
@@ -477,45 +477,58 @@ impl Fisheye {
     }
 }
 
+/// `$map(ctx, clip, lane)` with the lane of `$fisheye`'s law: `project` and `project_soa` run the
+/// same lanes into records or into arrays.
+macro_rules! by_law {
+    ($fisheye:ident, $map:path, $ctx:ident) => {{
+        let (clip, this) = ($fisheye.clip, $fisheye);
+        match this.law {
+            Law::Equidistant { h } => $map(
+                $ctx,
+                clip,
+                #[inline(always)]
+                |s| this.equidistant(s, h),
+            ),
+            Law::Stereographic { k } => $map(
+                $ctx,
+                clip,
+                #[inline(always)]
+                |s| this.stereographic(s, k),
+            ),
+            Law::Orthographic { m, cos_floor } => $map(
+                $ctx,
+                clip,
+                #[inline(always)]
+                |s| this.orthographic(s, m, cos_floor),
+            ),
+            Law::Equisolid { q, cos_floor } => $map(
+                $ctx,
+                clip,
+                #[inline(always)]
+                |s| this.equisolid(s, q, cos_floor),
+            ),
+            Law::Polynomial { p, dp } => $map(
+                $ctx,
+                clip,
+                #[inline(always)]
+                |s| this.polynomial(s, &p, &dp),
+            ),
+        }
+    }};
+}
+
 impl Projection for Fisheye {
     fn property(&self, property: ProjectionProperty) -> Option<PropertyValue> {
         spherical_property(property, self.field_of_view)
     }
 
     fn project(&self, ctx: &mut ProjectionContext<'_>) {
-        let clip = self.clip;
-        match self.law {
-            Law::Equidistant { h } => screen::map_centred_rays(
-                ctx,
-                clip,
-                #[inline(always)]
-                |s| self.equidistant(s, h),
-            ),
-            Law::Stereographic { k } => screen::map_centred_rays(
-                ctx,
-                clip,
-                #[inline(always)]
-                |s| self.stereographic(s, k),
-            ),
-            Law::Orthographic { m, cos_floor } => screen::map_centred_rays(
-                ctx,
-                clip,
-                #[inline(always)]
-                |s| self.orthographic(s, m, cos_floor),
-            ),
-            Law::Equisolid { q, cos_floor } => screen::map_centred_rays(
-                ctx,
-                clip,
-                #[inline(always)]
-                |s| self.equisolid(s, q, cos_floor),
-            ),
-            Law::Polynomial { p, dp } => screen::map_centred_rays(
-                ctx,
-                clip,
-                #[inline(always)]
-                |s| self.polynomial(s, &p, &dp),
-            ),
-        }
+        by_law!(self, screen::map_centred_rays, ctx);
+    }
+
+    /// The rays of `project` straight into the caller's arrays ([`screen::map_centred_rays_soa`]).
+    fn project_soa(&self, ctx: &mut SoaContext<'_>) -> bool {
+        by_law!(self, screen::map_centred_rays_soa, ctx)
     }
 
     fn unproject(&self, point: Vec3, _time: f32) -> Option<Point2> {

@@ -67,7 +67,8 @@ macro_rules! projection_factory {
 /// Option<Point2>` once the point's components are finite. Each ray from its screen sample by the
 /// camera's `ray(&self, Point2) -> RayGeometry`, or — with `lanes` after the field of view — by its
 /// branch-free `lane(&self, Point2) -> panorama::CentredLane` and its `clip` field, in the
-/// structure-of-arrays loop of `crate::screen::map_centred_rays`.
+/// structure-of-arrays loop of `crate::screen::map_centred_rays`, and then also `project_soa` (the
+/// same rays straight into the caller's arrays, `crate::screen::map_centred_rays_soa`).
 macro_rules! spherical_projection {
     ($camera:ty, $fov:expr $(,)?) => {
         spherical_projection!(@impl $camera, $fov, ray);
@@ -86,6 +87,17 @@ macro_rules! spherical_projection {
             |s| $this.lane(s),
         )
     };
+    (@soa ray) => {};
+    (@soa lane) => {
+        fn project_soa(&self, ctx: &mut obscura_sdk::SoaContext<'_>) -> bool {
+            crate::screen::map_centred_rays_soa(
+                ctx,
+                self.clip,
+                #[inline(always)]
+                |s| self.lane(s),
+            )
+        }
+    };
     (@impl $camera:ty, $fov:expr, $how:ident) => {
         impl obscura_sdk::Projection for $camera {
             fn property(
@@ -99,6 +111,8 @@ macro_rules! spherical_projection {
             fn project(&self, ctx: &mut obscura_sdk::ProjectionContext<'_>) {
                 spherical_projection!(@project self, ctx, $how);
             }
+
+            spherical_projection!(@soa $how);
 
             fn unproject(&self, point: obscura_sdk::Vec3, _time: f32) -> Option<obscura_sdk::Point2> {
                 let (x, y, z) = crate::panorama::finite_f64(point)?;

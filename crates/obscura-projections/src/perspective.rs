@@ -20,16 +20,26 @@
 //! Properties: DicingHint Perspective; FieldOfView `fov` (the narrower of `fov`, `fovEnd` during a
 //! zoom, so dicing is fine enough all through the shutter); DeepMetric CameraZ; FStop, FocalLength and
 //! FocalDistance only when depth of field is on.
+//!
+//! Batches: `project` writes 40-byte `RtRayGeometry` records; `project_soa` writes the same rays, bit
+//! for bit, one array per field ([`obscura_sdk::RaysSoa`]). Both run the same kernels at the dispatch
+//! tier — AVX-512 (`perspective/avx512.rs`, pinhole and thin lens), AVX2 + FMA (`perspective/avx2.rs`,
+//! pinhole) or the portable loop — and differ only in the kernel's sink: records take a transpose of
+//! the lanes, arrays take each register as it is (ten stores per sixteen rays, no shuffle). When the
+//! consumer asks for some fields only ([`obscura_sdk::SoaFields`]), the AVX-512 and AVX2 sinks store
+//! only those, and skip the footprint's fourth root when `ray_spread` is not among them.
 
 use std::sync::LazyLock;
 
 use obscura_sdk::optics::{PerspectiveRays, screen_distance};
 use obscura_sdk::{
     DeepMetric, DicingHint, ParamDecl, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, ValueRange, Vec3,
+    ProjectionEnvironment, ProjectionProperty, PropertyValue, RayGeometry, RaysSoa, SoaContext, SoaFields,
+    ValueRange, Vec3,
 };
 
 use crate::dof::{self, DepthOfField};
+use crate::screen::write_soa;
 use crate::simd;
 
 /// The name scenes use.
@@ -216,6 +226,31 @@ impl Projection for Perspective {
         }
     }
 
+    /// The rays of `project`, bit for bit, one array per field: the pinhole and thin-lens kernels
+    /// store each register straight into its array at every tier (no transposes); the zoom path
+    /// writes its per-ray rays field by field. Always offered.
+    fn project_soa(&self, ctx: &mut SoaContext<'_>) -> bool {
+        let rays = self.rays;
+        let d = self.zoom.d;
+        match (self.zoom.fov_end.is_some(), self.has_depth_of_field()) {
+            (false, false) => pinhole_soa(&rays, ctx.screen, d, ctx.fields(), &mut ctx.rays),
+            (false, true) => thin_lens_soa(&rays, ctx.screen, ctx.aperture, d, ctx.fields(), &mut ctx.rays),
+            (true, _) => {
+                let (screen, aperture, time, out) = (ctx.screen, ctx.aperture, &*ctx.time, &mut ctx.rays);
+                let n = out.len();
+                simd::run(
+                    #[inline(always)]
+                    || {
+                        write_soa(out, n, |i| {
+                            rays.ray(screen[i], aperture[i], self.screen_distance_at(time[i]))
+                        })
+                    },
+                );
+            }
+        }
+        true
+    }
+
     fn unproject(&self, point: Vec3, time: f32) -> Option<Point2> {
         if point.z <= 0.0 || !point.is_finite() {
             return None;
@@ -238,7 +273,9 @@ fn pinhole_batch(rays: &PerspectiveRays, screen: &[Point2], d: f32, out: &mut [R
         },
         #[cfg(target_arch = "x86_64")]
         // SAFETY: `level` only answers Avx2Fma when the CPU has AVX2 and FMA.
-        simd::Level::Avx2Fma => unsafe { avx2::pinhole(rays, &screen[..n], d, &mut out[..n]) },
+        simd::Level::Avx2Fma => unsafe {
+            avx2::pinhole(rays, &screen[..n], d, n, &mut avx2::Aos(&mut out[..n]))
+        },
         level => simd::run_at(
             level,
             #[inline(always)]
@@ -276,6 +313,60 @@ fn thin_lens_batch(
                     *r = rays.thin_lens(*s, *a, d);
                 }
             },
+        ),
+    }
+}
+
+/// [`pinhole_batch`] into arrays: the same kernels, with sinks that store each register into its
+/// field's array — those in `fields` only, and without computing the spread unless it is asked for
+/// (the portable tier writes every field).
+fn pinhole_soa(rays: &PerspectiveRays, screen: &[Point2], d: f32, fields: SoaFields, out: &mut RaysSoa<'_>) {
+    let n = screen.len().min(out.len());
+    match simd::level() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx512 when the CPU has it; `out` holds at least `n` rays.
+        simd::Level::Avx512 => unsafe {
+            avx512::pinhole(rays, &screen[..n], d, &mut avx512::Soa::new(out, fields))
+        },
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx2Fma when the CPU has AVX2 and FMA; `out` holds `n` rays.
+        simd::Level::Avx2Fma => unsafe {
+            avx2::pinhole(rays, &screen[..n], d, n, &mut avx2::Soa(out, fields))
+        },
+        level => simd::run_at(
+            level,
+            #[inline(always)]
+            || write_soa(out, n, |i| rays.pinhole(screen[i], d)),
+        ),
+    }
+}
+
+/// [`thin_lens_batch`] into arrays, as [`pinhole_soa`].
+fn thin_lens_soa(
+    rays: &PerspectiveRays,
+    screen: &[Point2],
+    aperture: &[Point2],
+    d: f32,
+    fields: SoaFields,
+    out: &mut RaysSoa<'_>,
+) {
+    let n = screen.len().min(aperture.len()).min(out.len());
+    match simd::level() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `level` only answers Avx512 when the CPU has it; every slice holds `n` items.
+        simd::Level::Avx512 => unsafe {
+            avx512::thin_lens(
+                rays,
+                &screen[..n],
+                &aperture[..n],
+                d,
+                &mut avx512::Soa::new(out, fields),
+            );
+        },
+        level => simd::run_at(
+            level,
+            #[inline(always)]
+            || write_soa(out, n, |i| rays.thin_lens(screen[i], aperture[i], d)),
         ),
     }
 }
@@ -454,6 +545,105 @@ mod tests {
                     continue;
                 }
                 assert_eq!(bits(&at(level)), bits(&portable), "tier {level}, {params:?}");
+            }
+        }
+    }
+
+    /// The three perspective configurations the kernels serve: pinhole, thin lens, zoom.
+    type Params = &'static [(&'static str, &'static [&'static str])];
+    const CONFIGS: [(&str, Params); 3] = [
+        ("pinhole", &[("float fov", &["60"])]),
+        (
+            "thin lens",
+            &[
+                ("float fov", &["40"]),
+                ("float fStop", &["2.8"]),
+                ("float focalLength", &["0.05"]),
+                ("float focalDistance", &["4"]),
+            ],
+        ),
+        ("zoom", &[("float fov", &["60"]), ("float fovEnd", &["30"])]),
+    ];
+
+    /// `project_soa` writes `project`'s rays bit for bit, every field (the arrays start as NaN
+    /// payloads), at every tier, every tail length 0..40 and the whole batch of awkward samples.
+    #[test]
+    fn tiers_project_soa_is_project_bit_for_bit() {
+        let (screen, aperture) = samples();
+        let time: Vec<f32> = (0..screen.len())
+            .map(|i| i as f32 / screen.len() as f32)
+            .collect();
+        for (label, params) in CONFIGS {
+            let p = make(params, Format::new(640, 480));
+            testing::assert_soa_is_project(label, p.as_ref(), &screen, &aperture, &time);
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Random batches of random length (tails of every size), at every tier: `project_soa` is
+        /// `project` bit for bit.
+        #[test]
+        fn tiers_project_soa_is_project_on_random_batches(
+            samples in proptest::collection::vec((-3.0f32..3.0, -3.0f32..3.0, -1.0f32..1.0, -1.0f32..1.0, 0.0f32..1.0), 0..70),
+            config in 0usize..3,
+        ) {
+            let (label, params) = CONFIGS[config];
+            let p = make(params, Format::new(320, 240));
+            let screen: Vec<_> = samples.iter().map(|s| Point2::new(s.0, s.1)).collect();
+            let aperture: Vec<_> = samples.iter().map(|s| Point2::new(s.2, s.3)).collect();
+            let time: Vec<_> = samples.iter().map(|s| s.4).collect();
+            for level in simd::Level::ALL.into_iter().filter(|l| l.is_available()) {
+                let want = simd::with_level(level, || project_points(p.as_ref(), &screen, &aperture, &time));
+                let got = simd::with_level(level, || testing::project_soa_batch(p.as_ref(), &screen, &aperture, &time, SoaFields::ALL))
+                    .expect("offered").0;
+                prop_assert_eq!(bits(&got), bits(&want), "{} tier {}", label, level);
+            }
+        }
+    }
+
+    /// A consumer asking for some fields only (Mitsuba's set: direction and `max_dist`; with the
+    /// origin; the spread alone; `min_dist` alone) gets those arrays bit for bit at every tier and
+    /// every tail length; every other array holds `project`'s value or was not touched, and on the
+    /// AVX-512 tier (which skips them) it was not touched at all.
+    #[test]
+    fn tiers_project_soa_writes_the_selected_fields() {
+        let (screen, aperture) = samples();
+        let time = vec![0.0; screen.len()];
+        let selections = [
+            SoaFields::DIRECTION | SoaFields::MAX_DIST,
+            SoaFields::ORIGIN | SoaFields::DIRECTION | SoaFields::MAX_DIST,
+            SoaFields::RAY_SPREAD,
+            SoaFields::MIN_DIST,
+        ];
+        for (label, params) in &CONFIGS[..2] {
+            let p = make(params, Format::new(640, 480));
+            for level in simd::Level::ALL.into_iter().filter(|l| l.is_available()) {
+                for n in (0..40).chain([screen.len()]) {
+                    let (s, a, t) = (&screen[..n], &aperture[..n], &time[..n]);
+                    let want = bits(&project_points(p.as_ref(), s, a, t));
+                    for fields in selections {
+                        let got = simd::with_level(level, || {
+                            testing::project_soa_batch(p.as_ref(), s, a, t, fields)
+                        })
+                        .expect("offered")
+                        .0;
+                        for (i, (g, w)) in bits(&got).iter().zip(&want).enumerate() {
+                            for k in 0..10 {
+                                let what =
+                                    format!("{label}, tier {level}, n {n}, {fields:?}, ray {i}, field {k}");
+                                if fields.has(k) {
+                                    assert_eq!(g[k], w[k], "{what}");
+                                } else if level == simd::Level::Avx512 {
+                                    assert_eq!(g[k], obscura_sdk::SOA_UNWRITTEN, "{what}: written");
+                                } else {
+                                    assert!(g[k] == w[k] || g[k] == obscura_sdk::SOA_UNWRITTEN, "{what}");
+                                }
+                            }
+                        }
+                    }
+                }
             }
         }
     }

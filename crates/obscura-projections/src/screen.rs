@@ -3,10 +3,14 @@
 //! in the vectorised loop of [`crate::simd`], and size the footprint by the pixel of the image format
 //! over the screen window, `Δx = (r − l)/W`, `Δy = (t − b)/H` screen units.
 //!
+//! The centred panoramas (every [`CentredLane`] camera) also write their rays one array per field
+//! ([`map_centred_rays_soa`], their `project_soa`): the lanes are already structure-of-arrays, so
+//! that path is one vectorised loop storing each field where it belongs, with no write-out.
+//!
 //! Window coordinates `u, v ∈ [−1, 1]`, the panoramas' normalised form of `s`, are
 //! [`crate::panorama::SweepWindow`]'s.
 
-use obscura_sdk::{Point2, ProjectionContext, ProjectionEnvironment, RayGeometry};
+use obscura_sdk::{Point2, ProjectionContext, ProjectionEnvironment, RayGeometry, RaysSoa, SoaContext};
 
 use crate::panorama::{CentredLane, SphericalClip};
 
@@ -155,6 +159,82 @@ fn write_centred(out: &mut [RayGeometry], d: &[[f32; LANES]; 4], clipping: &[[f3
             min_dist: clipping[0][i],
             max_dist: clipping[1][i],
         };
+    }
+}
+
+/// `project_soa` of a camera that [`map_centred_rays`] serves: the same rays, bit for bit, written one
+/// array per field ([`RaysSoa`]). Always returns `true` (every field of every ray is written).
+///
+/// No chunks and no write-out: the loop computes `lane` for each sample and stores its direction,
+/// spread and clipping distances (the culled ray's where the lane is not valid) straight into the
+/// arrays, and zero into the origin and origin radius. Each store is a contiguous run of one field,
+/// so LLVM vectorises the loop at the tier's width as it is; the tail needs no scalar loop of its own.
+#[inline(always)]
+pub fn map_centred_rays_soa(
+    ctx: &mut SoaContext<'_>,
+    clip: SphericalClip,
+    lane: impl Fn(Point2) -> CentredLane,
+) -> bool {
+    let screen = ctx.screen;
+    let rays = &mut ctx.rays;
+    simd::run(
+        #[inline(always)]
+        move || centred_lanes_soa(rays, screen, clip, lane),
+    );
+    true
+}
+
+/// The loop of [`map_centred_rays_soa`], inlined into the tier's trampoline.
+#[inline(always)]
+fn centred_lanes_soa(
+    rays: &mut RaysSoa<'_>,
+    screen: &[Point2],
+    clip: SphericalClip,
+    lane: impl Fn(Point2) -> CentredLane,
+) {
+    let n = rays.len().min(screen.len());
+    let culled = RayGeometry::CULLED;
+    let [ox, oy, oz, radius, dx, dy, dz, spread, min, max] = rays.fields_mut();
+    let (ox, oy, oz, radius) = (&mut ox[..n], &mut oy[..n], &mut oz[..n], &mut radius[..n]);
+    let (dx, dy, dz, spread) = (&mut dx[..n], &mut dy[..n], &mut dz[..n], &mut spread[..n]);
+    let (min, max, screen) = (&mut min[..n], &mut max[..n], &screen[..n]);
+    for i in 0..n {
+        let l = lane(screen[i]);
+        let v = l.valid;
+        ox[i] = 0.0;
+        oy[i] = 0.0;
+        oz[i] = 0.0;
+        radius[i] = 0.0;
+        dx[i] = if v { l.direction.x } else { culled.direction.x };
+        dy[i] = if v { l.direction.y } else { culled.direction.y };
+        dz[i] = if v { l.direction.z } else { culled.direction.z };
+        spread[i] = if v { l.ray_spread } else { culled.ray_spread };
+        min[i] = if v { clip.near } else { culled.min_dist };
+        max[i] = if v { clip.far } else { culled.max_dist };
+    }
+}
+
+/// Writes `ray(i)` as ray `i` of `rays` for every `i < n`, field by field (`project_soa` of a
+/// camera whose rays are computed one at a time). Inline it into a [`simd::run`] kernel: the loop has
+/// no branches of its own, so LLVM widens it where `ray` allows.
+#[inline(always)]
+pub fn write_soa(rays: &mut RaysSoa<'_>, n: usize, ray: impl Fn(usize) -> RayGeometry) {
+    let [ox, oy, oz, radius, dx, dy, dz, spread, min, max] = rays.fields_mut();
+    let (ox, oy, oz, radius) = (&mut ox[..n], &mut oy[..n], &mut oz[..n], &mut radius[..n]);
+    let (dx, dy, dz, spread) = (&mut dx[..n], &mut dy[..n], &mut dz[..n], &mut spread[..n]);
+    let (min, max) = (&mut min[..n], &mut max[..n]);
+    for i in 0..n {
+        let r = ray(i);
+        ox[i] = r.origin.x;
+        oy[i] = r.origin.y;
+        oz[i] = r.origin.z;
+        radius[i] = r.origin_radius;
+        dx[i] = r.direction.x;
+        dy[i] = r.direction.y;
+        dz[i] = r.direction.z;
+        spread[i] = r.ray_spread;
+        min[i] = r.min_dist;
+        max[i] = r.max_dist;
     }
 }
 
@@ -323,6 +403,57 @@ mod tests {
                 "{label}: a culled ray that is not RayGeometry::CULLED"
             );
             assert!(culled < screen.len(), "{label}: everything culled");
+        }
+    }
+
+    /// `project_soa` of every panorama branch is its `project` bit for bit at every tier, culled
+    /// samples included (the samples reach beyond every rim), every tail length.
+    #[test]
+    fn tiers_panoramas_project_soa_is_project_bit_for_bit() {
+        let format = Format::new(320, 160);
+        let screen = samples(format);
+        let n = screen.len();
+        for (label, factory, params) in panoramas() {
+            let p = make(factory.as_ref(), &params, format);
+            crate::testing::assert_soa_is_project(
+                label,
+                p.as_ref(),
+                &screen,
+                &vec![Point2::ZERO; n],
+                &vec![0.0; n],
+            );
+            let culled = rays_at(Level::Portable, p.as_ref(), &screen)
+                .iter()
+                .filter(|r| r.is_culled())
+                .count();
+            assert!(
+                culled > 0 || !label.starts_with("fisheye"),
+                "{label}: no culled sample among the tests"
+            );
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(24))]
+
+        /// Random batches of random length over and far beyond the window (culled samples among
+        /// them), at every tier: every panorama's `project_soa` is its `project` bit for bit.
+        #[test]
+        fn tiers_panoramas_project_soa_is_project_on_random_batches(
+            points in proptest::collection::vec((-3.0f64..4.0, -3.0f64..4.0), 0..50),
+        ) {
+            let format = Format::new(320, 160);
+            let w = ScreenWindow::default_for(format);
+            let screen: Vec<Point2> = points.iter().map(|&(fx, fy)| w.raster_to_screen(format, fx * 320.0, fy * 160.0)).collect();
+            let n = screen.len();
+            let (aperture, time) = (vec![Point2::ZERO; n], vec![0.0; n]);
+            for (label, factory, params) in panoramas() {
+                let p = make(factory.as_ref(), &params, format);
+                for level in Level::ALL.into_iter().filter(|l| l.is_available()) {
+                    let check = with_level(level, || obscura_sdk::check_project_soa(p.as_ref(), &screen, &aperture, &time));
+                    prop_assert_eq!(check, Ok(true), "{} tier {}", label, level);
+                }
+            }
         }
     }
 

@@ -2,10 +2,11 @@
 
 use obscura_host::contract::{Properties, ask_property};
 use obscura_sdk::contract;
+use obscura_sdk::simd::{Level, with_level};
 use obscura_sdk::{
     DeepMetric, DicingHint, Format, ParamList, PluginError, Point2, Projection, ProjectionContext,
-    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, Rgb,
-    ScreenWindow, Vec3,
+    ProjectionEnvironment, ProjectionFactory, ProjectionProperty, PropertyValue, RayGeometry, RaysSoa, Rgb,
+    ScreenWindow, SoaContext, SoaFields, Vec3,
 };
 
 use crate::panorama::angle_between;
@@ -244,6 +245,14 @@ pub fn project_points(
     project_batch(p, screen, aperture, time).0
 }
 
+/// The host's lens samples in `[0, 1)²` behind aperture samples in `[−1, 1]²`.
+fn lens_of(aperture: &[Point2]) -> Vec<Point2> {
+    aperture
+        .iter()
+        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
+        .collect()
+}
+
 /// Projects one batch of hand-made samples and returns the rays, output times and tints.
 pub fn project_batch(
     p: &dyn Projection,
@@ -252,16 +261,72 @@ pub fn project_batch(
     time: &[f32],
 ) -> (Vec<RayGeometry>, Vec<f32>, Vec<Rgb>) {
     let n = screen.len();
-    let lens: Vec<Point2> = aperture
-        .iter()
-        .map(|a| Point2::new(0.5 * a.x + 0.5, 0.5 * a.y + 0.5))
-        .collect();
+    let lens = lens_of(aperture);
     let mut time = time.to_vec();
     let mut rays = vec![RayGeometry::CULLED; n];
     let mut tint = vec![Rgb::WHITE; n];
     let mut ctx = ProjectionContext::new(screen, &lens, aperture, &mut time, &mut rays, &mut tint).unwrap();
     p.project(&mut ctx);
     (rays, time, tint)
+}
+
+/// `project_soa` of one batch into arrays of [`obscura_sdk::SOA_UNWRITTEN`] floats, the ten of them cut from one buffer
+/// one float past an aligned start (so no array is 16-byte aligned): `None` when the projection does
+/// not offer the path, else the rays read back as records, the output times and the tints. The
+/// context asks for `fields` ([`SoaContext::with_fields`]).
+pub fn project_soa_batch(
+    p: &dyn Projection,
+    screen: &[Point2],
+    aperture: &[Point2],
+    time: &[f32],
+    fields: SoaFields,
+) -> Option<(Vec<RayGeometry>, Vec<f32>, Vec<Rgb>)> {
+    let n = screen.len();
+    let lens = lens_of(aperture);
+    let mut time = time.to_vec();
+    let mut buffer = vec![f32::from_bits(obscura_sdk::SOA_UNWRITTEN); 10 * n + 1];
+    let [mut r, mut g, mut b] = [(); 3].map(|()| vec![1.0f32; n]);
+    let rays = RaysSoa::from_fields(&mut buffer[1..]).unwrap();
+    let mut ctx = SoaContext::new(screen, &lens, aperture, &mut time, rays, [&mut r, &mut g, &mut b])
+        .unwrap()
+        .with_fields(fields);
+    if !p.project_soa(&mut ctx) {
+        return None;
+    }
+    let rays = (0..n).map(|i| ctx.rays.get(i)).collect();
+    let tint = (0..n).map(|i| Rgb::new(r[i], g[i], b[i])).collect();
+    Some((rays, time, tint))
+}
+
+/// Asserts that `p` offers `project_soa` and that it gives what `project` gives — every field of
+/// every ray, the times and the tints, bit for bit ([`obscura_sdk::check_project_soa`]) — at every
+/// SIMD tier this CPU has, for each batch length 0 to 40 (every tail of the 8- and 16-lane kernels)
+/// from two starting samples, and for all of `screen` at once.
+pub fn assert_soa_is_project(
+    label: &str,
+    p: &dyn Projection,
+    screen: &[Point2],
+    aperture: &[Point2],
+    time: &[f32],
+) {
+    let ranges = (0..=40)
+        .flat_map(|n| [0..n, 3..3 + n])
+        .chain(std::iter::once(0..screen.len()))
+        .filter(|r| r.end <= screen.len());
+    for range in ranges {
+        let (s, a, t) = (
+            &screen[range.clone()],
+            &aperture[range.clone()],
+            &time[range.clone()],
+        );
+        for level in Level::ALL.into_iter().filter(|l| l.is_available()) {
+            match with_level(level, || obscura_sdk::check_project_soa(p, s, a, t)) {
+                Ok(true) => {}
+                Ok(false) => panic!("{label}: project_soa is not offered"),
+                Err(e) => panic!("{label}: samples {range:?}, tier {level}: {e}"),
+            }
+        }
+    }
 }
 
 /// The rays through every pixel centre of `format` with the default screen window, row by row.

@@ -76,4 +76,4 @@ pub use param::{
 pub use plugin::{PluginError, Projection, ProjectionFactory, SyncMessage};
 pub use property::{DeepMetric, DicingHint, ProjectionProperty, PropertyValue};
 pub use ray::RayGeometry;
-pub use soa::{RaysSoa, SoaContext, SoaLengthError};
+pub use soa::{RaysSoa, SOA_UNWRITTEN, SoaContext, SoaFields, SoaLengthError, check_project_soa};

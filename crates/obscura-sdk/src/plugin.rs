@@ -90,7 +90,9 @@ pub trait Projection: Send + Sync {
     /// and then the host runs [`project`](Projection::project) and scatters its records.
     ///
     /// The rays written must be the ones `project` writes for the same samples, bit for bit (tests
-    /// hold the built-ins to this); times and tints follow `project`'s rules. A projection that edits
+    /// hold the built-ins to this); times and tints follow `project`'s rules. A consumer that reads
+    /// only some fields says so ([`SoaContext::fields`]); a projection may then skip the others'
+    /// arrays, or write them all as when every field is asked for. A projection that edits
     /// the host's pre-filled rays (a modifier) must keep the default.
     fn project_soa(&self, ctx: &mut SoaContext<'_>) -> bool {
         let _ = ctx;

@@ -5,8 +5,8 @@
 #![allow(dead_code)]
 
 use obscura_sdk::{
-    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, Rgb,
-    ScreenWindow,
+    Format, ParamList, Point2, Projection, ProjectionContext, ProjectionEnvironment, RayGeometry, RaysSoa,
+    Rgb, ScreenWindow, SoaContext, SoaFields,
 };
 
 /// The frame every bench covers.
@@ -34,6 +34,10 @@ pub struct Batch {
     pub rays: Vec<RayGeometry>,
     /// The tints of the last `run`.
     pub tint: Vec<Rgb>,
+    /// The ten arrays of `run_soa`, from the first 64-byte boundary of this buffer on.
+    soa: Vec<f32>,
+    /// The tints of `run_soa`, three arrays.
+    soa_tint: Vec<f32>,
 }
 
 impl Batch {
@@ -69,7 +73,30 @@ impl Batch {
             time: (0..n).map(|i| i as f32 / n as f32).collect(),
             rays: vec![RayGeometry::CULLED; n],
             tint: vec![Rgb::WHITE; n],
+            soa: vec![0.0; 10 * n + 16],
+            soa_tint: vec![1.0; 3 * n],
         }
+    }
+
+    /// One `project_soa` call over the whole batch asking for `fields`, into ten arrays of `n`
+    /// floats that start on a cache line when `n` is a multiple of 16. False when not offered.
+    pub fn run_soa(&mut self, p: &dyn Projection, fields: SoaFields) -> bool {
+        let n = self.screen.len();
+        let skip = self.soa.as_ptr().align_offset(64);
+        let rays = RaysSoa::from_fields(&mut self.soa[skip..skip + 10 * n]).expect("ten arrays");
+        let mut tint = self.soa_tint.chunks_exact_mut(n.max(1));
+        let [r, g, b] = std::array::from_fn(|_| tint.next().unwrap_or_default());
+        let mut ctx = SoaContext::new(
+            &self.screen,
+            &self.lens,
+            &self.aperture,
+            &mut self.time,
+            rays,
+            [r, g, b],
+        )
+        .expect("equal lengths")
+        .with_fields(fields);
+        p.project_soa(&mut ctx)
     }
 
     /// One `project` call over the whole batch.

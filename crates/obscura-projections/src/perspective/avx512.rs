@@ -7,15 +7,16 @@
 //! is not a multiple of 16 ends with masked loads.
 //!
 //! The rays go to a [`Sink`]: [`Aos`] writes RenderMan's 40-byte `RtRayGeometry` records (two stores
-//! per ray from 128-bit lanes shuffled into record order; see `store_records`). A sink writing one
-//! array per field (numpy's layout) fits the same trait; the Python binding does not use one yet.
+//! per ray from 128-bit lanes shuffled into record order; see `store_records`); [`Soa`] writes one
+//! array per field (`project_soa`, numpy's layout): each register straight to its array, ten 64-byte
+//! stores per sixteen rays and no shuffle at all.
 //!
 //! [`quarter_root`]: obscura_sdk::optics::quarter_root
 
 use std::arch::x86_64::*;
 
 use obscura_sdk::optics::PerspectiveRays;
-use obscura_sdk::{Point2, RayGeometry};
+use obscura_sdk::{Point2, RayGeometry, RaysSoa, SoaFields};
 
 /// Sixteen rays, one register per field (`origin.z` and `origin_radius` are 0 for both models).
 pub(crate) struct Lanes {
@@ -36,6 +37,11 @@ pub(crate) trait Sink {
     /// # Safety
     /// The CPU has AVX-512 F/VL; `i + n` is within the sink.
     unsafe fn put(&mut self, i: usize, n: usize, rays: &Lanes);
+
+    /// False when the sink never stores `ray_spread`: the kernel then skips computing it.
+    fn wants_spread(&self) -> bool {
+        true
+    }
 }
 
 /// The renderer's array of `RtRayGeometry` records.
@@ -53,6 +59,55 @@ impl Sink for Aos<'_> {
             unsafe { store_records(tail.as_mut_ptr().cast(), rays) };
             self.0[i..i + n].copy_from_slice(&tail[..n]);
         }
+    }
+}
+
+/// The ten arrays of a [`RaysSoa`], field `k` of ray `i` at `fields[k] + i`; only the fields in
+/// `wanted` are stored ([`obscura_sdk::SoaContext::fields`]).
+pub(crate) struct Soa<'a> {
+    fields: [*mut f32; 10],
+    wanted: SoaFields,
+    len: usize,
+    _rays: std::marker::PhantomData<&'a mut [f32]>,
+}
+
+impl<'a> Soa<'a> {
+    /// The arrays of `rays`, borrowed for as long as the sink lives.
+    pub(crate) fn new(rays: &'a mut RaysSoa<'_>, wanted: SoaFields) -> Self {
+        let len = rays.len();
+        Soa {
+            fields: rays.fields_mut().map(<[f32]>::as_mut_ptr),
+            wanted,
+            len,
+            _rays: std::marker::PhantomData,
+        }
+    }
+}
+
+impl Sink for Soa<'_> {
+    #[inline(always)]
+    unsafe fn put(&mut self, i: usize, n: usize, r: &Lanes) {
+        debug_assert!(i + n <= self.len);
+        // SAFETY: every array holds `len ≥ i + n` floats (`RaysSoa` checks the ten lengths agree);
+        // a masked store touches lanes `0 .. n` only.
+        unsafe {
+            let zero = _mm512_setzero_ps();
+            let values = [r.ox, r.oy, zero, zero, r.dx, r.dy, r.dz, r.spread, r.min, r.max];
+            for (k, (field, v)) in self.fields.iter().zip(values).enumerate() {
+                if !self.wanted.has(k) {
+                    continue;
+                }
+                if n == 16 {
+                    _mm512_storeu_ps(field.add(i), v);
+                } else {
+                    _mm512_mask_storeu_ps(field.add(i), mask(n), v);
+                }
+            }
+        }
+    }
+
+    fn wants_spread(&self) -> bool {
+        self.wanted.contains(SoaFields::RAY_SPREAD)
     }
 }
 
@@ -231,6 +286,7 @@ pub(crate) unsafe fn pinhole(rays: &PerspectiveRays, screen: &[Point2], d: f32, 
     );
     let one = _mm512_set1_ps(1.0);
     let zero = _mm512_setzero_ps();
+    let spread_on = sink.wants_spread();
     let mut i = 0;
     while i < screen.len() {
         let n = (screen.len() - i).min(16);
@@ -240,16 +296,21 @@ pub(crate) unsafe fn pinhole(rays: &PerspectiveRays, screen: &[Point2], d: f32, 
         let (a, b, l2) = unsafe { squares(x, y, d2) };
         let l = _mm512_sqrt_ps(l2);
         let inv_l = _mm512_div_ps(one, l);
-        let inv_l2 = _mm512_mul_ps(inv_l, inv_l);
-        let w = _mm512_mul_ps(_mm512_mul_ps(a, inv_l2), _mm512_mul_ps(b, inv_l2));
+        let spread = if spread_on {
+            let inv_l2 = _mm512_mul_ps(inv_l, inv_l);
+            let w = _mm512_mul_ps(_mm512_mul_ps(a, inv_l2), _mm512_mul_ps(b, inv_l2));
+            // SAFETY: as for `squares`.
+            _mm512_mul_ps(_mm512_mul_ps(half, unsafe { quarter_root(w) }), inv_l)
+        } else {
+            zero
+        };
         let lanes = Lanes {
             ox: zero,
             oy: zero,
             dx: _mm512_mul_ps(x, inv_l),
             dy: _mm512_mul_ps(y, inv_l),
             dz: _mm512_mul_ps(vd, inv_l),
-            // SAFETY: as for `squares`.
-            spread: _mm512_mul_ps(_mm512_mul_ps(half, unsafe { quarter_root(w) }), inv_l),
+            spread,
             min: _mm512_mul_ps(near, l),
             max: _mm512_mul_ps(far, l),
         };
@@ -286,6 +347,7 @@ pub(crate) unsafe fn thin_lens(
         _mm512_set1_ps(rays.lens_radius),
     );
     let one = _mm512_set1_ps(1.0);
+    let spread_on = sink.wants_spread();
     let len = screen.len().min(aperture.len());
     let mut i = 0;
     while i < len {
@@ -299,22 +361,27 @@ pub(crate) unsafe fn thin_lens(
         };
         // SAFETY: this kernel has the features the helper's intrinsics need.
         let (a, b, l2) = unsafe { squares(x, y, d2) };
-        let inv_l2 = _mm512_div_ps(one, l2);
-        let w = _mm512_mul_ps(_mm512_mul_ps(a, inv_l2), _mm512_mul_ps(b, inv_l2));
         let (ox, oy) = (_mm512_mul_ps(radius, ax), _mm512_mul_ps(radius, ay));
         let tx = _mm512_sub_ps(_mm512_mul_ps(x, vk), ox);
         let ty = _mm512_sub_ps(_mm512_mul_ps(y, vk), oy);
         let t2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(tx, tx), _mm512_mul_ps(ty, ty)), f2);
         let t = _mm512_sqrt_ps(t2);
         let inv_t = _mm512_div_ps(one, t);
+        let spread = if spread_on {
+            let inv_l2 = _mm512_div_ps(one, l2);
+            let w = _mm512_mul_ps(_mm512_mul_ps(a, inv_l2), _mm512_mul_ps(b, inv_l2));
+            // SAFETY: as for `squares`.
+            _mm512_mul_ps(_mm512_mul_ps(half_k, unsafe { quarter_root(w) }), inv_t)
+        } else {
+            _mm512_setzero_ps()
+        };
         let lanes = Lanes {
             ox,
             oy,
             dx: _mm512_mul_ps(tx, inv_t),
             dy: _mm512_mul_ps(ty, inv_t),
             dz: _mm512_mul_ps(vf, inv_t),
-            // SAFETY: as for `squares`.
-            spread: _mm512_mul_ps(_mm512_mul_ps(half_k, unsafe { quarter_root(w) }), inv_t),
+            spread,
             min: _mm512_mul_ps(near, t),
             max: _mm512_mul_ps(far, t),
         };
