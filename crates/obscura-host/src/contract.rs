@@ -26,7 +26,7 @@ use obscura_sdk::contract::{Violation, expected_type, value_domain, value_in_dom
 use obscura_sdk::optics::{OrthographicRays, PerspectiveRays, screen_distance};
 use obscura_sdk::{
     DeepMetric, DicingHint, Point2, Projection, ProjectionContext, ProjectionEnvironment, ProjectionProperty,
-    PropertyValue, RayGeometry,
+    PropertyValue, RayGeometry, SoaContext,
 };
 
 /// The widest field of view, in degrees, of the host's pinhole default ray (a pinhole cannot show 180°;
@@ -296,6 +296,38 @@ impl DefaultRays {
         }
         ray
     }
+
+    /// [`DefaultRays::ray`] of every `screen[i]` through `aperture[i]` into `rays[i]` (the three of
+    /// one length), the same bits: the kind of ray and the lens chosen once for the batch, so each
+    /// case is a plain loop the vectoriser can widen (callers run it inside `obscura_sdk::simd::run`).
+    #[inline(always)]
+    pub fn fill(&self, screen: &[Point2], aperture: &[Point2], rays: &mut [RayGeometry]) {
+        match self {
+            DefaultRays::Perspective { rays: p, d, spheres } => {
+                let (d, spheres) = (*d, *spheres);
+                let clip = move |mut r: RayGeometry| {
+                    if spheres {
+                        (r.min_dist, r.max_dist) = (p.near, p.far);
+                    }
+                    r
+                };
+                if p.lens_radius > 0.0 {
+                    for ((r, s), a) in rays.iter_mut().zip(screen).zip(aperture) {
+                        *r = clip(p.thin_lens(*s, *a, d));
+                    }
+                } else {
+                    for (r, s) in rays.iter_mut().zip(screen) {
+                        *r = clip(p.pinhole(*s, d));
+                    }
+                }
+            }
+            DefaultRays::Orthographic { .. } => {
+                for ((r, s), a) in rays.iter_mut().zip(screen).zip(aperture) {
+                    *r = self.ray(*s, *a);
+                }
+            }
+        }
+    }
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -335,11 +367,22 @@ impl Loss {
 /// # Errors
 /// The [`Loss`] of the batch.
 pub fn call_project(p: &dyn Projection, ctx: &mut ProjectionContext<'_>) -> Result<(), Loss> {
-    catch_unwind(AssertUnwindSafe(|| p.project(ctx))).map_err(|payload| {
-        match payload.downcast_ref::<ProjectFailed>() {
-            Some(f) => Loss::Failed(f.0.clone()),
-            None => Loss::Panicked(panic_message(payload.as_ref())),
-        }
+    catch_loss(|| p.project(ctx))
+}
+
+/// Calls `project_soa`, catching a panic as [`call_project`] does: `Ok(true)` when the projection
+/// wrote the batch, `Ok(false)` when it does not offer the structure-of-arrays path.
+///
+/// # Errors
+/// The [`Loss`] of the batch.
+pub fn call_project_soa(p: &dyn Projection, ctx: &mut SoaContext<'_>) -> Result<bool, Loss> {
+    catch_loss(|| p.project_soa(ctx))
+}
+
+fn catch_loss<R>(call: impl FnOnce() -> R) -> Result<R, Loss> {
+    catch_unwind(AssertUnwindSafe(call)).map_err(|payload| match payload.downcast_ref::<ProjectFailed>() {
+        Some(f) => Loss::Failed(f.0.clone()),
+        None => Loss::Panicked(panic_message(payload.as_ref())),
     })
 }
 
@@ -422,6 +465,52 @@ mod tests {
         let r = DefaultRays::new(&props, &env).ray(s, Point2::ZERO);
         let (near, far) = clipping_distances(r.origin, r.direction, DeepMetric::CameraZ, 0.5, 20.0).unwrap();
         assert!((r.min_dist - near).abs() <= 1e-6 * near && (r.max_dist - far).abs() <= 1e-5 * far);
+    }
+
+    #[test]
+    fn fill_gives_the_bits_of_ray_at_every_simd_tier() {
+        let env = ProjectionEnvironment::new(
+            Format::new(64, 48),
+            ScreenWindow::default_for(Format::new(64, 48)),
+            (0.0, 1.0),
+            (0.5, 20.0),
+            Vec::new(),
+        );
+        let screen: Vec<Point2> = (0..203)
+            .map(|i| Point2::new((i % 17) as f32 / 8.0 - 1.0, (i % 13) as f32 / 6.0 - 1.0))
+            .collect();
+        let aperture: Vec<Point2> = (0..203)
+            .map(|i| Point2::new((i % 7) as f32 / 3.5 - 1.0, (i % 5) as f32 / 2.5 - 1.0))
+            .collect();
+        for (hint, metric, lens) in [
+            (DicingHint::Perspective, DeepMetric::CameraZ, false),
+            (DicingHint::Perspective, DeepMetric::CameraZ, true),
+            (DicingHint::Perspective, DeepMetric::RayLength, true),
+            (DicingHint::Orthographic, DeepMetric::CameraZ, true),
+            (DicingHint::Orthographic, DeepMetric::RayLength, false),
+        ] {
+            let props = Properties {
+                dicing_hint: hint,
+                deep_metric: metric,
+                field_of_view: Some(50.0),
+                f_stop: lens.then_some(2.0),
+                focal_length: lens.then_some(0.1),
+                focal_distance: lens.then_some(4.0),
+            };
+            let defaults = DefaultRays::new(&props, &env);
+            for level in obscura_sdk::simd::Level::ALL {
+                let mut rays = vec![RayGeometry::CULLED; screen.len()];
+                obscura_sdk::simd::run_at(level, || defaults.fill(&screen, &aperture, &mut rays));
+                for (i, r) in rays.iter().enumerate() {
+                    let want = defaults.ray(screen[i], aperture[i]);
+                    assert_eq!(
+                        r.to_bits(),
+                        want.to_bits(),
+                        "{hint:?} {metric:?} lens {lens} {level:?} ray {i}"
+                    );
+                }
+            }
+        }
     }
 
     struct Fails;

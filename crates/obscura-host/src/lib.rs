@@ -30,5 +30,5 @@ pub mod sampler;
 pub mod shutter;
 
 pub use camera::{CameraDesc, CameraError, CropWindow, PixelRect};
-pub use driver::{Batch, CameraStage, ContractReport, HostError, Violation};
+pub use driver::{Batch, CameraStage, ContractReport, HostError, SoaScratch, Violation};
 pub use registry::{DuplicateName, Registry};

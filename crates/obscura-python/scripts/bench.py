@@ -1,10 +1,18 @@
 """The Python benchmarks of BENCHMARKS.md ("Python"): `project` on 1 M and 10 M samples against the
-Rust reference (examples/project_reference.rs, the same projection through the same camera stage) in
-the same run, on 1 and 2 threads; `ray_to_pixel` against OpenCV's `projectPoints` and pycolmap's
-`img_from_cam` on the same points. Best of 3 calls in each of 2 interleaved rounds (the Rust reference: best of 5 per round).
+Rust references (examples/project_reference.rs: the same projection through the same camera stage's
+structure-of-arrays run, on the same samples and threads) in the same run, on 1 and 2 threads;
+`ray_to_pixel` against OpenCV's `projectPoints` and pycolmap's `img_from_cam` on the same points.
+`project` both into new arrays and into the arrays of an earlier call (`out=`). Best of 3 Python calls in each of 2 interleaved rounds (the Rust references: best of 5 per round,
+their modes interleaved). The Rust references:
+
+- *fresh*: the stage's SoA run into fourteen f32 arrays and the valid flags allocated by each call,
+  as `project` allocates its numpy arrays;
+- *preallocated*: the same into arrays allocated once (no page faults);
+- *batch*: the same into one cache-resident 4096-sample chunk per thread (nothing kept);
+- *AoS batch*: the array-of-structs stage (`run_prepared`) into a reused batch, the renderer's path.
 
     cargo build --release -p obscura-python --example project_reference
-    python3 crates/obscura-python/scripts/bench.py
+    python3 crates/obscura-python/scripts/bench.py [project] [ray_to_pixel]
 """
 
 import os
@@ -52,18 +60,36 @@ def screen_grid(cam, n):
     return np.stack([x, y], axis=1).astype(np.float32)
 
 
-def reference(name, args, n, threads, mode):
-    out = subprocess.run([str(REFERENCE), name, str(n), str(threads), mode, *args],
+MODES = ["soa", "soa-prealloc", "soa-batch", "batch"]
+
+
+def reference(name, args, n, threads, modes):
+    """Mrays/s of each Rust mode, one process (the modes interleaved inside it)."""
+    out = subprocess.run([str(REFERENCE), name, str(n), str(threads), ",".join(modes), *args],
                          check=True, capture_output=True, text=True).stdout
-    return float(out.split(": ")[1].split(" Mrays/s")[0])
+    rates = {}
+    for line in out.splitlines():
+        if " Mrays/s" in line:
+            mode = line.split(": ")[0].split()[-1]
+            rates[mode] = float(line.split(": ")[1].split(" Mrays/s")[0])
+    return rates
+
+
+def parts(name, args):
+    """The stage's pieces in ns per ray (one thread, one 4096-sample batch)."""
+    out = subprocess.run([str(REFERENCE), name, "4096", "1", "parts", *args],
+                         check=True, capture_output=True, text=True).stdout
+    return next(line for line in out.splitlines() if line.startswith("parts"))
 
 
 ROUNDS = 2
 
 
 def project_table():
-    print("| projection | N | threads | Python `project` | Rust, rays kept | Rust, batch only | Python / Rust kept |")
-    print("|---|---:|---:|---:|---:|---:|---:|")
+    print("| projection | N | threads | Python `project` | Python `project(out=)` | Rust SoA, fresh arrays | "
+          "Rust SoA, preallocated | Rust SoA, batch only | Rust AoS, batch only | Python / Rust fresh | "
+          "Python `out=` / Rust preallocated | Python `out=` / Rust batch only |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, params, args in CASES:
         cam = obscura.Camera(name, format=(1920, 1080), **params)
         for n in (1_000_000, 10_000_000):
@@ -72,14 +98,23 @@ def project_table():
                 obscura.set_num_threads(threads)
                 # Interleaved rounds, best of each: the machine is shared, so a quiet moment should
                 # reach both sides alike.
-                py = keep = batch = 0.0
+                py = into = 0.0
+                rust = dict.fromkeys(MODES, 0.0)
+                out = cam.project(s)
                 for _ in range(ROUNDS):
                     py = max(py, n / best(lambda: cam.project(s)) * 1e-6)
-                    keep = max(keep, reference(name, args, n, threads, "keep"))
-                    batch = max(batch, reference(name, args, n, threads, "batch"))
-                print(f"| `{name}` | {n:,} | {threads} | {py:.1f} | {keep:.1f} | {batch:.1f} | {py / keep:.0%} |",
+                    into = max(into, n / best(lambda: cam.project(s, out=out)) * 1e-6)
+                    for mode, rate in reference(name, args, n, threads, MODES).items():
+                        rust[mode] = max(rust[mode], rate)
+                del out
+                fresh, pre, batch, aos = (rust[m] for m in MODES)
+                print(f"| `{name}` | {n:,} | {threads} | {py:.1f} | {into:.1f} | {fresh:.1f} | {pre:.1f} | "
+                      f"{batch:.1f} | {aos:.1f} | {py / fresh:.0%} | {into / pre:.0%} | {into / batch:.0%} |",
                       flush=True)
     obscura.set_num_threads(0)
+    print()
+    for name, _, args in CASES:
+        print(f"- `{name}`: {parts(name, args)}")
 
 
 def ray_to_pixel_table():
@@ -121,6 +156,10 @@ if __name__ == "__main__":
     if not REFERENCE.exists():
         sys.exit(f"{REFERENCE} is missing: cargo build --release -p obscura-python --example project_reference")
     print(f"obscura {obscura.__version__}, {os.cpu_count()} cores, load average {os.getloadavg()}")
-    project_table()
-    print()
-    ray_to_pixel_table()
+    # `bench.py project` or `bench.py ray_to_pixel` runs one table (the second needs cv2 and pycolmap).
+    which = sys.argv[1:] or ["project", "ray_to_pixel"]
+    if "project" in which:
+        project_table()
+        print()
+    if "ray_to_pixel" in which:
+        ray_to_pixel_table()

@@ -12,11 +12,13 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 
 /// A float type numpy arrays come in.
-pub trait Real: Element + Copy + Send + Sync + 'static {
+pub trait Real: Element + Copy + PartialEq + Send + Sync + 'static {
     /// From f64 (rounded for f32).
     fn from_f64(x: f64) -> Self;
     /// From f32 (exact).
     fn from_f32(x: f32) -> Self;
+    /// The slice itself when `Self` is f32 (the camera stage writes it directly), else `None`.
+    fn as_f32(values: &mut [Self]) -> Option<&mut [f32]>;
 }
 
 impl Real for f32 {
@@ -26,6 +28,9 @@ impl Real for f32 {
     fn from_f32(x: f32) -> Self {
         x
     }
+    fn as_f32(values: &mut [Self]) -> Option<&mut [f32]> {
+        Some(values)
+    }
 }
 
 impl Real for f64 {
@@ -34,6 +39,9 @@ impl Real for f64 {
     }
     fn from_f32(x: f32) -> Self {
         f64::from(x)
+    }
+    fn as_f32(_: &mut [Self]) -> Option<&mut [f32]> {
+        None
     }
 }
 
@@ -96,8 +104,21 @@ impl View<'_> {
         }
     }
 
-    /// The first row that holds a NaN or an infinity, with its values.
+    /// The first row that holds a NaN or an infinity, with its values. A contiguous array is
+    /// scanned first with a branch-free pass that vectorises (this runs on the caller's thread, before
+    /// the parallel work, for every sample).
     pub fn first_non_finite(&self) -> Option<(usize, Vec<f64>)> {
+        let all_finite = match self {
+            View::F32(a) => a
+                .as_slice_memory_order()
+                .map(|s| s.iter().fold(true, |ok, x| ok & x.is_finite())),
+            View::F64(a) => a
+                .as_slice_memory_order()
+                .map(|s| s.iter().fold(true, |ok, x| ok & x.is_finite())),
+        };
+        if all_finite == Some(true) {
+            return None;
+        }
         let cols = match self {
             View::F32(a) => a.ncols(),
             View::F64(a) => a.ncols(),
@@ -216,6 +237,14 @@ impl VectorView<'_> {
             VectorView::F64(a) => out.extend(range.map(|i| a[i] as f32)),
         }
     }
+
+    /// The values in f32, for rows `range`, into `out` (of the range's length).
+    pub fn write(&self, range: std::ops::Range<usize>, out: &mut [f32]) {
+        match self {
+            VectorView::F32(a) => out.iter_mut().zip(range).for_each(|(o, i)| *o = a[i]),
+            VectorView::F64(a) => out.iter_mut().zip(range).for_each(|(o, i)| *o = a[i] as f32),
+        }
+    }
 }
 
 /// Reads argument `name` as a float32 or float64 array of length `n`, finite.
@@ -253,4 +282,12 @@ pub fn vector<'py>(py: Python<'py>, name: &str, obj: &Bound<'py, PyAny>, n: usiz
 /// A new zeroed array of shape `dims`, owned by Python.
 pub fn zeros<'py, T: Element>(py: Python<'py>, dims: &[usize]) -> Bound<'py, PyArrayDyn<T>> {
     PyArrayDyn::<T>::zeros(py, dims, false)
+}
+
+/// A new array of shape `dims`, owned by Python, whose contents are not initialised: for outputs the
+/// caller writes every element of before Python sees them (no pass of zeros first).
+pub fn uninit<'py, T: Element>(py: Python<'py>, dims: &[usize]) -> Bound<'py, PyArrayDyn<T>> {
+    // SAFETY: `T` is a float type (every bit pattern a value), and every caller writes each element
+    // before the array is handed to Python.
+    unsafe { PyArrayDyn::<T>::new(py, dims, false) }
 }

@@ -8,19 +8,20 @@
 //! chief ray and its `unproject` (f32).
 
 use glam::Affine3A;
-use numpy::{PyArray1, PyArrayDyn, PyArrayMethods};
+use numpy::{PyArray1, PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use obscura_calibration::PixelConvention;
 use obscura_geometry::motion::Motion;
 use obscura_geometry::motion::glam_from_sdk;
-use obscura_host::driver::Batch;
+use obscura_host::driver::{Batch, OUTPUT_FIELDS, output_values};
+use obscura_host::{CameraStage, SoaScratch};
 use obscura_image::raymap::trace_ray_map;
-use obscura_sdk::{Point2, RayGeometry, Rgb, Vec3};
+use obscura_sdk::{Point2, RayGeometry, RaysSoa, Rgb, SoaContext, Vec3};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 use rayon::prelude::*;
 
-use crate::arrays::{Matrix, Real, Vector, View, matrix, vector, zeros};
+use crate::arrays::{Matrix, Real, Vector, View, matrix, uninit, vector, zeros};
 use crate::camera::Camera;
 use crate::pool::pool;
 
@@ -30,46 +31,57 @@ type Answer<'py, T> = (Bound<'py, PyArrayDyn<T>>, Bound<'py, PyArray1<bool>>);
 /// Samples per batch handed to the camera stage (the renderer's batch size).
 const CHUNK: usize = 4096;
 
-/// One chunk of `project`'s outputs.
-struct RayOut<'a, T> {
+/// The number of `f32` fields of one sample in `project`'s outputs ([`OUTPUT_FIELDS`] order: the ray's
+/// ten, time, tint's three).
+const FIELDS: usize = OUTPUT_FIELDS.len();
+
+/// One chunk of every output: the fields in [`OUTPUT_FIELDS`] order, each its own contiguous slice of
+/// the same rows, and the valid flags.
+struct Chunk<'a, T> {
     start: usize,
-    origin: &'a mut [T],
-    direction: &'a mut [T],
-    origin_radius: &'a mut [T],
-    ray_spread: &'a mut [T],
-    min_dist: &'a mut [T],
-    max_dist: &'a mut [T],
-    tint: &'a mut [T],
-    time: &'a mut [T],
+    fields: [&'a mut [T]; FIELDS],
     valid: &'a mut [bool],
 }
 
-impl<T: Real> RayOut<'_, T> {
-    fn write(&mut self, rays: &[RayGeometry], tint: &[Rgb], time: &[f32]) {
-        for (i, r) in rays.iter().enumerate() {
-            let o = &mut self.origin[3 * i..3 * i + 3];
-            o[0] = T::from_f32(r.origin.x);
-            o[1] = T::from_f32(r.origin.y);
-            o[2] = T::from_f32(r.origin.z);
-            let d = &mut self.direction[3 * i..3 * i + 3];
-            d[0] = T::from_f32(r.direction.x);
-            d[1] = T::from_f32(r.direction.y);
-            d[2] = T::from_f32(r.direction.z);
-            self.origin_radius[i] = T::from_f32(r.origin_radius);
-            self.ray_spread[i] = T::from_f32(r.ray_spread);
-            self.min_dist[i] = T::from_f32(r.min_dist);
-            self.max_dist[i] = T::from_f32(r.max_dist);
-            let t = &mut self.tint[3 * i..3 * i + 3];
-            t[0] = T::from_f32(tint[i].r);
-            t[1] = T::from_f32(tint[i].g);
-            t[2] = T::from_f32(tint[i].b);
-            self.time[i] = T::from_f32(time[i]);
-            self.valid[i] = r.direction != Vec3::ZERO;
+impl<T: Real> Chunk<'_, T> {
+    fn len(&self) -> usize {
+        self.valid.len()
+    }
+
+    /// Writes array-of-structs rays (the ray map's) into the fields.
+    fn write_aos(&mut self, rays: &[RayGeometry], tint: &[Rgb], time: &[f32]) {
+        for (i, ((r, t), time)) in rays.iter().zip(tint).zip(time).enumerate() {
+            for (field, v) in self.fields.iter_mut().zip(output_values(r, *time, *t)) {
+                field[i] = T::from_f32(v);
+            }
+        }
+    }
+
+    /// `valid`: the direction is not zero (the stage culls every ray that broke the contract).
+    fn set_valid(&mut self) {
+        let zero = T::from_f32(0.0);
+        let [_, _, _, _, dx, dy, dz, ..] = &self.fields;
+        for (i, v) in self.valid.iter_mut().enumerate() {
+            *v = dx[i] != zero || dy[i] != zero || dz[i] != zero;
         }
     }
 }
 
-/// The output arrays of `project`/`rays`, with leading dimensions `lead`.
+/// What one worker thread keeps between chunks.
+#[derive(Default)]
+struct Worker {
+    screen: Vec<Point2>,
+    lens: Vec<Point2>,
+    aperture: Vec<Point2>,
+    scratch: SoaScratch,
+    /// `FIELDS × CHUNK` floats for a float64 output: the stage writes f32 here first.
+    narrow: Vec<f32>,
+}
+
+/// The output arrays of `project`/`rays`, with leading dimensions `lead`. Each field is stored
+/// component by component: a 3-vector as a `(3, *lead)` array handed back as its `(*lead, 3)`
+/// transposed view, so every component (all `origin.x`, …) is contiguous and the camera stage writes
+/// it directly.
 struct RayArrays<'py, T: Real> {
     origin: Bound<'py, PyArrayDyn<T>>,
     direction: Bound<'py, PyArrayDyn<T>>,
@@ -80,89 +92,206 @@ struct RayArrays<'py, T: Real> {
     tint: Bound<'py, PyArrayDyn<T>>,
     time: Bound<'py, PyArrayDyn<T>>,
     valid: Bound<'py, PyArrayDyn<bool>>,
+    lead: Vec<usize>,
 }
 
 impl<'py, T: Real> RayArrays<'py, T> {
+    /// Every float array uninitialised (each element is written by `fill`), `valid` zeroed.
     fn new(py: Python<'py>, lead: &[usize]) -> Self {
-        let with3: Vec<usize> = lead.iter().copied().chain([3]).collect();
+        let by3: Vec<usize> = [3].into_iter().chain(lead.iter().copied()).collect();
         RayArrays {
-            origin: zeros(py, &with3),
-            direction: zeros(py, &with3),
-            origin_radius: zeros(py, lead),
-            ray_spread: zeros(py, lead),
-            min_dist: zeros(py, lead),
-            max_dist: zeros(py, lead),
-            tint: zeros(py, &with3),
-            time: zeros(py, lead),
+            origin: uninit(py, &by3),
+            direction: uninit(py, &by3),
+            origin_radius: uninit(py, lead),
+            ray_spread: uninit(py, lead),
+            min_dist: uninit(py, lead),
+            max_dist: uninit(py, lead),
+            tint: uninit(py, &by3),
+            time: uninit(py, lead),
             valid: zeros(py, lead),
+            lead: lead.to_vec(),
         }
     }
 
-    /// Runs `fill` over chunks of `CHUNK` samples of all outputs, in parallel, without the GIL.
+    /// The arrays of `out`, a dict as an earlier `project` of `n` samples in `T` returned (or any with
+    /// those keys whose arrays have its shapes, dtypes and layout): every 3-vector's `.T` a C-contiguous
+    /// 3×N array, the others C-contiguous of N, all writeable. A `ValueError` names the first key at
+    /// fault and what it expected.
+    fn from_out(py: Python<'py>, out: &Bound<'py, PyDict>, n: usize) -> PyResult<Self> {
+        let dtype = numpy::dtype::<T>(py).str()?.to_string();
+        let get = |key: &str, by3: bool| -> PyResult<Bound<'py, PyAny>> {
+            let a = out
+                .get_item(key)?
+                .ok_or_else(|| PyValueError::new_err(format!("out: no {key:?} array")))?;
+            Ok(if by3 { a.getattr("T")? } else { a })
+        };
+        let wrong = |key: &str, want: &str| {
+            PyValueError::new_err(format!(
+                "out[{key:?}]: expected {want} (the arrays an earlier project() of {n} samples returned)"
+            ))
+        };
+        let float = |key: &str, by3: bool| -> PyResult<Bound<'py, PyArrayDyn<T>>> {
+            let want = if by3 {
+                format!("a writeable {dtype} array of shape ({n}, 3) whose .T is C-contiguous")
+            } else {
+                format!("a writeable C-contiguous {dtype} array of shape ({n},)")
+            };
+            let a = get(key, by3)?
+                .cast_into::<PyArrayDyn<T>>()
+                .map_err(|_| wrong(key, &want))?;
+            let shape: &[usize] = if by3 { &[3, n] } else { &[n] };
+            if a.shape() != shape || !a.is_c_contiguous() || a.try_readwrite().is_err() {
+                return Err(wrong(key, &want));
+            }
+            Ok(a)
+        };
+        let valid = get("valid", false)?
+            .cast_into::<PyArrayDyn<bool>>()
+            .ok()
+            .filter(|a| a.shape() == [n] && a.is_c_contiguous() && a.try_readwrite().is_ok())
+            .ok_or_else(|| {
+                wrong(
+                    "valid",
+                    &format!("a writeable C-contiguous bool array of shape ({n},)"),
+                )
+            })?;
+        Ok(RayArrays {
+            origin: float("origin", true)?,
+            direction: float("direction", true)?,
+            origin_radius: float("origin_radius", false)?,
+            ray_spread: float("ray_spread", false)?,
+            min_dist: float("min_dist", false)?,
+            max_dist: float("max_dist", false)?,
+            tint: float("tint", true)?,
+            time: float("time", false)?,
+            valid,
+            lead: vec![n],
+        })
+    }
+
+    /// Runs `fill` over chunks of `CHUNK` samples of all outputs (disjoint slices of the arrays), in
+    /// parallel, without the GIL. `fill` must write every field of its chunk.
     fn fill(
         &self,
         py: Python<'py>,
         n: usize,
-        fill: impl Fn(&mut Batch, &mut RayOut<'_, T>) + Send + Sync,
+        fill: impl Fn(&mut Worker, &mut Chunk<'_, T>) + Send + Sync,
     ) -> PyResult<()> {
-        let mut origin = self.origin.readwrite();
-        let mut direction = self.direction.readwrite();
-        let mut origin_radius = self.origin_radius.readwrite();
-        let mut ray_spread = self.ray_spread.readwrite();
-        let mut min_dist = self.min_dist.readwrite();
-        let mut max_dist = self.max_dist.readwrite();
-        let mut tint = self.tint.readwrite();
-        let mut time = self.time.readwrite();
-        let mut valid = self.valid.readwrite();
+        let busy = |_| PyValueError::new_err("out: an array is given twice, or is not writeable");
+        let mut origin = self.origin.try_readwrite().map_err(busy)?;
+        let mut direction = self.direction.try_readwrite().map_err(busy)?;
+        let mut origin_radius = self.origin_radius.try_readwrite().map_err(busy)?;
+        let mut ray_spread = self.ray_spread.try_readwrite().map_err(busy)?;
+        let mut min_dist = self.min_dist.try_readwrite().map_err(busy)?;
+        let mut max_dist = self.max_dist.try_readwrite().map_err(busy)?;
+        let mut tint = self.tint.try_readwrite().map_err(busy)?;
+        let mut time = self.time.try_readwrite().map_err(busy)?;
+        let mut valid = self.valid.try_readwrite().map_err(busy)?;
         let err = not_contiguous;
-        let mut o3 = origin.as_slice_mut().map_err(err)?.chunks_mut(3 * CHUNK);
-        let mut d3 = direction.as_slice_mut().map_err(err)?.chunks_mut(3 * CHUNK);
-        let mut t3 = tint.as_slice_mut().map_err(err)?.chunks_mut(3 * CHUNK);
-        let mut r1 = origin_radius.as_slice_mut().map_err(err)?.chunks_mut(CHUNK);
-        let mut s1 = ray_spread.as_slice_mut().map_err(err)?.chunks_mut(CHUNK);
-        let mut n1 = min_dist.as_slice_mut().map_err(err)?.chunks_mut(CHUNK);
-        let mut f1 = max_dist.as_slice_mut().map_err(err)?.chunks_mut(CHUNK);
-        let mut m1 = time.as_slice_mut().map_err(err)?.chunks_mut(CHUNK);
-        let mut v1 = valid.as_slice_mut().map_err(err)?.chunks_mut(CHUNK);
-        let mut chunks = Vec::with_capacity(n.div_ceil(CHUNK));
-        for start in (0..n).step_by(CHUNK) {
-            let missing = || PyRuntimeError::new_err("output arrays of unequal length");
-            chunks.push(RayOut {
-                start,
-                origin: o3.next().ok_or_else(missing)?,
-                direction: d3.next().ok_or_else(missing)?,
-                origin_radius: r1.next().ok_or_else(missing)?,
-                ray_spread: s1.next().ok_or_else(missing)?,
-                min_dist: n1.next().ok_or_else(missing)?,
-                max_dist: f1.next().ok_or_else(missing)?,
-                tint: t3.next().ok_or_else(missing)?,
-                time: m1.next().ok_or_else(missing)?,
-                valid: v1.next().ok_or_else(missing)?,
-            });
+        let [ox, oy, oz] = thirds(origin.as_slice_mut().map_err(err)?, n)?;
+        let [dx, dy, dz] = thirds(direction.as_slice_mut().map_err(err)?, n)?;
+        let [tr, tg, tb] = thirds(tint.as_slice_mut().map_err(err)?, n)?;
+        let whole: [&mut [T]; FIELDS] = [
+            ox,
+            oy,
+            oz,
+            origin_radius.as_slice_mut().map_err(err)?,
+            dx,
+            dy,
+            dz,
+            ray_spread.as_slice_mut().map_err(err)?,
+            min_dist.as_slice_mut().map_err(err)?,
+            max_dist.as_slice_mut().map_err(err)?,
+            time.as_slice_mut().map_err(err)?,
+            tr,
+            tg,
+            tb,
+        ];
+        let valid = valid.as_slice_mut().map_err(err)?;
+        if whole.iter().any(|f| f.len() != n) || valid.len() != n {
+            return Err(PyRuntimeError::new_err("output arrays of unequal length"));
         }
+        let mut parts = whole.map(|f| f.chunks_mut(CHUNK));
+        let chunks: Vec<Chunk<'_, T>> = valid
+            .chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(k, valid)| Chunk {
+                start: k * CHUNK,
+                fields: std::array::from_fn(|f| parts[f].next().expect("every field has n rows")),
+                valid,
+            })
+            .collect();
         let pool = pool()?;
         py.detach(|| {
             pool.install(|| {
                 chunks
                     .into_par_iter()
-                    .for_each_init(|| Batch::with_capacity(CHUNK), |b, mut c| fill(b, &mut c));
+                    .for_each_init(Worker::default, |w, mut c| fill(w, &mut c));
             });
         });
         Ok(())
     }
 
     fn into_dict(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        // The (3, *lead) arrays seen as (*lead, 3): axes 1..=L, then 0.
+        let axes: Vec<usize> = (1..=self.lead.len()).chain([0]).collect();
+        let axes = PyTuple::new(py, axes)?;
         let d = PyDict::new(py);
-        d.set_item("origin", self.origin)?;
-        d.set_item("direction", self.direction)?;
+        d.set_item("origin", self.origin.call_method1("transpose", (&axes,))?)?;
+        d.set_item("direction", self.direction.call_method1("transpose", (&axes,))?)?;
         d.set_item("origin_radius", self.origin_radius)?;
         d.set_item("ray_spread", self.ray_spread)?;
         d.set_item("min_dist", self.min_dist)?;
         d.set_item("max_dist", self.max_dist)?;
-        d.set_item("tint", self.tint)?;
+        d.set_item("tint", self.tint.call_method1("transpose", (&axes,))?)?;
         d.set_item("time", self.time)?;
         d.set_item("valid", self.valid)?;
         Ok(d)
+    }
+}
+
+/// `s`, of `3·n` values, as its three thirds.
+fn thirds<T>(s: &mut [T], n: usize) -> PyResult<[&mut [T]; 3]> {
+    if s.len() != 3 * n {
+        return Err(PyRuntimeError::new_err("output arrays of unequal length"));
+    }
+    let (a, bc) = s.split_at_mut(n);
+    let (b, c) = bc.split_at_mut(n);
+    Ok([a, b, c])
+}
+
+/// Runs the camera stage on the worker's samples (`w.screen`, `w.lens`; `fields[10]`, the time,
+/// holds the canonical times) into `fields`, every one of which it writes. `chief`: the aperture
+/// centre and no warps, as `run_prepared` with a zero aperture.
+fn run_stage(stage: &CameraStage, w: &mut Worker, fields: [&mut [f32]; FIELDS], chief: bool) {
+    let [
+        ox,
+        oy,
+        oz,
+        radius,
+        dx,
+        dy,
+        dz,
+        spread,
+        near,
+        far,
+        time,
+        tr,
+        tg,
+        tb,
+    ] = fields;
+    let rays = RaysSoa::new([ox, oy, oz], radius, [dx, dy, dz], spread, near, far)
+        .expect("the chunk's fields have one length");
+    if chief {
+        w.aperture.clear();
+        w.aperture.resize(w.screen.len(), Point2::ZERO);
+        let mut ctx = SoaContext::new(&w.screen, &w.lens, &w.aperture, time, rays, [tr, tg, tb])
+            .expect("the chunk's inputs have its length");
+        stage.run_soa_prepared(&mut ctx, &mut w.scratch);
+    } else {
+        stage
+            .run_soa(&w.screen, &w.lens, time, rays, [tr, tg, tb], &mut w.scratch)
+            .expect("the chunk's inputs have its length");
     }
 }
 
@@ -233,41 +362,61 @@ impl Camera {
         screen: View<'_>,
         lens: Option<&Matrix<'_>>,
         time: Option<&Vector<'_>>,
+        into: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let n = screen.rows();
-        let out = RayArrays::<T>::new(py, &[n]);
+        let out = match into {
+            Some(d) => RayArrays::<T>::from_out(py, d, n)?,
+            None => RayArrays::<T>::new(py, &[n]),
+        };
         let lens = lens.map(Matrix::view);
         let time = time.map(Vector::view);
         let chief = lens.is_none() && time.is_none();
         let stage = &self.stage;
-        out.fill(py, n, |b, c| {
-            let range = c.start..(c.start + CHUNK).min(n);
-            screen.points(range.clone(), &mut b.screen);
-            let m = b.screen.len();
+        out.fill(py, n, |w, c| {
+            let m = c.len();
+            let range = c.start..c.start + m;
+            screen.points(range.clone(), &mut w.screen);
             match &lens {
-                Some(l) => l.points(range.clone(), &mut b.lens),
+                Some(l) => l.points(range.clone(), &mut w.lens),
                 None => {
-                    b.lens.clear();
-                    b.lens.resize(m, Point2::new(0.5, 0.5));
+                    w.lens.clear();
+                    w.lens.resize(m, Point2::new(0.5, 0.5));
                 }
             }
-            match &time {
-                Some(t) => t.values(range, &mut b.time),
+            let set_time = |t: &mut [f32]| match &time {
+                Some(v) => v.write(range.clone(), t),
+                None => t.fill(0.0),
+            };
+            // float32 out: the stage writes the numpy arrays themselves; float64: a chunk of f32 first.
+            let direct: Option<Vec<&mut [f32]>> = c.fields.iter_mut().map(|f| T::as_f32(f)).collect();
+            match direct.and_then(|d| <[&mut [f32]; FIELDS]>::try_from(d).ok()) {
+                Some(fields) => {
+                    set_time(fields[10]);
+                    run_stage(stage, w, fields, chief);
+                }
                 None => {
-                    b.time.clear();
-                    b.time.resize(m, 0.0);
+                    let mut narrow = std::mem::take(&mut w.narrow);
+                    narrow.resize(FIELDS * m, 0.0);
+                    let mut parts = narrow.chunks_exact_mut(m.max(1));
+                    let fields: [&mut [f32]; FIELDS] =
+                        std::array::from_fn(|_| parts.next().expect("FIELDS chunks of m"));
+                    set_time(fields[10]);
+                    run_stage(stage, w, fields, chief);
+                    for (to, from) in c.fields.iter_mut().zip(narrow.chunks_exact(m.max(1))) {
+                        for (t, f) in to.iter_mut().zip(from) {
+                            *t = T::from_f32(*f);
+                        }
+                    }
+                    w.narrow = narrow;
                 }
             }
-            if chief {
-                b.aperture.clear();
-                b.aperture.resize(m, Point2::ZERO);
-                stage.run_prepared(b);
-            } else {
-                stage.run(b);
-            }
-            c.write(&b.rays, &b.tint, &b.time);
+            c.set_valid();
         })?;
-        out.into_dict(py)
+        match into {
+            Some(d) => Ok(d.clone()),
+            None => out.into_dict(py),
+        }
     }
 }
 
@@ -285,13 +434,23 @@ impl Camera {
     /// `max_dist` (N), `tint` (N×3), `time` (N, after the projection) and `valid` (N bool). Invalid
     /// (culled) rays have a zero direction. Values are the projection's f32 rays, in the input's
     /// float type. A NaN or infinite input raises ValueError naming the argument and row.
-    #[pyo3(signature = (screen, lens = None, time = None))]
+    ///
+    /// Memory: every component is contiguous — the N×3 arrays are transposed views of 3×N arrays
+    /// (`out["direction"].T` is C-contiguous: all x, then all y, then all z), which the camera stage
+    /// writes directly; `numpy.ascontiguousarray` gives a row-major copy.
+    ///
+    /// `out`: a dict an earlier `project` of as many samples in the same float type returned; its
+    /// arrays are written in place and the dict returned (no new memory: the loop of a caller that
+    /// projects batch after batch). An array of another shape, dtype or layout raises ValueError
+    /// naming it.
+    #[pyo3(signature = (screen, lens = None, time = None, out = None))]
     fn project<'py>(
         &self,
         py: Python<'py>,
         screen: &Bound<'py, PyAny>,
         lens: Option<&Bound<'py, PyAny>>,
         time: Option<&Bound<'py, PyAny>>,
+        out: Option<&Bound<'py, PyDict>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let screen = matrix(py, "screen", screen, 2, false)?;
         let n = screen.view().rows();
@@ -306,14 +465,15 @@ impl Camera {
         }
         let time = time.map(|t| vector(py, "time", t, n)).transpose()?;
         if screen.is_f64() {
-            self.project_typed::<f64>(py, screen.view(), lens.as_ref(), time.as_ref())
+            self.project_typed::<f64>(py, screen.view(), lens.as_ref(), time.as_ref(), out)
         } else {
-            self.project_typed::<f32>(py, screen.view(), lens.as_ref(), time.as_ref())
+            self.project_typed::<f32>(py, screen.view(), lens.as_ref(), time.as_ref(), out)
         }
     }
 
     /// Every pixel centre's chief ray (aperture centre, time 0) over the crop window: the same dict
-    /// as `project` with H×W leading dimensions, float32, bit-identical to `obscura rays`.
+    /// as `project` with H×W leading dimensions, float32, bit-identical to `obscura rays`. The H×W×3
+    /// arrays are, as `project`'s, views of 3×H×W arrays (each component contiguous).
     fn rays<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let pool = pool()?;
         let stage = &self.stage;
@@ -324,12 +484,13 @@ impl Camera {
         let out = RayArrays::<f32>::new(py, &[h, w]);
         let layer = &map.layers[0];
         out.fill(py, w * h, |_, c| {
-            let range = c.start..(c.start + CHUNK).min(w * h);
-            c.write(
+            let range = c.start..c.start + c.len();
+            c.write_aos(
                 &layer.rays[range.clone()],
                 &layer.tint[range.clone()],
                 &layer.time[range],
             );
+            c.set_valid();
         })?;
         out.into_dict(py)
     }

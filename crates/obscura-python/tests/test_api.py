@@ -75,6 +75,81 @@ def test_rays_are_project_of_the_pixel_centres():
     assert np.array_equal(out["direction"], rays["direction"].reshape(-1, 3))
 
 
+OPENCV = {"model": "OPENCV", "params": [60, 60, 32, 24, -0.1, 0.02, 0.001, -0.0005], "resolution": (64, 48)}
+
+
+@pytest.mark.parametrize("name,params", [
+    ("PxrPerspective", {"fov": 60}),
+    ("PxrCamera", {"fov": 50, "fStop": 2, "focalLength": 0.1, "focalDistance": 3}),
+    ("Fisheye", {"fov": 180, "mapping": "equisolid"}),
+    ("PxrSphereCamera", {}),
+    ("PxrPanini", {"compression": 1}),
+    ("CalibratedCamera", OPENCV),
+])
+def test_project_writes_the_camera_stages_rays_field_by_field(name, params):
+    """`project` (the stage's structure-of-arrays run, into the numpy arrays) gives `rays()`'s rays
+    (the stage's array-of-structs run, the ray map `obscura rays` writes) bit for bit, every field, in
+    float32 and float64; each component is contiguous."""
+    cam = obscura.Camera(name, format=(64, 48), **params)
+    rays = cam.rays()
+    n = 64 * 48
+    for dtype in (np.float32, np.float64):
+        out = cam.project(grid(cam).astype(dtype))
+        assert set(out) == set(rays)
+        for k in out:
+            assert out[k].dtype == (bool if k == "valid" else dtype), k
+            assert out[k].shape == ((n, 3) if k in ("origin", "direction", "tint") else (n,)), k
+            assert np.array_equal(out[k], rays[k].reshape(out[k].shape)), (name, k, dtype)
+        for k in ("origin", "direction", "tint"):
+            assert out[k].T.flags.c_contiguous and rays[k].transpose(2, 0, 1).flags.c_contiguous, k
+            assert np.array_equal(np.ascontiguousarray(out[k]), out[k])
+        assert out["valid"].sum() > 0
+        assert np.array_equal(out["valid"], (out["direction"] != 0).any(axis=1))
+    if name == "Fisheye":
+        assert not out["valid"].all(), "the corners outside the image circle are culled"
+
+
+def test_float64_and_float32_give_the_same_rays_with_lens_and_time_samples():
+    """float64 outputs go through a float32 chunk; float32 ones are written by the stage directly."""
+    cam = obscura.Camera("PxrCamera", fov=50, fStop=2, focalLength=0.1, focalDistance=3, format=(64, 48))
+    rng = np.random.default_rng(4)
+    s, lens, t = rng.uniform(-1, 1, (9000, 2)), rng.uniform(0, 1, (9000, 2)), rng.uniform(0, 1, 9000)
+    wide = cam.project(s, lens=lens, time=t)
+    narrow = cam.project(s.astype(np.float32), lens=lens.astype(np.float32), time=t.astype(np.float32))
+    for k in wide:
+        assert np.array_equal(wide[k], narrow[k]), k
+    # thin-lens rays from points on the lens meet at the focal distance, where the chief ray does
+    chief = cam.project(s)
+    at = lambda o: (o["origin"] + o["direction"] * ((3 - o["origin"][:, 2]) / o["direction"][:, 2])[:, None])
+    assert np.abs(at(wide) - at(chief)).max() < 1e-4
+    assert np.abs(wide["origin"]).max() > 0.01
+
+
+def test_project_into_the_arrays_of_an_earlier_call():
+    cam = obscura.Camera("Fisheye", fov=180, format=(32, 32))
+    rng = np.random.default_rng(5)
+    a, b = rng.uniform(-1, 1, (5000, 2)), rng.uniform(-1, 1, (5000, 2))
+    for dtype in (np.float32, np.float64):
+        out = cam.project(a.astype(dtype))
+        memory = {k: v.__array_interface__["data"][0] for k, v in out.items()}
+        again = cam.project(b.astype(dtype), out=out)
+        assert again is out
+        assert {k: v.__array_interface__["data"][0] for k, v in out.items()} == memory
+        fresh = cam.project(b.astype(dtype))
+        for k in fresh:
+            assert np.array_equal(out[k], fresh[k]), k
+    with pytest.raises(ValueError, match=r'out\["origin"\]: expected a writeable float32 array of shape \(5000, 3\)'):
+        cam.project(a.astype(np.float32), out=cam.project(a))  # float64 arrays for float32 samples
+    with pytest.raises(ValueError, match=r'out\["tint"\]: .* of shape \(4000, 3\)'):
+        cam.project(a[:4000], out={**cam.project(a[:4000]), "tint": np.zeros((4000, 3))})
+    with pytest.raises(ValueError, match=r'out: no "valid" array'):
+        cam.project(a, out={k: v for k, v in cam.project(a).items() if k != "valid"})
+    shared = cam.project(a)
+    shared["direction"] = shared["origin"]
+    with pytest.raises(ValueError, match="given twice"):
+        cam.project(a, out=shared)
+
+
 def test_crop_gives_the_crop_pixels():
     cam = obscura.Camera("PxrPerspective", format=(100, 50), crop=(0.2, 0.6, 0.0, 0.5))
     assert cam.pixels == (20, 60, 0, 25)

@@ -122,7 +122,11 @@ class Camera:
     def warnings(self) -> List[str]:
         """Warnings from setting the camera up."""
     def project(
-        self, screen: ArrayLike, lens: Optional[ArrayLike] = None, time: Optional[ArrayLike] = None
+        self,
+        screen: ArrayLike,
+        lens: Optional[ArrayLike] = None,
+        time: Optional[ArrayLike] = None,
+        out: Optional[Rays] = None,
     ) -> Rays:
         """Rays of N screen samples through the projection and the host's contract.
 
@@ -132,7 +136,9 @@ class Camera:
         rays ``rays()`` computes. Returns ``origin``, ``direction`` (N×3), ``origin_radius``,
         ``ray_spread``, ``min_dist``, ``max_dist`` (N), ``tint`` (N×3), ``time`` (N) and ``valid``
         (N bool); culled rays have a zero direction. float32 in gives float32 out, float64 gives
-        float64 (the projection's f32 values). Integer arrays raise TypeError, wrong shapes and NaN
+        float64 (the projection's f32 values). Every component is contiguous (the N×3 arrays are
+        transposed views of 3×N arrays); ``out``, an earlier call's dict of as many samples in the
+        same float type, is written in place and returned. Integer arrays raise TypeError, wrong shapes and NaN
         ValueError, naming the argument."""
     def rays(self) -> Rays:
         """Every pixel centre's chief ray over the crop window (H×W leading dimensions, float32),
