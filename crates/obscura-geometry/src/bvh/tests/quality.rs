@@ -310,19 +310,30 @@ fn block_sah_fills_leaf_blocks_without_raising_the_cost() {
 }
 
 #[test]
-#[ignore = "experiment: OBSCURA_QUALITY_MESH=<off file>"]
+/// The quality report of one mesh: `OBSCURA_QUALITY_MESH=<off file>` for a mesh of your own (with
+/// `-- --nocapture` to see it), else a bumpy sphere. It also holds the report's figures to what any
+/// sound wide tree gives: both SAH terms finite and positive, more than two children per node, at most
+/// four triangles per block, and at least one node (the root) tested per ray.
+#[test]
 fn quality_report() {
-    let path = std::env::var("OBSCURA_QUALITY_MESH").unwrap();
-    let mesh = read_off(&path);
+    let mesh = match std::env::var("OBSCURA_QUALITY_MESH") {
+        Ok(path) => read_off(&path),
+        Err(_) => bumpy_sphere(64, 48, 3),
+    };
     let start = std::time::Instant::now();
     let bvh = MeshBvh::build_with_layout(mesh, BvhLayout::Wide);
     let ms = start.elapsed().as_secs_f64() * 1e3;
     let rays = incoherent(bvh.bounds(), 20_000, 5);
     let (n, b) = visits(&bvh.wide, &rays, false);
     let (sn, sb) = visits(&bvh.wide, &rays, true);
+    let shape = shape(&bvh.wide);
+    let (sah_nodes, sah_leaves) = bvh.wide.sah_cost_parts();
     println!(
-        "build {ms:.0} ms (debug); shape {:?}; SAH (nodes, leaves) {:?}; nearest: {n:.2} nodes {b:.2} blocks; any: {sn:.2} nodes {sb:.2} blocks",
-        shape(&bvh.wide),
-        bvh.wide.sah_cost_parts()
+        "build {ms:.0} ms; shape {shape:?}; SAH (nodes, leaves) {:?}; nearest: {n:.2} nodes {b:.2} blocks; any: {sn:.2} nodes {sb:.2} blocks",
+        (sah_nodes, sah_leaves)
     );
+    assert!(sah_nodes.is_finite() && sah_nodes > 0.0 && sah_leaves.is_finite() && sah_leaves > 0.0);
+    assert!(shape.2 <= LANES as f64 && shape.3 > 2.0, "shape {shape:?}");
+    // Every ray tests the root at least.
+    assert!(n >= 1.0 && sn >= 1.0, "nearest {n} + {b}, any {sn} + {sb}");
 }
