@@ -309,7 +309,6 @@ fn block_sah_fills_leaf_blocks_without_raising_the_cost() {
     );
 }
 
-#[test]
 /// The quality report of one mesh: `OBSCURA_QUALITY_MESH=<off file>` for a mesh of your own (with
 /// `-- --nocapture` to see it), else a bumpy sphere. It also holds the report's figures to what any
 /// sound wide tree gives: both SAH terms finite and positive, more than two children per node, at most
