@@ -40,12 +40,12 @@ pub(super) trait BoxKernel: Copy {
 #[derive(Clone, Copy)]
 pub(super) struct ScalarKernel;
 
-/// The scalar kernel's per-ray constants.
+/// The scalar kernel's per-ray constants (also the portable wide kernel's).
 pub(super) struct ScalarBoxRay {
-    origin: [f32; 3],
-    inv_dir: [f32; 3],
-    negative: [bool; 3],
-    t_min: f32,
+    pub(super) origin: [f32; 3],
+    pub(super) inv_dir: [f32; 3],
+    pub(super) negative: [bool; 3],
+    pub(super) t_min: f32,
 }
 
 impl ScalarKernel {

@@ -14,7 +14,7 @@
 
 use glam::Vec3A;
 
-use super::traverse::{FAR_PAD, LeafVisitor, pad_far};
+use super::traverse::{BoxKernel, FAR_PAD, LeafVisitor, ScalarBoxRay, ScalarKernel, pad_far};
 use super::tree::{Aabb, Node, Tree};
 use super::triangle::TriRay;
 
@@ -428,13 +428,8 @@ fn leaf_scalar(ray: &TriRay, block: &Tri4, lanes: u32, t_min: f32, lim: f32, hit
 #[derive(Clone, Copy)]
 pub(super) struct PortableWide;
 
-/// Per-ray constants of [`PortableWide`].
-pub(super) struct PortableWideRay {
-    origin: [f32; 3],
-    inv_dir: [f32; 3],
-    negative: [bool; 3],
-    t_min: f32,
-}
+/// Per-ray constants of [`PortableWide`]: the scalar kernel's, prepared by it.
+pub(super) type PortableWideRay = ScalarBoxRay;
 
 impl WideKernel for PortableWide {
     type Ray = PortableWideRay;
@@ -447,16 +442,7 @@ impl WideKernel for PortableWide {
 
     #[inline(always)]
     fn prepare(self, origin: Vec3A, direction: Vec3A, t_min: f32) -> PortableWideRay {
-        PortableWideRay {
-            origin: origin.to_array(),
-            inv_dir: (Vec3A::ONE / direction).to_array(),
-            negative: [
-                direction.x.is_sign_negative(),
-                direction.y.is_sign_negative(),
-                direction.z.is_sign_negative(),
-            ],
-            t_min,
-        }
+        BoxKernel::prepare(ScalarKernel, origin, direction, t_min)
     }
 
     #[inline(always)]
