@@ -70,24 +70,27 @@ impl PerspectiveRays {
 
     /// The pinhole ray through screen point `s` with the screen plane at `d`.
     ///
-    /// `L = sqrt(sx² + sy² + d²)`, `D = (sx, sy, d)/L`, `ray_spread = half_pixel·w^¼/L` with
-    /// `w = (sx² + d²)(sy² + d²)/L⁴` (the formula of the module doc, `½·sqrt(αx·αy)`, rearranged so the
-    /// only square root and division are those of `1/L`), `min_dist = (near/d)·L`, `max_dist = (far/d)·L`
-    /// (`near/D.z` with `D.z = d/L`). One `sqrt`, one `div` and [`quarter_root`]: the SIMD kernels of
-    /// `PxrPerspective` compute exactly this, operation for operation, so their rays are bit-identical.
+    /// `L = sqrt(sx² + sy² + d²)`, `D = (sx, sy, d)/L`, and `ray_spread = (half_pixel·d)·W^¼/L²` with
+    /// `W = ((sx² + d²)/d²)·((sy² + d²)/d²)`: the module doc's `½·sqrt(αx·αy)` rearranged so that the
+    /// only square root and division are those of `1/L`, and so that [`quarter_root`] does not wait for
+    /// them (`W` needs the squares only; `1/d²` is the camera's constant). `W = (1 + tan²θx)(1 + tan²θy)`
+    /// is at least 1 and is held to [`PINHOLE_W_MAX`] = 2¹²⁰, which only a ray about 10⁻⁹ radians from
+    /// 90° off axis reaches. `min_dist =
+    /// (near/d)·L`, `max_dist = (far/d)·L` (`near/D.z` with `D.z = d/L`). One `sqrt`, one `div` and
+    /// [`quarter_root`]: the SIMD kernels of `PxrPerspective` compute exactly this, operation for
+    /// operation, so their rays are bit-identical.
     #[inline(always)]
     #[must_use]
     pub fn pinhole(&self, s: Point2, d: f32) -> RayGeometry {
         let (sx2, sy2, d2) = (s.x * s.x, s.y * s.y, d * d);
         let l = (sx2 + sy2 + d2).sqrt();
         let inv_l = 1.0 / l;
-        let inv_l2 = inv_l * inv_l;
-        let w = ((sx2 + d2) * inv_l2) * ((sy2 + d2) * inv_l2);
+        let w = footprint_w(sx2, sy2, d2);
         RayGeometry {
             origin: Vec3::ZERO,
             origin_radius: 0.0,
             direction: Vec3::new(s.x * inv_l, s.y * inv_l, d * inv_l),
-            ray_spread: self.half_pixel * quarter_root(w) * inv_l,
+            ray_spread: quarter_root(w) * ((self.half_pixel * d) * (inv_l * inv_l)),
             min_dist: (self.near / d) * l,
             max_dist: (self.far / d) * l,
         }
@@ -105,17 +108,18 @@ impl PerspectiveRays {
     ///
     /// With `f` the focal distance and `k = f/d`: `O = (R·ax, R·ay, 0)`, the focus point
     /// `F = k·(sx, sy, d)`, `T = F − O = (k·sx − O.x, k·sy − O.y, f)`, `D = T/|T|`; the pinhole's
-    /// footprint scaled by `|F|/|T|`, which with `|F| = k·L` is `ray_spread = half_pixel·k·w^¼/|T|`
-    /// (`w` as for [`PerspectiveRays::pinhole`]); `min_dist = (near/f)·|T|`, `max_dist = (far/f)·|T|`
-    /// (`near/D.z` with `D.z = f/|T|`). One `sqrt`, two `div`s.
+    /// footprint scaled by `|F|/|T|`, which with `|F| = k·L` is `ray_spread = (half_pixel·k·d)·W^¼/(L·|T|)`
+    /// (`L` and `W` as for [`PerspectiveRays::pinhole`]); `min_dist = (near/f)·|T|`, `max_dist =
+    /// (far/f)·|T|` (`near/D.z` with `D.z = f/|T|`). Two `sqrt`s and two `div`s, `1/L` off the path of
+    /// the fourth root, as in the pinhole.
     #[inline(always)]
     #[must_use]
     pub fn thin_lens(&self, s: Point2, a: Point2, d: f32) -> RayGeometry {
         let f = self.focal_distance;
         let k = f / d;
         let (sx2, sy2, d2) = (s.x * s.x, s.y * s.y, d * d);
-        let inv_l2 = 1.0 / (sx2 + sy2 + d2);
-        let w = ((sx2 + d2) * inv_l2) * ((sy2 + d2) * inv_l2);
+        let inv_l = 1.0 / (sx2 + sy2 + d2).sqrt();
+        let w = footprint_w(sx2, sy2, d2);
         let (ox, oy) = (self.lens_radius * a.x, self.lens_radius * a.y);
         let (tx, ty) = (s.x * k - ox, s.y * k - oy);
         let len = (tx * tx + ty * ty + f * f).sqrt();
@@ -124,7 +128,7 @@ impl PerspectiveRays {
             origin: Vec3::new(ox, oy, 0.0),
             origin_radius: 0.0,
             direction: Vec3::new(tx * inv_len, ty * inv_len, f * inv_len),
-            ray_spread: self.half_pixel * k * quarter_root(w) * inv_len,
+            ray_spread: quarter_root(w) * ((self.half_pixel * k * d) * (inv_l * inv_len)),
             min_dist: (self.near / f) * len,
             max_dist: (self.far / f) * len,
         }
@@ -146,13 +150,26 @@ impl PerspectiveRays {
 /// (`bits(r) ≈ 1.25·bits(1.0) − bits(w)/4`, the constant tuned for the smallest worst-case error).
 pub const QUARTER_ROOT_SEED: u32 = 0x4F58_4000;
 
-/// `w^¼` for `w ∈ [0, 1]`, to 1e-6 relative (9·2⁻²⁴ worst over the range, measured), with
-/// multiplications, one subtraction and one integer shift only.
+/// `W = min(((sx² + d²)·(1/d²))·((sy² + d²)·(1/d²)), 2¹²⁰)` from the squares `sx²`, `sy²`, `d²`:
+/// the argument of the footprint's fourth root in [`PerspectiveRays::pinhole`] and `thin_lens`.
+#[inline(always)]
+fn footprint_w(sx2: f32, sy2: f32, d2: f32) -> f32 {
+    let inv_d2 = 1.0 / d2;
+    (((sx2 + d2) * inv_d2) * ((sy2 + d2) * inv_d2)).min(PINHOLE_W_MAX)
+}
+
+/// The largest `W` [`PerspectiveRays::pinhole`] takes the fourth root of: `2¹²⁰`, where
+/// [`quarter_root`] is still exact to a millionth (`W` passes it only when `tan θx·tan θy > 2⁶⁰`).
+pub const PINHOLE_W_MAX: f32 = f32::from_bits(0x7B80_0000);
+
+/// `w^¼` for `w ∈ [0, 2¹²⁰]`, to 1e-6 relative (8.6·2⁻²⁴ worst over `[2⁻¹⁰⁰, 2¹²⁰]`, measured),
+/// with multiplications, one subtraction and one integer shift only.
 ///
-/// Three Newton steps `r ← r·(5/4 − ((w/4)·r²)·r²)` on `r ≈ w^(−¼)` from a bit-pattern seed, then
-/// `w^¼ = w·r³`. No `sqrt` or division: the divider is the bottleneck of the perspective kernels, and
-/// every instruction here rounds the same in every SIMD lane width, so the kernels reproduce it bit for
-/// bit. `quarter_root(0) = 0`.
+/// Three Newton steps `r ← (5/4)·r − ((w/4)·r²)·(r²·r)` on `r ≈ w^(−¼)` from a bit-pattern seed,
+/// then `w^¼ = (w·r)·(r·r)`; the products are grouped so that each step is four dependent operations
+/// (the kernels are bound by this chain's latency), and so that `w = 0` gives 0, not `0·∞`. No `sqrt`
+/// or division: the divider is the other bottleneck of the perspective kernels, and every instruction
+/// here rounds the same in every SIMD lane width, so the kernels reproduce it bit for bit.
 #[inline(always)]
 #[must_use]
 pub fn quarter_root(w: f32) -> f32 {
@@ -160,9 +177,9 @@ pub fn quarter_root(w: f32) -> f32 {
     let mut r = f32::from_bits(QUARTER_ROOT_SEED.wrapping_sub(w.to_bits() >> 2));
     for _ in 0..3 {
         let r2 = r * r;
-        r *= 1.25 - (quarter_w * r2) * r2;
+        r = 1.25 * r - (quarter_w * r2) * (r2 * r);
     }
-    w * (r * r * r)
+    (w * r) * (r * r)
 }
 
 /// The constants of one orthographic camera, ready to make rays.
@@ -261,16 +278,43 @@ mod tests {
     fn quarter_root_is_the_fourth_root_to_a_millionth() {
         assert_eq!(quarter_root(0.0), 0.0);
         assert_eq!(quarter_root(1.0).to_bits(), 1.0f32.to_bits());
-        // Every octave down to 1e-30 at 4096 points each, and the top octave densely.
+        assert_eq!(quarter_root(16.0), 2.0);
+        assert_eq!(PINHOLE_W_MAX, 2.0f32.powi(120));
+        // Every octave from 2⁻¹⁰⁰ to 2¹²⁰ (the pinhole's `W` reaches the top) at 4096 points each.
         let mut worst = 0.0f64;
-        for e in 0..100 {
+        for e in -100..120 {
             for i in 0..4096 {
-                let w = (0.5f64.powi(e) * (1.0 - i as f64 / 8192.0)) as f32;
+                let w = (2.0f64.powi(e) * (1.0 - i as f64 / 8192.0)) as f32;
                 let exact = f64::from(w).powf(0.25);
                 worst = worst.max((f64::from(quarter_root(w)) / exact - 1.0).abs());
             }
         }
         assert!(worst < 1e-6, "worst relative error {worst:e}");
+    }
+
+    /// Far off axis the pinhole's `W` grows as `tan⁴θ`: the footprint still matches the f64 formula up
+    /// to `tan θ = 10⁹` and stays finite and positive beyond, where `W` is held to 2¹²⁰.
+    #[test]
+    fn pinhole_footprint_stays_finite_far_off_axis() {
+        let p = PerspectiveRays::new((0.002, 0.002), (0.1, 1e4), 0.0, 1.0);
+        for e in 0..=18 {
+            let t = 10f32.powi(e);
+            for s in [Point2::new(t, t), Point2::new(t, 0.5), Point2::new(-0.5, t)] {
+                let r = p.pinhole(s, 1.0);
+                assert!(
+                    r.ray_spread.is_finite() && r.ray_spread > 0.0,
+                    "{s:?}: {}",
+                    r.ray_spread
+                );
+                let (x, y) = (f64::from(s.x), f64::from(s.y));
+                let l2 = x * x + y * y + 1.0;
+                let exact = f64::from(p.half_pixel) * ((x * x + 1.0) * (y * y + 1.0)).powf(0.25) / l2;
+                if e <= 9 {
+                    let err = (f64::from(r.ray_spread) / exact - 1.0).abs();
+                    assert!(err < 1e-5, "{s:?}: {} vs {exact:e}", r.ray_spread);
+                }
+            }
+        }
     }
 
     /// The rearranged footprint and clipping distances against the module's formulas in f64:

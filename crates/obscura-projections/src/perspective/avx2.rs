@@ -10,7 +10,7 @@
 
 use std::arch::x86_64::*;
 
-use obscura_sdk::optics::{PerspectiveRays, QUARTER_ROOT_SEED};
+use obscura_sdk::optics::{PINHOLE_W_MAX, PerspectiveRays, QUARTER_ROOT_SEED};
 use obscura_sdk::{Point2, RayGeometry, RaysSoa, SoaFields, Vec3};
 
 /// Eight rays' direction `x`, `y`, `z`, spread, `min_dist` and `max_dist`, one register each (the
@@ -106,12 +106,17 @@ pub(crate) unsafe fn pinhole(
     sink: &mut impl Sink,
 ) {
     let blocks = n / 8;
-    let (vd, d2) = (_mm256_set1_ps(d), _mm256_set1_ps(d * d));
-    let (half, near, far, one) = (
-        _mm256_set1_ps(rays.half_pixel),
+    let (vd, d2, inv_d2) = (
+        _mm256_set1_ps(d),
+        _mm256_set1_ps(d * d),
+        _mm256_set1_ps(1.0 / (d * d)),
+    );
+    let (half_d, near, far, one, w_max) = (
+        _mm256_set1_ps(rays.half_pixel * d),
         _mm256_set1_ps(rays.near / d),
         _mm256_set1_ps(rays.far / d),
         _mm256_set1_ps(1.0),
+        _mm256_set1_ps(PINHOLE_W_MAX),
     );
     let (seed, quarter, five_quarters) = (
         _mm256_set1_epi32(QUARTER_ROOT_SEED as i32),
@@ -132,10 +137,13 @@ pub(crate) unsafe fn pinhole(
             let l = _mm256_sqrt_ps(_mm256_add_ps(_mm256_add_ps(sx2, sy2), d2));
             let inv_l = _mm256_div_ps(one, l);
             let spread = if spread_on {
-                let inv_l2 = _mm256_mul_ps(inv_l, inv_l);
-                let w = _mm256_mul_ps(
-                    _mm256_mul_ps(_mm256_add_ps(sx2, d2), inv_l2),
-                    _mm256_mul_ps(_mm256_add_ps(sy2, d2), inv_l2),
+                // `min_ps` returns its second operand for a NaN, as `f32::min` does.
+                let w = _mm256_min_ps(
+                    _mm256_mul_ps(
+                        _mm256_mul_ps(_mm256_add_ps(sx2, d2), inv_d2),
+                        _mm256_mul_ps(_mm256_add_ps(sy2, d2), inv_d2),
+                    ),
+                    w_max,
                 );
                 let quarter_w = _mm256_mul_ps(quarter, w);
                 let mut r = _mm256_castsi256_ps(_mm256_sub_epi32(
@@ -144,13 +152,13 @@ pub(crate) unsafe fn pinhole(
                 ));
                 for _ in 0..3 {
                     let r2 = _mm256_mul_ps(r, r);
-                    r = _mm256_mul_ps(
-                        r,
-                        _mm256_sub_ps(five_quarters, _mm256_mul_ps(_mm256_mul_ps(quarter_w, r2), r2)),
+                    r = _mm256_sub_ps(
+                        _mm256_mul_ps(five_quarters, r),
+                        _mm256_mul_ps(_mm256_mul_ps(quarter_w, r2), _mm256_mul_ps(r2, r)),
                     );
                 }
-                let root = _mm256_mul_ps(w, _mm256_mul_ps(_mm256_mul_ps(r, r), r));
-                _mm256_mul_ps(_mm256_mul_ps(half, root), inv_l)
+                let root = _mm256_mul_ps(_mm256_mul_ps(w, r), _mm256_mul_ps(r, r));
+                _mm256_mul_ps(root, _mm256_mul_ps(half_d, _mm256_mul_ps(inv_l, inv_l)))
             } else {
                 _mm256_setzero_ps()
             };
