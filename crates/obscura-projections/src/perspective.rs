@@ -375,6 +375,8 @@ fn thin_lens_soa(
 mod avx2;
 #[cfg(target_arch = "x86_64")]
 mod avx512;
+#[cfg(target_arch = "x86_64")]
+pub(crate) use avx512::store_centred_records;
 
 #[cfg(test)]
 mod tests {

@@ -84,6 +84,10 @@ fn centred_lanes(
     let mut d = [[0.0f32; LANES]; 4];
     let mut clipping = [[0.0f32; LANES]; 2];
     let culled = RayGeometry::CULLED;
+    // The AVX-512 tier writes the records with the perspective kernels' write-out (this closure runs
+    // inside `simd::run`, which took the tier `simd::level()` names).
+    #[cfg(target_arch = "x86_64")]
+    let widest = simd::level() == simd::Level::Avx512;
     for (out, s) in (&mut out_chunks).zip(&mut in_chunks) {
         let sx: [f32; LANES] = std::array::from_fn(|i| s[i].x);
         let sy: [f32; LANES] = std::array::from_fn(|i| s[i].y);
@@ -96,6 +100,13 @@ fn centred_lanes(
             d[3][i] = if v { l.ray_spread } else { culled.ray_spread };
             clipping[0][i] = if v { clip.near } else { culled.min_dist };
             clipping[1][i] = if v { clip.far } else { culled.max_dist };
+        }
+        #[cfg(target_arch = "x86_64")]
+        if widest {
+            // SAFETY: `simd::level()` is never above the CPU's tier, so the CPU has AVX-512; `out` is
+            // a chunk of LANES = 16 records.
+            unsafe { crate::perspective::store_centred_records(out.as_mut_ptr(), &d, &clipping) };
+            continue;
         }
         write_centred(out, &d, &clipping);
     }

@@ -208,6 +208,40 @@ unsafe fn store_records(out: *mut f32, r: &Lanes) {
     }
 }
 
+/// Sixteen records at `out` from a centred camera's structure-of-arrays lanes (`d`: direction x, y, z
+/// and spread; `clipping`: `min_dist`, `max_dist`; origin and origin radius 0): the write-out of
+/// [`crate::screen::map_centred_rays`] at the AVX-512 tier, `store_records` and the output prefetch of
+/// the perspective kernels in place of four SSE transposes.
+///
+/// # Safety
+/// The CPU has AVX-512 F/BW/CD/DQ/VL (the caller's tier is [`obscura_sdk::simd::Level::Avx512`]); `out`
+/// points at 16 writable records.
+#[target_feature(enable = "avx512f,avx512bw,avx512cd,avx512dq,avx512vl,avx2,fma")]
+pub(crate) unsafe fn store_centred_records(
+    out: *mut RayGeometry,
+    d: &[[f32; 16]; 4],
+    clipping: &[[f32; 16]; 2],
+) {
+    prefetch_lines(out.wrapping_add(AHEAD).cast_const().cast(), 10);
+    let load = |a: &[f32; 16]| {
+        // SAFETY: sixteen floats from a reference to sixteen.
+        unsafe { _mm512_loadu_ps(a.as_ptr()) }
+    };
+    let zero = _mm512_setzero_ps();
+    let lanes = Lanes {
+        ox: zero,
+        oy: zero,
+        dx: load(&d[0]),
+        dy: load(&d[1]),
+        dz: load(&d[2]),
+        spread: load(&d[3]),
+        min: load(&clipping[0]),
+        max: load(&clipping[1]),
+    };
+    // SAFETY: `out` holds 16 records (the caller's promise).
+    unsafe { store_records(out.cast(), &lanes) };
+}
+
 /// How many rays ahead of the one being stored the sinks prefetch their output: four groups of 16.
 ///
 /// The renderer's batch (4096 rays, 160 KB of records) lives in L2, not L1, and a store that misses L1
