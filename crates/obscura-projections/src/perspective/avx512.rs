@@ -246,7 +246,7 @@ pub(crate) unsafe fn store_centred_records(
 ///
 /// The renderer's batch (4096 rays, 160 KB of records) lives in L2, not L1, and a store that misses L1
 /// waits in the store buffer for its line; fetching the lines four groups ahead takes that wait off the
-/// kernel (on the Xeon of BENCHMARKS.md the pinhole's `project_soa` went from 630 to 930 Mrays/s).
+/// kernel (on the Xeon of BENCHMARKS.md the pinhole's `project_soa` went from about 630 to 900 Mrays/s).
 const AHEAD: usize = 64;
 
 /// Prefetches `lines` cache lines from `p` into L1. `p` may lie past the end of the output (the last
