@@ -16,17 +16,23 @@ use crate::geometry::{Point2, Vec3};
 use crate::ray::RayGeometry;
 
 /// `d = 1/tan(fov/2)`, the screen-plane distance for a field of view in degrees.
+///
+/// Computed in `f64` and rounded once: `f32::tan` at run time is libm's `tanf`, but an optimised build
+/// folds a constant argument through the double-precision `tan`, and the two differ in the last bit
+/// for some angles (60° among them), so the same camera would get another `d`, and other rays, in a
+/// release build than in a debug one.
 #[inline]
 #[must_use]
 pub fn screen_distance(fov_degrees: f32) -> f32 {
-    1.0 / (0.5 * fov_degrees.to_radians()).tan()
+    (1.0 / (0.5 * f64::from(fov_degrees).to_radians()).tan()) as f32
 }
 
-/// The field of view in degrees whose screen plane lies at `d`: the inverse of [`screen_distance`].
+/// The field of view in degrees whose screen plane lies at `d`: the inverse of [`screen_distance`]
+/// (in `f64` too, for the same reason).
 #[inline]
 #[must_use]
 pub fn fov_from_distance(d: f32) -> f32 {
-    2.0 * (1.0 / d).atan().to_degrees()
+    (2.0 * (1.0 / f64::from(d)).atan().to_degrees()) as f32
 }
 
 /// The constants of one perspective camera, ready to make rays.
@@ -110,25 +116,27 @@ impl PerspectiveRays {
     /// `F = k·(sx, sy, d)`, `T = F − O = (k·sx − O.x, k·sy − O.y, f)`, `D = T/|T|`; the pinhole's
     /// footprint scaled by `|F|/|T|`, which with `|F| = k·L` is `ray_spread = (half_pixel·k·d)·W^¼/(L·|T|)`
     /// (`L` and `W` as for [`PerspectiveRays::pinhole`]); `min_dist = (near/f)·|T|`, `max_dist =
-    /// (far/f)·|T|` (`near/D.z` with `D.z = f/|T|`). Two `sqrt`s and two `div`s, `1/L` off the path of
-    /// the fourth root, as in the pinhole.
+    /// (far/f)·|T|` (`near/D.z` with `D.z = f/|T|`). Two `sqrt`s and one `div`: `g = 1/(L·|T|)`, then
+    /// `1/|T| = L·g` (the divider is the thin-lens kernel's bottleneck; this costs `D` at most one
+    /// rounding more than `1/|T|` would).
     #[inline(always)]
     #[must_use]
     pub fn thin_lens(&self, s: Point2, a: Point2, d: f32) -> RayGeometry {
         let f = self.focal_distance;
         let k = f / d;
         let (sx2, sy2, d2) = (s.x * s.x, s.y * s.y, d * d);
-        let inv_l = 1.0 / (sx2 + sy2 + d2).sqrt();
+        let l = (sx2 + sy2 + d2).sqrt();
         let w = footprint_w(sx2, sy2, d2);
         let (ox, oy) = (self.lens_radius * a.x, self.lens_radius * a.y);
         let (tx, ty) = (s.x * k - ox, s.y * k - oy);
         let len = (tx * tx + ty * ty + f * f).sqrt();
-        let inv_len = 1.0 / len;
+        let inv_l_len = 1.0 / (l * len);
+        let inv_len = l * inv_l_len;
         RayGeometry {
             origin: Vec3::new(ox, oy, 0.0),
             origin_radius: 0.0,
             direction: Vec3::new(tx * inv_len, ty * inv_len, f * inv_len),
-            ray_spread: quarter_root(w) * ((self.half_pixel * k * d) * (inv_l * inv_len)),
+            ray_spread: quarter_root(w) * ((self.half_pixel * k * d) * inv_l_len),
             min_dist: (self.near / f) * len,
             max_dist: (self.far / f) * len,
         }
@@ -162,14 +170,18 @@ fn footprint_w(sx2: f32, sy2: f32, d2: f32) -> f32 {
 /// [`quarter_root`] is still exact to a millionth (`W` passes it only when `tan θx·tan θy > 2⁶⁰`).
 pub const PINHOLE_W_MAX: f32 = f32::from_bits(0x7B80_0000);
 
-/// `w^¼` for `w ∈ [0, 2¹²⁰]`, to 1e-6 relative (8.6·2⁻²⁴ worst over `[2⁻¹⁰⁰, 2¹²⁰]`, measured),
-/// with multiplications, one subtraction and one integer shift only.
+/// `w^¼` for `w ∈ [0, 2¹²⁰]`, to 1e-6 relative (8.5·2⁻²⁴ worst over `[2⁻¹⁰⁰, 2¹²⁰]`, measured),
+/// with multiplications, fused multiply-adds and one integer shift only.
 ///
 /// Three Newton steps `r ← (5/4)·r − ((w/4)·r²)·(r²·r)` on `r ≈ w^(−¼)` from a bit-pattern seed,
-/// then `w^¼ = (w·r)·(r·r)`; the products are grouped so that each step is four dependent operations
-/// (the kernels are bound by this chain's latency), and so that `w = 0` gives 0, not `0·∞`. No `sqrt`
-/// or division: the divider is the other bottleneck of the perspective kernels, and every instruction
-/// here rounds the same in every SIMD lane width, so the kernels reproduce it bit for bit.
+/// then `w^¼ = (w·r)·(r·r)`; the last product and the subtraction of each step are one fused
+/// multiply-add ([`f32::mul_add`]: `c − a·b` rounded once), so that each step is three dependent
+/// operations (the kernels are bound by this chain's latency), and the products are grouped so that
+/// `w = 0` gives 0, not `0·∞`. No `sqrt` or division: the divider is the other bottleneck of the
+/// perspective kernels. Every operation here is correctly rounded, so every SIMD tier (`vfnmadd` in
+/// AVX2 and AVX-512) and every platform reproduces it bit for bit. Where the CPU has no FMA unit (x86
+/// before AVX2) `mul_add` is a call into libm's `fmaf` and the portable tier runs two to four times
+/// slower (BENCHMARKS.md); ARM and every x86 with AVX2 fuse in hardware.
 #[inline(always)]
 #[must_use]
 pub fn quarter_root(w: f32) -> f32 {
@@ -177,7 +189,7 @@ pub fn quarter_root(w: f32) -> f32 {
     let mut r = f32::from_bits(QUARTER_ROOT_SEED.wrapping_sub(w.to_bits() >> 2));
     for _ in 0..3 {
         let r2 = r * r;
-        r = 1.25 * r - (quarter_w * r2) * (r2 * r);
+        r = (-(quarter_w * r2)).mul_add(r2 * r, 1.25 * r);
     }
     (w * r) * (r * r)
 }
@@ -251,6 +263,15 @@ mod tests {
 
     #[test]
     fn screen_distance_matches_the_conventions_page() {
+        // The same bits whether the argument is folded at compile time or known only at run time.
+        for fov in [60.0f32, 40.0, 37.0, 90.0, 120.0] {
+            assert_eq!(
+                screen_distance(fov),
+                screen_distance(std::hint::black_box(fov)),
+                "{fov}"
+            );
+        }
+        assert_eq!(screen_distance(60.0), (1.0 / 30f64.to_radians().tan()) as f32);
         assert!((screen_distance(90.0) - 1.0).abs() < 1e-6);
         assert!((screen_distance(20.0) - 5.6713).abs() < 1e-4);
         assert!((fov_from_distance(screen_distance(37.0)) - 37.0).abs() < 1e-4);

@@ -19,9 +19,11 @@
 //! **Bit identity.** Every tier gives the same bits. Rust never contracts `a*b + c` into a fused
 //! multiply-add on its own, and the vectoriser only widens IEEE operations (add, mul, div, sqrt,
 //! comparisons, selects), which round the same in every lane width. Hand-written kernels follow the
-//! same rule: exact `div` and `sqrt` (never the `rcp`/`rsqrt` approximations), no `fmadd`, and the
-//! portable code they mirror computes the same expression in the same order. A kernel that does use a
-//! fused multiply-add must say so and be tested to 1 ulp against the portable tier instead.
+//! same rule: exact `div` and `sqrt` (never the `rcp`/`rsqrt` approximations), and the portable code
+//! they mirror computes the same expression in the same order. A fused multiply-add is allowed only
+//! where the portable code asks for it with [`f32::mul_add`] (correctly rounded everywhere: in hardware,
+//! or in libm's `fmaf` on a CPU without FMA), as [`crate::optics::quarter_root`]'s Newton steps do; a
+//! kernel that fuses where the portable code does not must say so and be tested to 1 ulp instead.
 //!
 //! Benchmarks and the tests against the portable tier: `BENCHMARKS.md` ("SIMD tiers") and the
 //! `tiers_*` tests of `obscura-projections`.

@@ -1,9 +1,9 @@
 //! `PxrPerspective`'s pinhole eight rays at a time in AVX2, for CPUs without AVX-512: LLVM's loop
 //! vectoriser declines the plain loop (it stays scalar, a fifth of this kernel's rate).
 //!
-//! [`PerspectiveRays::pinhole`] operation for operation (exact `div` and `sqrt`, no fused multiply-add,
-//! [`quarter_root`]'s integer seed and Newton steps), so the rays are bit-identical to the portable
-//! tier's. The lanes go to a [`Sink`]: through a small array on the stack into the 40-byte records
+//! [`PerspectiveRays::pinhole`] operation for operation (exact `div` and `sqrt`, a fused multiply-add
+//! only where the portable code has `mul_add`, [`quarter_root`]'s integer seed and Newton steps), so
+//! the rays are bit-identical to the portable tier's. The lanes go to a [`Sink`]: through a small array on the stack into the 40-byte records
 //! ([`Aos`]), or each register straight into its array ([`Soa`], `project_soa`).
 //!
 //! [`quarter_root`]: obscura_sdk::optics::quarter_root
@@ -152,9 +152,10 @@ pub(crate) unsafe fn pinhole(
                 ));
                 for _ in 0..3 {
                     let r2 = _mm256_mul_ps(r, r);
-                    r = _mm256_sub_ps(
+                    r = _mm256_fnmadd_ps(
+                        _mm256_mul_ps(quarter_w, r2),
+                        _mm256_mul_ps(r2, r),
                         _mm256_mul_ps(five_quarters, r),
-                        _mm256_mul_ps(_mm256_mul_ps(quarter_w, r2), _mm256_mul_ps(r2, r)),
                     );
                 }
                 let root = _mm256_mul_ps(_mm256_mul_ps(w, r), _mm256_mul_ps(r, r));

@@ -1,10 +1,11 @@
 //! `PxrPerspective`'s pinhole and thin lens sixteen rays at a time in AVX-512.
 //!
 //! Each kernel is [`PerspectiveRays::pinhole`] / [`PerspectiveRays::thin_lens`] operation for operation
-//! (exact `div` and `sqrt`, no fused multiply-add, [`quarter_root`]'s integer seed and Newton steps), so
-//! the rays are bit-identical to the portable tier's. The screen and aperture samples are loaded 32
-//! floats at a time and split into x and y lanes with one two-source permute each; a batch whose length
-//! is not a multiple of 16 ends with masked loads.
+//! (exact `div` and `sqrt`, a fused multiply-add only where the portable code has `mul_add`,
+//! [`quarter_root`]'s integer seed and Newton steps), so the rays are bit-identical to the portable
+//! tier's. The screen and aperture samples are loaded 32 floats at a time and split into x and y
+//! lanes with one two-source permute each; a batch whose length is not a multiple of 16 ends with
+//! masked loads.
 //!
 //! The rays go to a [`Sink`]: [`Aos`] writes RenderMan's 40-byte `RtRayGeometry` records (two stores
 //! per ray from 128-bit lanes shuffled into record order; see `store_records`); [`Soa`] writes one
@@ -315,9 +316,10 @@ unsafe fn quarter_root(w: __m512) -> __m512 {
         let five_quarters = _mm512_set1_ps(1.25);
         for _ in 0..3 {
             let r2 = _mm512_mul_ps(r, r);
-            r = _mm512_sub_ps(
+            r = _mm512_fnmadd_ps(
+                _mm512_mul_ps(quarter_w, r2),
+                _mm512_mul_ps(r2, r),
                 _mm512_mul_ps(five_quarters, r),
-                _mm512_mul_ps(_mm512_mul_ps(quarter_w, r2), _mm512_mul_ps(r2, r)),
             );
         }
         _mm512_mul_ps(_mm512_mul_ps(w, r), _mm512_mul_ps(r, r))
@@ -477,10 +479,11 @@ pub(crate) unsafe fn thin_lens(
         let ty = _mm512_sub_ps(_mm512_mul_ps(y, vk), oy);
         let t2 = _mm512_add_ps(_mm512_add_ps(_mm512_mul_ps(tx, tx), _mm512_mul_ps(ty, ty)), f2);
         let t = _mm512_sqrt_ps(t2);
-        let inv_t = _mm512_div_ps(one, t);
+        let l = _mm512_sqrt_ps(l2);
+        let inv_lt = _mm512_div_ps(one, _mm512_mul_ps(l, t));
+        let inv_t = _mm512_mul_ps(l, inv_lt);
         let spread = if spread_on {
-            let inv_l = _mm512_div_ps(one, _mm512_sqrt_ps(l2));
-            let scale = _mm512_mul_ps(half_kd, _mm512_mul_ps(inv_l, inv_t));
+            let scale = _mm512_mul_ps(half_kd, inv_lt);
             // SAFETY: as for `squares`.
             _mm512_mul_ps(unsafe { quarter_root(footprint_w(a, b, inv_d2)) }, scale)
         } else {
