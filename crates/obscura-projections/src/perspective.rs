@@ -518,8 +518,9 @@ mod tests {
     }
 
     /// Every dispatch tier this CPU has against the portable one, through `project`: pinhole, thin lens
-    /// and zoom rays bit for bit, every field (the kernels use exact `div`/`sqrt` and no FMA). Tiers
-    /// the CPU lacks are skipped, and only then.
+    /// and zoom rays bit for bit, every field (the kernels use exact `div`/`sqrt`, and a fused
+    /// multiply-add only where the portable code has `mul_add`). Tiers the CPU lacks are skipped, and
+    /// only then.
     #[test]
     fn tiers_give_bit_identical_perspective_rays() {
         let (screen, aperture) = samples();
