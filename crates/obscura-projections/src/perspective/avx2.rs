@@ -3,8 +3,9 @@
 //!
 //! [`PerspectiveRays::pinhole`] operation for operation (exact `div` and `sqrt`, a fused multiply-add
 //! only where the portable code has `mul_add`, [`quarter_root`]'s integer seed and Newton steps), so
-//! the rays are bit-identical to the portable tier's. The lanes go to a [`Sink`]: through a small array on the stack into the 40-byte records
-//! ([`Aos`]), or each register straight into its array ([`Soa`], `project_soa`).
+//! the rays are bit-identical to the portable tier's. The lanes go to a [`Sink`]: through a small
+//! array on the stack into the 40-byte records ([`Aos`]), or each register straight into its array
+//! ([`Soa`], `project_soa`).
 //!
 //! [`quarter_root`]: obscura_sdk::optics::quarter_root
 
