@@ -158,7 +158,8 @@ struct RenderArgs {
     #[arg(long, default_value_t = 6)]
     max_depth: u32,
     /// The most triangles the scene may dice into; beyond it the render stops with a message naming
-    /// the primitive (about 150 bytes each with the BVH).
+    /// the primitive (up to 450 bytes each with the BVH). Lowered to what the memory the job may use
+    /// holds (`OBSCURA_MEMORY_LIMIT`, `MemAvailable`, the cgroup's and the address-space limit).
     #[arg(long, default_value_t = obscura_geometry::dice::DEFAULT_SCENE_TRIANGLES, value_name = "N")]
     max_triangles: u64,
     /// Seed of the sample sequences.

@@ -526,7 +526,8 @@ fn configure(
     };
     // RIB `Option "searchpath" "string rixplugin"` directories join the search after --plugin-path.
     let search = &search.with_scene_dirs(&scene.plugin_path);
-    let projection = ensure(&mut registry, overrides.projection(scene), search).map_err(|e| e.to_string())?;
+    let projection = ensure(&mut registry, overrides.projection(scene), search)
+        .map_err(|e| overrides.locate_projection_error(scene, e))?;
     let factory = registry.find(&projection).map_err(|e| e.to_string())?;
     overrides.params =
         param_list(&a.params, factory.name(), factory.param_table()).map_err(|e| e.to_string())?;

@@ -42,6 +42,10 @@ type Case = (
     &'static str,
 );
 
+/// A sphere diced into 4.3 M triangles (an eighth of a pixel each at 160×120).
+const FINE_SPHERE: &str = "Format 160 120 1\nProjection \"perspective\" \"fov\" [40]\nWorldBegin\nTranslate 0 0 5\n\
+Attribute \"dice\" \"float micropolygonlength\" [0.125]\nSphere 1 -1 1 360\nWorldEnd\n";
+
 /// A triangle 10^300 units away: its translation does not fit an f32.
 const GLTF_FAR: &str = r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[0,1]}],
 "nodes":[{"mesh":0,"translation":[1e300,0,0]},{"mesh":0}],
@@ -118,6 +122,15 @@ const CATALOGUE: &[Case] = &[
         &[],
         M,
         "a 20000x20000 render with 14 channels needs about 155.0 GiB of memory, more than the 1.0 GiB available (OBSCURA_MEMORY_LIMIT=1G)",
+    ),
+    (
+        "a scene that dices into more triangles than the memory limit holds",
+        &["render", "s.rib"],
+        &[("s.rib", FINE_SPHERE)],
+        M,
+        "s.rib:6: this primitive dices into 4289040 triangles, which the scene cannot hold: 0 are diced \
+         already and the budget is 1789569, what 1.0 GiB of memory holds at 450 bytes a triangle \
+         (OBSCURA_MEMORY_LIMIT=1G)",
     ),
     (
         "rays with sample layers over the memory limit",
@@ -528,7 +541,7 @@ const CATALOGUE: &[Case] = &[
             "Format 8 6 1\nProjection \"Nope\"\nWorldBegin\nWorldEnd\n",
         )],
         E,
-        "unknown projection \"Nope\"",
+        "s.rib:2: unknown projection \"Nope\"",
     ),
     (
         "RIB unknown projection parameter",
@@ -1036,6 +1049,35 @@ fn every_bad_input_of_the_catalogue_gets_its_message() {
         CATALOGUE.len(),
         failures.join("\n")
     );
+}
+
+/// The process's address-space limit (`ulimit -v`, what Grid Engine's `h_vmem` sets) bounds the
+/// scene's triangles as `OBSCURA_MEMORY_LIMIT` does: under util-linux's `prlimit --as` a scene too
+/// large for it stops with a message naming the primitive and the limit, where the allocator used to
+/// abort the process (aqsis's `tenpatch.rib` under the corpus script's 2 GiB).
+#[test]
+fn an_address_space_limit_bounds_the_triangles_with_a_located_error() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.rib"), FINE_SPHERE).unwrap();
+    let out = Command::new("prlimit")
+        .arg(format!("--as={}", 1u64 << 30))
+        .arg(env!("CARGO_BIN_EXE_obscura"))
+        .args(["render", "s.rib", "-o", "s.exr"])
+        .current_dir(dir.path())
+        .env_remove("OBSCURA_MEMORY_LIMIT")
+        .output()
+        .expect("prlimit (util-linux) runs");
+    let stderr = text(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains(
+            "s.rib:6: this primitive dices into 4289040 triangles, which the scene cannot hold: 0 are \
+             diced already and the budget is 1789569, what 1.0 GiB of memory holds at 450 bytes a \
+             triangle (the process's address-space limit, ulimit -v)"
+        ),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("s.exr").exists());
 }
 
 /// RIB files as they come (issue 16): a Latin-1 byte, gzip (by content, whatever the name) and binary

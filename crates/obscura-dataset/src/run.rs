@@ -593,8 +593,8 @@ fn prepare_camera(
         Lens::Projection { name, .. } => overrides.projection = Some(name.clone()),
         Lens::Calibration(c) => overrides.calibration = Some((**c).clone()),
     }
-    let projection =
-        ensure(session.registry, overrides.projection(first), &search).map_err(|e| input(e.to_string()))?;
+    let projection = ensure(session.registry, overrides.projection(first), &search)
+        .map_err(|e| input(overrides.locate_projection_error(first, e)))?;
     let factory = session
         .registry
         .find(&projection)

@@ -211,6 +211,27 @@ impl Overrides {
         }
     }
 
+    /// Where the scene file named [`Overrides::projection`]'s projection
+    /// ([`Scene::projection_origin`]); `None` when an override chose it.
+    #[must_use]
+    pub fn projection_origin<'a>(&self, scene: &'a Scene) -> Option<&'a str> {
+        if self.calibration.is_some() || self.projection.is_some() {
+            None
+        } else {
+            scene.projection_origin.as_deref()
+        }
+    }
+
+    /// `error`, about the projection of [`Overrides::projection`], prefixed with where the scene
+    /// named it (`s.rib:2: unknown projection "Nope": …`).
+    #[must_use]
+    pub fn locate_projection_error(&self, scene: &Scene, error: impl std::fmt::Display) -> String {
+        match self.projection_origin(scene) {
+            Some(at) => format!("{at}: {error}"),
+            None => error.to_string(),
+        }
+    }
+
     /// Applies every override to `scene` (see the fields for what each does).
     ///
     /// # Errors

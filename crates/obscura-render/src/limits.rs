@@ -9,7 +9,9 @@
 //!   all ([`check_image_size`]), whatever set it (`--format`, RIB `Format`, a calibration file);
 //! - **memory**: an estimate of the bytes the job allocates ([`render_bytes`], [`ray_map_bytes`],
 //!   [`stmap_bytes`]) against the memory available ([`memory_limit`]: `OBSCURA_MEMORY_LIMIT`, else the
-//!   cgroup's limit and `MemAvailable` of `/proc/meminfo`, whichever is smaller);
+//!   smallest of the cgroup's limit, `MemAvailable` of `/proc/meminfo` and the process's address-space
+//!   limit), and the scene's triangles against what that memory holds
+//!   ([`obscura_geometry::dice::TriangleBudget::within_memory`]);
 //! - **threads**: 1 to [`MAX_THREADS`]; an absurd count is an error, not clamped;
 //! - **samples per pixel**: 1 to [`obscura_host::sampler::MAX_SAMPLES`];
 //! - **output files** ([`check_output`]): a known extension for the driver, an existing directory we
@@ -202,8 +204,9 @@ pub fn stmap_bytes(pixels: u64) -> u64 {
 }
 
 /// The memory a job may use, in bytes, and where that figure comes from: `OBSCURA_MEMORY_LIMIT` when
-/// set; else the smaller of the cgroup's `memory.max` and `/proc/meminfo`'s `MemAvailable`; `None`
-/// where neither can be read (then only the image-size limits apply).
+/// set; else the smallest of the cgroup's `memory.max`, `/proc/meminfo`'s `MemAvailable` and the
+/// process's address-space limit (`ulimit -v`, `prlimit --as`, a farm's virtual-memory limit such as
+/// Grid Engine's `h_vmem`); `None` where none can be read (then only the image-size limits apply).
 ///
 /// # Errors
 /// [`LimitError::MemoryVariable`] when the variable is set but not a size.
@@ -221,10 +224,24 @@ pub fn memory_limit() -> Result<Option<(u64, String)>, LimitError> {
         .ok()
         .and_then(|t| t.trim().parse::<u64>().ok())
         .map(|b| (b, "the cgroup's memory.max".to_string()));
-    Ok(match (available, cgroup) {
-        (Some(a), Some(c)) => Some(if c.0 < a.0 { c } else { a }),
-        (a, c) => a.or(c),
-    })
+    let address_space = std::fs::read_to_string("/proc/self/limits")
+        .ok()
+        .and_then(|t| address_space_limit(&t))
+        .map(|b| (b, "the process's address-space limit, ulimit -v".to_string()));
+    Ok([available, cgroup, address_space]
+        .into_iter()
+        .flatten()
+        .min_by_key(|(bytes, _)| *bytes))
+}
+
+/// The soft "Max address space" of a `/proc/<pid>/limits` text, in bytes (`None` when unlimited).
+fn address_space_limit(limits: &str) -> Option<u64> {
+    let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
+    line["Max address space".len()..]
+        .split_whitespace()
+        .next()?
+        .parse()
+        .ok()
 }
 
 /// `MemAvailable` of a `/proc/meminfo` text, in bytes.
@@ -432,6 +449,23 @@ mod tests {
         let t = "MemTotal:       24000000 kB\nMemFree: 1 kB\nMemAvailable:   2048 kB\n";
         assert_eq!(mem_available(t), Some(2 << 20));
         assert_eq!(mem_available("MemTotal: 1 kB"), None);
+    }
+
+    #[test]
+    fn the_address_space_limit_is_the_soft_one_of_proc_limits() {
+        let limited = "Limit                     Soft Limit           Hard Limit           Units     \n\
+                       Max stack size            8388608              unlimited            bytes     \n\
+                       Max address space         2147483648           4294967296           bytes     \n";
+        assert_eq!(address_space_limit(limited), Some(2 << 30));
+        let unlimited = "Max address space         unlimited            unlimited            bytes     \n";
+        assert_eq!(address_space_limit(unlimited), None);
+        assert_eq!(
+            address_space_limit("Max stack size 8388608 unlimited bytes"),
+            None
+        );
+        // This process's own file reads, whatever its limit.
+        let own = std::fs::read_to_string("/proc/self/limits").unwrap();
+        assert!(own.contains("Max address space"));
     }
 
     #[test]

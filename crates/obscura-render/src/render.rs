@@ -442,7 +442,11 @@ fn dice_objects(
     world_to_camera_open: Affine3A,
     max_triangles: u64,
 ) -> Result<Vec<Diced>, RenderError> {
-    let budget = TriangleBudget::new(max_triangles);
+    // The memory a job may use bounds the triangles too: past it the allocator would abort the
+    // process; here the primitive that goes over is named. (A malformed OBSCURA_MEMORY_LIMIT was
+    // refused before the render, by the job's memory check.)
+    let memory = crate::limits::memory_limit().ok().flatten();
+    let budget = TriangleBudget::within_memory(max_triangles, memory.as_ref().map(|(b, s)| (*b, s.as_str())));
     let diced: Vec<Result<Diced, RenderError>> = scene
         .objects
         .par_iter()

@@ -463,6 +463,10 @@ pub struct Scene {
     pub projection: String,
     /// The projection's parameters as given.
     pub projection_params: ParamList,
+    /// Where the file named [`Scene::projection`], for errors about it: `file:line` of the RIB
+    /// `Projection` (or `Perspective`) request, `layer: <prim>` of a USD projection prim; `None` for the
+    /// default projection and one a reader chose itself.
+    pub projection_origin: Option<String>,
     /// The projection declared in the RIB just before [`Scene::projection`] (name and parameters), or
     /// `None` when that one is the first `Projection`. When it is a built-in and [`Scene::projection`]
     /// a plugin, the two are chained as in RenderMan: the built-in fills the rays, then the plugin
@@ -526,6 +530,7 @@ impl Scene {
             camera,
             projection: "PxrPerspective".into(),
             projection_params: ParamList::new(),
+            projection_origin: None,
             projection_base: None,
             samples_per_pixel: 64,
             filter: PixelFilter::default(),

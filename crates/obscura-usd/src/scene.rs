@@ -473,6 +473,7 @@ fn set_camera(
         );
         scene.projection = ri.name;
         scene.projection_params = ri.params;
+        scene.projection_origin = Some(format!("{}: <{}>", stage.file, ri.source));
         return Ok(());
     }
     if cam.projection == "orthographic" {

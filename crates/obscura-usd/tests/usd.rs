@@ -292,6 +292,12 @@ fn renderman_projections_are_wired_as_hdprman_reads_them() {
     let file = data("ri_projection.usda");
     let pano = scene(&file, Some("Pano"), 64, 32, 1);
     assert_eq!(pano.projection, "PxrCylinderCamera");
+    // An error about the projection (an unknown name, a bad parameter) names the prim it came from.
+    let origin = pano.projection_origin.as_deref().unwrap_or_default();
+    assert!(
+        origin.ends_with("ri_projection.usda: </World/Pano/Projection>"),
+        "{origin}"
+    );
     let hsweep = pano.projection_params.get("hsweep").map(|e| e.value.clone());
     assert_eq!(hsweep, Some(ParamValue::Floats(vec![270.0])));
     let legacy = scene(&file, Some("Legacy"), 64, 32, 1);
@@ -299,6 +305,11 @@ fn renderman_projections_are_wired_as_hdprman_reads_them() {
     // The RenderSettings' camera with its ri:projection:name and parameters.
     let plain = scene(&file, None, 64, 32, 1);
     assert_eq!(plain.projection, "PxrPanini");
+    let origin = plain.projection_origin.as_deref().unwrap_or_default();
+    assert!(
+        origin.ends_with("ri_projection.usda: </Render/Settings>"),
+        "{origin}"
+    );
     let c = plain
         .projection_params
         .get("compression")

@@ -146,9 +146,19 @@ pub const OFF_SCREEN_PIXELS: f32 = 64.0;
 /// The shortest micropolygon length, in pixels: finer `micropolygonlength` values dice as this.
 pub const MIN_MICROPOLYGON_LENGTH: f32 = 0.0625;
 
-/// The most triangles a scene dices into by default ([`TriangleBudget`]): about 1.2 GB with the BVH
-/// (measured: 155 bytes per triangle for an 8.4-million-triangle sphere).
+/// The most triangles a scene dices into by default ([`TriangleBudget`]): 0.6 to 3.5 GiB with the
+/// BVH, depending on the geometry ([`TRIANGLE_BYTES`]).
 pub const DEFAULT_SCENE_TRIANGLES: u64 = 8_000_000;
+
+/// The address space a render takes per diced triangle at its peak (while the accelerator is built),
+/// the most measured: 442 bytes for ten bilinear patches (5.9 M triangles, a 2.55 GiB peak of
+/// `VmPeak` against 0.22 GiB for a one-triangle scene; 303 bytes of it resident), 71 bytes for one
+/// sphere of 8.4 M triangles. [`TriangleBudget::within_memory`] divides the memory a job may use by it.
+pub const TRIANGLE_BYTES: u64 = 450;
+
+/// The address space of a render before any triangle: the one-triangle scene's peak above, rounded
+/// up (threads' stacks and allocator arenas, mostly reserved rather than resident).
+pub const RENDER_BASE_BYTES: u64 = 256 << 20;
 
 /// Crease sharpness at or above which an edge is infinitely sharp.
 pub const INFINITE_SHARPNESS: f32 = 10.0;
@@ -286,8 +296,8 @@ pub enum DiceError {
     /// The scene's triangle budget ([`TriangleBudget`]) cannot hold this primitive.
     #[error(
         "this primitive dices into {triangles} triangles, which the scene cannot hold: {used} are diced \
-         already and the budget is {limit} (raise it with --max-triangles if the memory is there, or \
-         raise this primitive's Attribute \"dice\" \"micropolygonlength\")"
+         already and the budget is {limit}, {bound}, or raise this primitive's Attribute \"dice\" \
+         \"micropolygonlength\""
     )]
     SceneBudget {
         /// The primitive's triangles.
@@ -296,10 +306,40 @@ pub enum DiceError {
         used: u64,
         /// The budget.
         limit: u64,
+        /// What set the budget.
+        bound: BudgetBound,
     },
     /// The diced geometry overflowed to infinity (parameters near the limits of `f32`).
     #[error("diced geometry is not finite (parameters too large)")]
     NonFiniteGeometry,
+}
+
+/// What set a [`TriangleBudget`]'s limit; its `Display` says what to raise.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum BudgetBound {
+    /// The renderer's option (`--max-triangles`).
+    Option,
+    /// The memory the job may use: `memory` (human-readable) according to `source`, at
+    /// [`TRIANGLE_BYTES`] a triangle after [`RENDER_BASE_BYTES`].
+    Memory {
+        /// The memory, e.g. `2.0 GiB`.
+        memory: String,
+        /// Where that figure comes from (`OBSCURA_MEMORY_LIMIT=2G`, the address-space limit, …).
+        source: String,
+    },
+}
+
+impl std::fmt::Display for BudgetBound {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BudgetBound::Option => f.write_str("set by --max-triangles: raise it if the memory is there"),
+            BudgetBound::Memory { memory, source } => write!(
+                f,
+                "what {memory} of memory holds at {TRIANGLE_BYTES} bytes a triangle ({source}): give \
+                 the job more memory"
+            ),
+        }
+    }
 }
 
 /// The triangles a whole scene may dice into, shared by the threads dicing its primitives: each
@@ -309,17 +349,45 @@ pub enum DiceError {
 #[derive(Debug)]
 pub struct TriangleBudget {
     limit: u64,
+    bound: BudgetBound,
     used: std::sync::atomic::AtomicU64,
 }
 
 impl TriangleBudget {
-    /// A budget of `limit` triangles.
+    /// A budget of `limit` triangles, set by the renderer's option.
     #[must_use]
     pub fn new(limit: u64) -> Self {
         TriangleBudget {
             limit,
+            bound: BudgetBound::Option,
             used: std::sync::atomic::AtomicU64::new(0),
         }
+    }
+
+    /// A budget of `max_triangles`, or fewer when `memory` (bytes the job may use, and where that
+    /// figure comes from) holds fewer: `(memory − RENDER_BASE_BYTES) / TRIANGLE_BYTES`. A scene too
+    /// large for the memory then stops with a message naming the primitive, where the allocator
+    /// would have aborted the process.
+    #[must_use]
+    pub fn within_memory(max_triangles: u64, memory: Option<(u64, &str)>) -> Self {
+        let mut budget = TriangleBudget::new(max_triangles);
+        if let Some((bytes, source)) = memory {
+            let held = bytes.saturating_sub(RENDER_BASE_BYTES) / TRIANGLE_BYTES;
+            if held < max_triangles {
+                budget.limit = held;
+                budget.bound = BudgetBound::Memory {
+                    memory: format!("{:.1} GiB", bytes as f64 / f64::from(1u32 << 30)),
+                    source: source.to_string(),
+                };
+            }
+        }
+        budget
+    }
+
+    /// The most triangles the scene may hold.
+    #[must_use]
+    pub fn limit(&self) -> u64 {
+        self.limit
     }
 
     /// Takes `triangles` from the budget.
@@ -338,6 +406,7 @@ impl TriangleBudget {
                 triangles,
                 used,
                 limit: self.limit,
+                bound: self.bound.clone(),
             })
     }
 

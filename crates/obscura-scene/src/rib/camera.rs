@@ -86,6 +86,7 @@ impl Reader {
         self.scene.projection = "PxrPerspective".into();
         self.scene.projection_params = obscura_sdk::ParamList::new();
         self.scene.projection_base = None;
+        self.scene.projection_origin = Some(r.at());
         self.projection_declared = true;
         self.scene
             .projection_params

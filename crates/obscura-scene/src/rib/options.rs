@@ -239,6 +239,7 @@ impl Reader {
         let earlier = std::mem::replace(&mut self.scene.projection, plugin.to_string());
         let earlier_params = std::mem::replace(&mut self.scene.projection_params, list);
         self.scene.projection_base = self.projection_declared.then_some((earlier, earlier_params));
+        self.scene.projection_origin = Some(r.at());
         self.projection_declared = true;
         Ok(())
     }

@@ -84,11 +84,37 @@ fn the_scene_budget_refuses_the_primitive_that_goes_over_and_takes_nothing() {
         Err(DiceError::SceneBudget {
             triangles: 41,
             used: 60,
-            limit: 100
+            limit: 100,
+            bound: BudgetBound::Option,
         })
     );
     assert_eq!(b.used(), 60);
     b.take(40).unwrap();
     assert!(b.exhausted());
     assert!(b.take(u64::MAX).is_err());
+}
+
+#[test]
+fn a_memory_limit_lowers_the_budget_to_what_it_holds_and_says_so() {
+    let gib = 1u64 << 30;
+    // 2 GiB hold (2 GiB − 256 MiB) / 450 bytes.
+    let b = TriangleBudget::within_memory(8_000_000, Some((2 * gib, "the address-space limit")));
+    assert_eq!(b.limit(), (2 * gib - (256 << 20)) / 450);
+    assert_eq!(b.limit(), 4_175_662);
+    let message = b.take(5_000_000).unwrap_err().to_string();
+    assert!(
+        message.contains("budget is 4175662, what 2.0 GiB of memory holds at 450 bytes a triangle (the address-space limit)"),
+        "{message}"
+    );
+    // A limit that holds more than the option leaves the option in charge; so does no limit.
+    let roomy = TriangleBudget::within_memory(8_000_000, Some((64 * gib, "MemAvailable")));
+    assert_eq!(roomy.limit(), 8_000_000);
+    let message = roomy.take(9_000_000).unwrap_err().to_string();
+    assert!(message.contains("set by --max-triangles"), "{message}");
+    assert_eq!(TriangleBudget::within_memory(100, None).limit(), 100);
+    // Less memory than a render's base holds nothing, without underflow.
+    assert_eq!(
+        TriangleBudget::within_memory(100, Some((1 << 20, "x"))).limit(),
+        0
+    );
 }

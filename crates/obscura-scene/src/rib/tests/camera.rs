@@ -75,12 +75,17 @@ fn a_projection_after_another_keeps_the_earlier_as_its_base_and_frames_restore_i
     // RenderMan applies a built-in declared before a plugin first; the reader keeps the order.
     let s = ok("Projection \"perspective\" \"fov\" 40\nProjection \"Strobe\" \"int n\" 3\nWorldBegin\n");
     assert_eq!(s.projection, "Strobe");
+    // Errors about a projection name the request that named it.
+    assert_eq!(s.projection_origin.as_deref(), Some("t.rib:2"));
     let (name, params) = s.projection_base.expect("the earlier projection is kept");
     assert_eq!(name, "PxrPerspective");
     assert_eq!(params.get("fov").unwrap().value, ParamValue::Floats(vec![40.0]));
     // `Perspective` declares the built-in too.
     let s = ok("Perspective 35\nProjection \"Strobe\"\nWorldBegin\n");
     assert_eq!(s.projection_base.unwrap().0, "PxrPerspective");
+    let s = ok("Format 8 6 1\n\nPerspective 35\nWorldBegin\n");
+    assert_eq!(s.projection_origin.as_deref(), Some("t.rib:3"));
+    assert_eq!(ok("WorldBegin\n").projection_origin, None);
     // The first projection has no base, and a later `Perspective` replaces the chain.
     assert!(
         ok("Projection \"Strobe\"\nWorldBegin\n")
