@@ -6,7 +6,11 @@
 //! only near the camera. Each piece gets its own rate from the bounding sphere of its control points, and
 //! `n = ⌈A·k/m⌉` segments per direction (clamped to `[1, 4096]`), `A` the longest control-polygon
 //! row (for `u`) or column (for `v`): the control polygon is never shorter than the curve, so the
-//! surface's edges come out at most `m` pixels long. When the patches of one primitive together
+//! surface's edges come out at most `m` pixels long. Under an orthographic camera (`DicingHint` of
+//! `Orthographic`) `A` is first scaled by the fraction of it the image shows, the polyline's length in
+//! the camera's x-y plane over its length in camera space: depth does not move a point on an
+//! orthographic image, so a patch running away from the camera dices by its span on screen (aqsis's
+//! `tenpatch.rib`: 590 k triangles a patch at 160×120 before, 102 k after). When the patches of one primitive together
 //! exceed [`MAX_QUADS_PER_PRIMITIVE`](super::MAX_QUADS_PER_PRIMITIVE) quads, every count is scaled
 //! down by the same factor. Vertices lie on the surface (Bernstein form, `f64`), normals are
 //! `∂P/∂u × ∂P/∂v` normalised (at a collapsed edge, the normal a small step inside the patch).
@@ -15,6 +19,7 @@
 
 use glam::{DVec3, Vec2, Vec3};
 use obscura_scene::BezierPatch;
+use obscura_sdk::DicingHint;
 
 use super::quadric::{Grid, Rate, tessellate};
 use super::{DicingContext, MAX_QUADS_PER_PRIMITIVE};
@@ -155,7 +160,37 @@ fn counts(p: &[DVec3; 16], ctx: &DicingContext) -> (u32, u32) {
     let (centre, radius) = bounding_sphere(p.iter().copied());
     let rate = Rate::new(ctx, centre, radius);
     let (au, av) = hull_arcs(p);
-    (rate.segments(au, 0.0), rate.segments(av, 0.0))
+    let (fu, fv) = on_screen_fractions(p, ctx);
+    (rate.segments(au * fu, 0.0), rate.segments(av * fv, 0.0))
+}
+
+/// The fraction of a patch's control polylines, along `u` and along `v`, that an orthographic camera
+/// sees: the longest row's (column's) length in the camera's x-y plane over its length in camera
+/// space. Depth does not move a point on an orthographic image, so a patch running away from the
+/// camera is diced by what it spans on screen, as RenderMan dices by raster size; (1, 1) for every
+/// other dicing hint, whose rate already holds the nearest point's depth.
+fn on_screen_fractions(p: &[DVec3; 16], ctx: &DicingContext) -> (f64, f64) {
+    if ctx.hint != DicingHint::Orthographic {
+        return (1.0, 1.0);
+    }
+    let m = ctx.object_to_camera.as_dmat4();
+    let q = p.map(|x| m.transform_point3(x));
+    let lengths = |at: &dyn Fn(usize, usize) -> usize| {
+        let (mut flat, mut full) = (0.0f64, 0.0f64);
+        for k in 0..4 {
+            let (mut a, mut b) = (0.0, 0.0);
+            for i in 0..3 {
+                let d = q[at(k, i + 1)] - q[at(k, i)];
+                a += d.truncate().length();
+                b += d.length();
+            }
+            flat = flat.max(a);
+            full = full.max(b);
+        }
+        let f = flat / full;
+        if f.is_finite() { f.clamp(0.0, 1.0) } else { 1.0 }
+    };
+    (lengths(&|k, i| 4 * k + i), lengths(&|k, j| 4 * j + k))
 }
 
 /// A piece of a patch: its control points, the part `[u0, u1] × [v0, v1]` of its patch it covers,
@@ -348,6 +383,32 @@ mod tests {
             "{} triangles, budget {budget} quads",
             mesh.triangles.len()
         );
+    }
+
+    #[test]
+    fn an_orthographic_camera_dices_a_patch_by_its_span_on_screen() {
+        // A unit square seen face on, and the same square as a ramp whose far edge is 4 units deeper:
+        // on an orthographic image the two cover the same pixels, so they dice alike (the ramp's
+        // v polyline is 4.1 units long, which would give it four times the rows). A perspective
+        // camera still measures the ramp's whole length.
+        let square = |depth: f32| {
+            std::array::from_fn(|k| {
+                let (i, j) = ((k % 4) as f32 / 3.0, (k / 4) as f32 / 3.0);
+                glam::DVec3::new(f64::from(i - 0.5), f64::from(j - 0.5), f64::from(2.0 + depth * j))
+            })
+        };
+        let (flat, ramp) = (square(0.0), square(4.0));
+        let ortho = DicingContext::new(DicingHint::Orthographic, 90.0, Format::new(64, 48));
+        let (f, r) = (counts(&flat, &ortho), counts(&ramp, &ortho));
+        assert!(f.1 >= 20, "{f:?}");
+        assert_eq!(r.0, f.0, "{r:?} against {f:?}");
+        assert!(r.1.abs_diff(f.1) <= 1, "{r:?} against {f:?}");
+        assert_eq!(on_screen_fractions(&flat, &ortho), (1.0, 1.0));
+        let (fu, fv) = on_screen_fractions(&ramp, &ortho);
+        assert_eq!(fu, 1.0);
+        assert!((fv - 1.0 / 17f64.sqrt()).abs() < 1e-12, "{fv}");
+        let perspective = DicingContext::new(DicingHint::Perspective, 90.0, Format::new(64, 48));
+        assert_eq!(on_screen_fractions(&ramp, &perspective), (1.0, 1.0));
     }
 
     #[test]
